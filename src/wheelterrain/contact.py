@@ -1,0 +1,301 @@
+"""The rigid-wheel terramechanics contact model, written once in CasADi SX symbols.
+
+Everything that computes a force in this project (the Python API, the CLI, the FMUs, the MPC, the
+calibration) calls the functions built here. Nothing else re-derives a formula.
+
+Conventions
+-----------
+- theta is measured from the downward vertical through the axle, positive toward the direction of
+  travel. Entry angle theta_f = arccos(1 - z/R_c) > 0; exit angle theta_r = -arccos(1 - lambda*z/R_c)
+  <= 0 (lambda = ``model.exit_ratio``; 0 gives the Wong-Reece theta_r = 0).
+- ``slip`` is the traction slip i = (omega*R_ref - V)/(omega*R_ref) (see :mod:`wheelterrain.slip`
+  for the paper's s = i/(1 - i)). Positive when driving.
+- Forces are those of the soil on the wheel: normal force up, drawbar pull forward, torque the
+  resistive torque the motor has to supply.
+
+Equations (Wong & Reece 1967; Wong, *Theory of Ground Vehicles*; Ishigami et al. 2007; Ding et al.
+2011; Irani et al. 2011)::
+
+    R_c = R + f_c*h_g,  R_s = R + f_s*h_g,  R_ref = R + f_ref*h_g       (radii; all R when f = 0)
+    n    = n0 + n1*|i|                                                   (Ding et al. 2011)
+    k_eq = (c*k_c' + gamma*b*k_phi') * (R_c/b)**n                        (Reece 1965)
+    theta_m = (a0 + a1*i)*theta_f                                        (Wong & Reece 1967)
+    sigma(theta) = k_eq*(cos(theta) - cos(theta_f))**n                   theta_m <= theta <= theta_f
+    sigma(theta) = k_eq*(cos(theta*) - cos(theta_f))**n,                 theta_r <= theta < theta_m
+        theta* = theta_f - (theta - theta_r)/(theta_m - theta_r)*(theta_f - theta_m)
+    j(theta) = R_s*(theta_f - theta) - (1 - i)*R_ref*(sin(theta_f) - sin(theta))
+    tau = (c + sigma*tan(phi)) * g(j),   g = 1 - exp(-j/K)  (Janosi)  or Wong's hump form
+    Fz = b*int(R_c*sigma*cos + R_s*tau*sin),  DP = b*int(R_s*tau*cos - R_c*sigma*sin),
+    T  = b*R_s**2*int(tau)                                               over [theta_r, theta_f]
+
+With every extension off (n1 = 0, f_c = f_s = f_ref = 0, Janosi, lambda = 0, no ripple) this is the
+classical Wong-Reece rigid wheel, exactly.
+
+Grouser ripple (Irani et al. 2011, as read in shared/spec/model-notes.md): the normal stress on the
+contact arc becomes max(sigma + A*sin(n_g*wheel_angle + Phi), 0), with
+A = k_g'*p_mean + k_0'*l_c*d_gamma, p_mean = Fz_static/(b*l_c) the mean contact pressure of the
+ripple-free stress and l_c = R_c*(sin(theta_f) - sin(theta_r)) the contact length. The phase follows
+the wheel's rotation angle, not time. The ``max(., 0)`` (soil carries no tension) is the one
+non-smooth operation; it is only active with the ripple on.
+
+Choices where the equations are silent, each documented:
+- The shear law is made odd in j, g(-j) = -g(j), so a braked wheel (negative j) gets a bounded,
+  opposite shear instead of the exponential blow-up of the literal formula; identical for j >= 0.
+- The slip-sinkage exponent uses |i| (skid also digs in); the paper only covers i >= 0.
+- The damping term C_f*dz/dt acts only in contact (z > 0), and the total normal force is kept >= 0
+  (the soil cannot pull the wheel down). Both are inactive in the quasi-static solve.
+- ``max(cos(theta) - cos(theta_f), 0)`` guards the rounding of a non-negative difference only.
+
+Quadrature: the arc is split at theta_m into two Gauss-Legendre panels with a graded map
+theta = theta_f - (theta_f - theta_m)*u**3 (front) and theta = theta_r + (theta_m - theta_r)*u**3
+(rear), u in [0, 1]. The grading removes the (theta_f - theta)**n end-point singularity of the stress,
+so 12 nodes per panel integrate to ~1e-12 relative. Both panels evaluate sigma at the same theta*,
+so the stress is computed once per node pair.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from .parameters import INDEX, NAMES
+
+DEFAULT_NODES = 12
+GRADING = 3
+NEWTON_ITERATIONS = 10
+THETA_MIN = 1e-12  # rad: lower end of the sinkage-solve bracket (z ~ 1e-26 m)
+FULL_BURIAL = math.pi / 2  # entry angle at sinkage = contact radius
+
+CONTACT_INPUTS = ("sinkage", "sinkage_rate", "slip", "wheel_angle", "p")
+CONTACT_OUTPUTS = (
+    "normal_force", "drawbar_pull", "torque", "gross_thrust", "compaction_resistance",
+    "entry_angle", "exit_angle", "max_stress_angle", "contact_length", "mean_pressure",
+    "sinkage_exponent", "ripple_amplitude", "normal_force_static",
+)
+STEADY_INPUTS = ("load", "slip", "p")
+STEADY_OUTPUTS = ("sinkage", *CONTACT_OUTPUTS, "residual", "capacity")
+FORCES = ("normal_force", "drawbar_pull", "torque")
+
+
+def _graded_rule(nodes: int) -> tuple[np.ndarray, np.ndarray]:
+    """Graded Gauss-Legendre rule on [0, 1]: offsets u**3 and weights 3*u**2*w."""
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    u, w = (x + 1.0) / 2.0, w / 2.0
+    return u**GRADING, GRADING * u ** (GRADING - 1) * w
+
+
+class _P:
+    """Attribute access to the symbolic parameter vector by table name (``P['soil.phi']``)."""
+
+    def __init__(self, p: ca.SX) -> None:
+        self.p = p
+
+    def __getitem__(self, name: str) -> ca.SX:
+        return self.p[INDEX[name]]
+
+
+def _radii(P: _P) -> tuple[ca.SX, ca.SX, ca.SX]:
+    R, h = P["wheel.radius"], P["grouser.height"]
+    return (R + P["model.contact_radius_factor"] * h,
+            R + P["model.shear_radius_factor"] * h,
+            R + P["model.slip_radius_factor"] * h)
+
+
+def shear_function(j: ca.SX, P: _P) -> ca.SX:
+    """Mobilised fraction g(j) of the shear strength (odd in j).
+
+    Janosi: 1 - exp(-j/K). Wong's hump form (paper eq. 3, with its last factor restored):
+    K_r*(1 + (1/(K_r*(1 - 1/e)) - 1)*exp(1 - j/K))*(1 - exp(-j/K)), peak 1 at j = K, tending to K_r.
+    """
+    K, Kr, hump = P["soil.shear_modulus"], P["soil.residual_ratio"], P["model.shear_model"]
+    E = ca.exp(-ca.fabs(j) / K)
+    janosi = 1 - E
+    wong = Kr * (1 + (1 / (Kr * (1 - math.exp(-1))) - 1) * math.e * E) * (1 - E)
+    return ca.sign(j) * ((1 - hump) * janosi + hump * wong)
+
+
+def _arc(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: int, ripple: bool) -> dict:
+    """All contact quantities for a given entry angle (no damping). ``ripple=False`` drops it."""
+    Rc, Rs, Rref = _radii(P)
+    b = P["wheel.width"]
+    c, tan_phi = P["soil.cohesion"], ca.tan(P["soil.phi"])
+    n = P["soil.n0"] + P["soil.n1"] * ca.fabs(slip)
+    k_eq = (c * P["soil.k_c"] + P["soil.gamma"] * b * P["soil.k_phi"]) * (Rc / b) ** n
+
+    lam = P["model.exit_ratio"]
+    # -arccos(1 - lam*z/R_c) written through sin(theta_f/2): finite derivatives at lam = 0.
+    theta_r = -2 * ca.asin(ca.sqrt(lam) * ca.sin(theta_f / 2))
+    theta_m = (P["model.a0"] + P["model.a1"] * slip) * theta_f
+
+    g, w = (ca.DM(a) for a in _graded_rule(nodes))
+    d_front, d_rear = theta_f - theta_m, theta_m - theta_r
+    th_front = theta_f - d_front * g  # also theta* of the rear nodes
+    th_rear = theta_r + d_rear * g
+    w_front, w_rear = d_front * w, d_rear * w
+
+    cos_f, sin_f = ca.cos(th_front), ca.sin(th_front)
+    cos_r, sin_r = ca.cos(th_rear), ca.sin(th_rear)
+    sigma0 = k_eq * ca.fmax(cos_f - ca.cos(theta_f), 0) ** n  # shared by both panels
+
+    v_ratio = (1 - slip) * Rref  # carriage speed / wheel angular speed
+    g_front = shear_function(Rs * (theta_f - th_front) - v_ratio * (ca.sin(theta_f) - sin_f), P)
+    g_rear = shear_function(Rs * (theta_f - th_rear) - v_ratio * (ca.sin(theta_f) - sin_r), P)
+
+    def integrals(sigma: ca.SX) -> dict:
+        tau_f, tau_r = (c + sigma * tan_phi) * g_front, (c + sigma * tan_phi) * g_rear
+        return {
+            "sig_cos": ca.dot(w_front, sigma * cos_f) + ca.dot(w_rear, sigma * cos_r),
+            "sig_sin": ca.dot(w_front, sigma * sin_f) + ca.dot(w_rear, sigma * sin_r),
+            "tau_cos": ca.dot(w_front, tau_f * cos_f) + ca.dot(w_rear, tau_r * cos_r),
+            "tau_sin": ca.dot(w_front, tau_f * sin_f) + ca.dot(w_rear, tau_r * sin_r),
+            "tau": ca.dot(w_front, tau_f) + ca.dot(w_rear, tau_r),
+        }
+
+    static = integrals(sigma0)
+    normal_static = b * (Rc * static["sig_cos"] + Rs * static["tau_sin"])
+    contact_length = Rc * (ca.sin(theta_f) - ca.sin(theta_r))
+    mean_pressure = normal_static / (b * ca.fmax(contact_length, 1e-300))
+    amplitude = (P["ripple.k_g"] * mean_pressure
+                 + P["ripple.k_0"] * contact_length * P["soil.gamma_variation"])
+    if ripple:
+        phase = P["grouser.count"] * wheel_angle + P["ripple.phase"]
+        total = integrals(ca.fmax(sigma0 + amplitude * ca.sin(phase), 0))
+    else:
+        total = static
+    thrust = b * Rs * total["tau_cos"]
+    compaction = b * Rc * total["sig_sin"]
+    return {
+        "normal_force": b * (Rc * total["sig_cos"] + Rs * total["tau_sin"]),
+        "drawbar_pull": thrust - compaction,
+        "torque": b * Rs**2 * total["tau"],
+        "gross_thrust": thrust,
+        "compaction_resistance": compaction,
+        "entry_angle": theta_f,
+        "exit_angle": theta_r,
+        "max_stress_angle": theta_m,
+        "contact_length": contact_length,
+        "mean_pressure": mean_pressure,
+        "sinkage_exponent": n,
+        "ripple_amplitude": amplitude if ripple else ca.SX(0),
+        "normal_force_static": normal_static,
+    }
+
+
+def _contact(z, z_rate, slip, wheel_angle, P: _P, nodes: int, ripple: bool) -> dict:
+    """Contact quantities at sinkage z (m, to the contact circle), with damping C_f*dz/dt."""
+    Rc, _, _ = _radii(P)
+    theta_f = ca.acos(1 - ca.fmax(z, 0) / Rc)
+    out = _arc(theta_f, slip, wheel_angle, P, nodes, ripple)
+    damping = ca.if_else(z > 0, P["soil.damping"] * z_rate, 0)
+    out["normal_force"] = ca.fmax(out["normal_force"] + damping, 0)
+    return out
+
+
+@dataclass(frozen=True)
+class ModelFunctions:
+    """The CasADi Functions of the model, built once per quadrature order.
+
+    - ``contact(sinkage, sinkage_rate, slip, wheel_angle, p)`` -> CONTACT_OUTPUTS (ripple on).
+    - ``contact_jacobian`` -> ``d_state`` (3x3: normal_force, drawbar_pull, torque by sinkage,
+      sinkage_rate, slip) and ``d_params`` (3 x len(p)).
+    - ``sinkage_solve(load, slip, p)`` -> ``sinkage``, ``residual`` (relative), ``capacity``
+      (normal force fully buried). Ripple-free, zero sinkage rate.
+    - ``steady(load, slip, p)`` -> STEADY_OUTPUTS: the solve plus the ripple-free contact there.
+    - ``steady_jacobian(load, slip, p, sinkage)`` -> ``d_inputs`` (4x2: sinkage, normal_force,
+      drawbar_pull, torque by load, slip) and ``d_params`` (4 x len(p)), by the implicit function
+      theorem at a solved ``sinkage``.
+    """
+
+    contact: ca.Function
+    contact_jacobian: ca.Function
+    sinkage_solve: ca.Function
+    steady: ca.Function
+    steady_jacobian: ca.Function
+    nodes: int
+
+
+def _symbols():
+    return (ca.SX.sym("sinkage"), ca.SX.sym("sinkage_rate"), ca.SX.sym("slip"),
+            ca.SX.sym("wheel_angle"), ca.SX.sym("p", len(NAMES)))
+
+
+def _sinkage_solve_expr(load, slip, P: _P, nodes: int):
+    """Safeguarded Newton on log(Fz_static) - log(load) in y = log(theta_f), unrolled.
+
+    Fz_static grows like theta_f**(2n+1) for small theta_f, so in log-log coordinates the residual
+    is nearly linear and Newton converges in a few steps from the power-law first guess. A bracket
+    [log THETA_MIN, log(pi/2)] is kept; a step that leaves it is replaced by bisection. Returns the
+    sinkage, the relative residual of the final iterate and the capacity (normal force fully buried).
+    Callers must check load <= capacity and the residual (``model.steady_state`` does).
+    """
+    th = ca.SX.sym("theta_f")
+    fz = _arc(th, slip, 0, P, nodes, ripple=False)["normal_force_static"]
+    fz_fun = ca.Function("fz_static", [th, slip, P.p], [fz, ca.jacobian(fz, th)])
+
+    n = P["soil.n0"] + P["soil.n1"] * ca.fabs(slip)
+    log_load = ca.log(ca.fmax(load, 1e-300))
+    capacity, _ = fz_fun(FULL_BURIAL, slip, P.p)
+    lo, hi = ca.SX(math.log(THETA_MIN)), ca.SX(math.log(FULL_BURIAL))
+    y = hi + (log_load - ca.log(capacity)) / (2 * n + 1)
+    y = ca.if_else(ca.logic_and(y > lo, y < hi), y, (lo + hi) / 2)
+    for _ in range(NEWTON_ITERATIONS):
+        theta = ca.exp(y)
+        f, df = fz_fun(theta, slip, P.p)
+        f = ca.fmax(f, 1e-300)
+        h = ca.log(f) - log_load
+        slope = theta * df / f
+        lo = ca.if_else(h <= 0, y, lo)
+        hi = ca.if_else(h > 0, y, hi)
+        step = y - h / ca.fmax(slope, 1e-12)
+        y = ca.if_else(ca.logic_and(step >= lo, step <= hi), step, (lo + hi) / 2)
+    theta = ca.exp(y)
+    f, _ = fz_fun(theta, slip, P.p)
+    Rc, _, _ = _radii(P)
+    sinkage = ca.if_else(load > 0, Rc * (1 - ca.cos(theta)), 0)
+    residual = ca.if_else(load > 0, (f - load) / ca.fmax(load, 1e-300), 0)
+    return sinkage, residual, capacity
+
+
+@lru_cache(maxsize=4)
+def build(nodes: int = DEFAULT_NODES) -> ModelFunctions:
+    """Build (once per ``nodes``) every CasADi Function of the model."""
+    z, z_rate, slip, angle, p = _symbols()
+    P = _P(p)
+    out = _contact(z, z_rate, slip, angle, P, nodes, ripple=True)
+    contact = ca.Function("contact", [z, z_rate, slip, angle, p],
+                          [out[k] for k in CONTACT_OUTPUTS], list(CONTACT_INPUTS),
+                          list(CONTACT_OUTPUTS))
+
+    forces = ca.vertcat(*(out[k] for k in FORCES))
+    contact_jacobian = ca.Function(
+        "contact_jacobian", [z, z_rate, slip, angle, p],
+        [ca.jacobian(forces, ca.vertcat(z, z_rate, slip)), ca.jacobian(forces, p)],
+        list(CONTACT_INPUTS), ["d_state", "d_params"])
+
+    load = ca.SX.sym("load")
+    sink, residual, capacity = _sinkage_solve_expr(load, slip, P, nodes)
+    sinkage_solve = ca.Function("sinkage_solve", [load, slip, p], [sink, residual, capacity],
+                                list(STEADY_INPUTS), ["sinkage", "residual", "capacity"])
+
+    quasi = _contact(sink, 0, slip, 0, P, nodes, ripple=False)
+    steady = ca.Function("steady", [load, slip, p],
+                         [sink, *(quasi[k] for k in CONTACT_OUTPUTS), residual, capacity],
+                         list(STEADY_INPUTS), list(STEADY_OUTPUTS))
+
+    # Implicit function theorem at a solved sinkage: Fz_static(z, slip, p) = load.
+    at = _contact(z, 0, slip, 0, P, nodes, ripple=False)
+    q = ca.vertcat(load, slip)
+    balance = at["normal_force_static"] - load
+    dz_dq = -ca.jacobian(balance, q) / ca.jacobian(balance, z)
+    dz_dp = -ca.jacobian(balance, p) / ca.jacobian(balance, z)
+    ys = ca.vertcat(*(at[k] for k in FORCES))
+    dy_dz = ca.jacobian(ys, z)
+    d_inputs = ca.vertcat(dz_dq, ca.jacobian(ys, q) + dy_dz @ dz_dq)
+    d_params = ca.vertcat(dz_dp, ca.jacobian(ys, p) + dy_dz @ dz_dp)
+    steady_jacobian = ca.Function("steady_jacobian", [load, slip, p, z], [d_inputs, d_params],
+                                  [*STEADY_INPUTS, "sinkage"], ["d_inputs", "d_params"])
+    return ModelFunctions(contact, contact_jacobian, sinkage_solve, steady, steady_jacobian, nodes)

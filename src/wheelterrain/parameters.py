@@ -1,0 +1,280 @@
+"""The one table of wheel, grouser, soil, ripple and model parameters.
+
+Every other face of the project (the CasADi functions, the FMU variables, the CLI's ``--set`` keys,
+the JSON printed by ``wheelterrain params``) is generated from :data:`TABLE`. A parameter has a
+structured name (``soil.phi``), an SI unit, a default, a closed valid range ``[min, max]``, a
+description and the source of its default. Presets (see :mod:`wheelterrain.presets`) override the
+defaults with documented values.
+
+Ranges are *validity* ranges: the model is defined, finite and tested at every corner of the box
+they span (see ``tests/test_robustness.py``). Values outside are rejected with an error that names
+the parameter and its range; nothing is clamped.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+
+from .errors import ParameterError
+
+DEG = math.pi / 180.0
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One row of the parameter table.
+
+    ``kind`` is ``"real"``, ``"integer"`` (a count) or ``"enum"`` (a switch whose allowed values are
+    the integers of ``choices``). ``quantity`` names the Modelica.Units.SI type where one exists.
+    """
+
+    name: str
+    unit: str
+    default: float
+    min: float
+    max: float
+    description: str
+    source: str
+    kind: str = "real"
+    quantity: str | None = None
+    display_unit: str | None = None
+    choices: Mapping[int, str] | None = None
+
+    def check(self, value: float) -> float:
+        """Return ``value`` as float if it is valid for this parameter, else raise ParameterError."""
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            raise ParameterError(self.name, value, f"is not a number; {self.valid_range()}") from None
+        if not math.isfinite(number):
+            raise ParameterError(self.name, value, f"must be finite; {self.valid_range()}")
+        if not (self.min <= number <= self.max):
+            raise ParameterError(self.name, value, f"is out of range; {self.valid_range()}")
+        if self.kind in ("integer", "enum") and number != round(number):
+            raise ParameterError(self.name, value, f"must be a whole number; {self.valid_range()}")
+        return number
+
+    def valid_range(self) -> str:
+        """Human-readable valid range, in the unit (and display unit for angles)."""
+        if self.kind == "enum" and self.choices:
+            opts = ", ".join(f"{k} = {v}" for k, v in self.choices.items())
+            return f"valid values: {opts}"
+        text = f"valid range [{self.min:g}, {self.max:g}] {self.unit}"
+        if self.unit == "rad":
+            text += f" ([{self.min / DEG:g}, {self.max / DEG:g}] deg)"
+        return text
+
+    def as_dict(self, value: float | None = None) -> dict:
+        """JSON-ready description; ``value`` is the preset's value (default if None)."""
+        row = {
+            "name": self.name,
+            "unit": self.unit,
+            "value": self.default if value is None else value,
+            "default": self.default,
+            "min": self.min,
+            "max": self.max,
+            "kind": self.kind,
+            "description": self.description,
+            "source": self.source,
+        }
+        if self.quantity:
+            row["quantity"] = self.quantity
+        if self.display_unit:
+            row["display_unit"] = self.display_unit
+        if self.choices:
+            row["choices"] = {str(k): v for k, v in self.choices.items()}
+        return row
+
+
+_P = Parameter
+_PAPER = "Abubakar et al., Rashid rover wheel-terrain study"
+_TABLE2 = f"{_PAPER}, Table II (tuned)"
+
+TABLE: tuple[Parameter, ...] = (
+    # --- wheel -------------------------------------------------------------------------------
+    _P("wheel.radius", "m", 0.05, 0.01, 1.0,
+       "Rim radius R of the rigid wheel (grousers excluded).",
+       f"{_PAPER}: diameter 0.1 m", quantity="Length"),
+    _P("wheel.width", "m", 0.075, 0.005, 1.0,
+       "Wheel width b; also the plate width in the Reece pressure-sinkage law.",
+       f"{_PAPER} prints 0.0075 m; read as 0.075 m because at 0.0075 m even a fully buried wheel "
+       "carries only ~15 N of the 62 N measured (shared/spec/paper-digest.md)", quantity="Length"),
+    _P("wheel.mass", "kg", 1.0, 0.01, 1000.0,
+       "Mass of the wheel (used by the rig's vertical dynamics, not by the contact model).",
+       f"{_PAPER}: 1 kg", quantity="Mass"),
+    # --- grousers ----------------------------------------------------------------------------
+    _P("grouser.count", "1", 12, 0, 100,
+       "Number of grousers n_g around the rim; sets the ripple phase psi = n_g * wheel angle.",
+       f"{_PAPER}: 12", kind="integer"),
+    _P("grouser.height", "m", 0.01, 0.0, 0.1,
+       "Grouser height h_g above the rim (the paper's h_b).",
+       f"{_PAPER}: grouser height 0.01 m; h_b = 0.01 m in Tables I/II read as the same length",
+       quantity="Length"),
+    _P("grouser.thickness", "m", 0.001, 0.0, 0.02,
+       "Grouser thickness (width along the rim). Carried for the grouser-thrust extension; "
+       "the classical contact model does not use it.",
+       f"{_PAPER}: 0.001 m", quantity="Length"),
+    # --- soil --------------------------------------------------------------------------------
+    _P("soil.cohesion", "Pa", 0.0, 0.0, 20000.0,
+       "Cohesion c (Mohr-Coulomb shear strength and Reece pressure-sinkage).",
+       f"{_TABLE2}: 0 kPa", quantity="Pressure"),
+    _P("soil.phi", "rad", 23 * DEG, 0.0, 60 * DEG,
+       "Internal friction angle phi (Mohr-Coulomb).",
+       f"{_TABLE2}: 23 deg (Table I: 28 deg)", quantity="Angle", display_unit="deg"),
+    _P("soil.k_c", "1", 0.63, 0.0, 2000.0,
+       "Reece cohesive modulus k_c' (dimensionless); multiplies c, so it has no effect when c = 0.",
+       f"{_TABLE2}: 0.63 (Table I: 0)"),
+    _P("soil.k_phi", "1", 80.0, 1.0, 5000.0,
+       "Reece frictional modulus k_phi' (dimensionless).",
+       f"{_TABLE2}: 80"),
+    _P("soil.n0", "1", 1.1, 0.3, 2.0,
+       "Sinkage exponent at zero slip, n0 in n = n0 + n1*|i|.",
+       f"{_TABLE2}: n = 1.1 (Table I: 1)"),
+    _P("soil.n1", "1", 0.0, 0.0, 2.0,
+       "Slip-sinkage coefficient n1 in n = n0 + n1*|i| (i traction slip). 0 = classical model.",
+       "Ding et al. 2011, J. Terramechanics 48 (slip-sinkage exponent); presets read the paper's "
+       "eta = 1.15 as n1 (shared/spec/model-notes.md)"),
+    _P("soil.gamma", "N/m3", 15620.0, 5000.0, 30000.0,
+       "Soil weight density gamma (Reece pressure-sinkage law).",
+       f"{_TABLE2}: 15620 N/m3 (Table I: 13734)"),
+    _P("soil.shear_modulus", "m", 0.036, 1e-4, 0.2,
+       "Shear deformation modulus K (Janosi), and the peak-shear displacement K_w of Wong's hump "
+       "form.",
+       f"{_TABLE2}: K = 0.036 m; equals Ishigami et al. 2007's K_x (shared/spec/model-notes.md)",
+       quantity="Length"),
+    _P("soil.residual_ratio", "1", 0.6, 0.1, 1.0,
+       "Residual-to-peak shear ratio K_r of Wong's hump shear form (unused with Janosi shear).",
+       "Wong, Theory of Ground Vehicles (hump-type shear, K_r typically 0.3-1); the paper gives "
+       "no value, 0.6 is an assumption"),
+    _P("soil.gamma_variation", "N/m3", 1562.0, 0.0, 10000.0,
+       "Weight-density variation d_gamma driving the density part of the grouser ripple.",
+       f"{_TABLE2}: d_gamma = 0.1*gamma"),
+    _P("soil.damping", "N.s/m", 800.0, 0.0, 1e5,
+       "Vertical contact damping C_f: adds C_f * (sinkage rate) to the normal force while in "
+       "contact. The quasi-static solve (zero rate) does not see it.",
+       f"{_TABLE2}: C_f = 800 N.s/m, read as the vertical damper (shared/spec/model-notes.md)",
+       quantity="TranslationalDampingConstant"),
+    # --- grouser ripple (Irani et al. 2011) --------------------------------------------------
+    _P("ripple.k_g", "1", 0.0, 0.0, 1.0,
+       "Stress coefficient k_g' of the ripple amplitude A = k_g'*mean_pressure + "
+       "k_0'*contact_length*d_gamma. 0 with k_0' = 0 switches the ripple off.",
+       f"Irani, Bauer & Warkentin 2011, J. Terramechanics 48:307-318; {_TABLE2}: 0.07"),
+    _P("ripple.k_0", "1", 0.0, 0.0, 1.0,
+       "Density coefficient k_0' (the text's k_a') of the ripple amplitude.",
+       f"Irani et al. 2011; {_TABLE2}: 0.035"),
+    _P("ripple.phase", "rad", 0.0, -2 * math.pi, 2 * math.pi,
+       "Phase Phi of the ripple sin(n_g*wheel_angle + Phi).",
+       "Irani et al. 2011; the paper gives no value", quantity="Angle", display_unit="deg"),
+    # --- model form --------------------------------------------------------------------------
+    _P("model.a0", "1", 0.40, 0.32, 0.5,
+       "Max-stress angle coefficient a0 in theta_m = (a0 + a1*i)*theta_f. The lower bound keeps "
+       "theta_m > 0 at slip -0.9 with the largest a1.",
+       "Ishigami et al. 2007, J. Field Robotics 24(3): 0.40 for lunar simulant (Wong-Reece sand: "
+       "0.43)"),
+    _P("model.a1", "1", 0.15, 0.0, 0.35,
+       "Max-stress angle coefficient a1 in theta_m = (a0 + a1*i)*theta_f.",
+       "Ishigami et al. 2007: 0.15 for lunar simulant (Wong-Reece sand: 0.32)"),
+    _P("model.exit_ratio", "1", 0.0, 0.0, 1.0,
+       "Exit-angle ratio lambda: theta_r = -arccos(1 - lambda*z/R_c). 0 = Wong-Reece (theta_r = 0); "
+       "Ishigami 2007 uses about 0.9.",
+       "Wong & Reece 1967; Ishigami et al. 2007"),
+    _P("model.shear_model", "1", 0, 0, 1,
+       "Shear-stress law: 0 = Janosi 1 - exp(-j/K); 1 = Wong's hump form (paper eq. 3).",
+       "Janosi & Hanamoto 1961; Wong, Theory of Ground Vehicles", kind="enum",
+       choices=MappingProxyType({0: "janosi", 1: "wong-hump"})),
+    _P("model.contact_radius_factor", "1", 0.0, 0.0, 1.0,
+       "Contact radius R_c = R + factor*h_g used for the geometry and the normal stress "
+       "(0 = rim, 1 = grouser tips). Sinkage is measured to this circle.",
+       "grouser-tip effective radius (shared/spec/model-notes.md)"),
+    _P("model.shear_radius_factor", "1", 0.0, 0.0, 1.0,
+       "Shearing radius R_s = R + factor*h_g used in the shear displacement, the shear terms and "
+       "the torque (lambda_s of Ding et al.).",
+       "Ding et al. 2011, J. Terramechanics 48"),
+    _P("model.slip_radius_factor", "1", 0.0, 0.0, 1.0,
+       "Radius R_ref = R + factor*h_g to which the slip input is referenced: carriage speed "
+       "V = (1 - i)*omega*R_ref. 0 = rim radius, as the rig defines slip from omega_r*R.",
+       f"{_PAPER}, eq. 4 (slip from omega_r*R)"),
+)
+
+INDEX: Mapping[str, int] = MappingProxyType({p.name: k for k, p in enumerate(TABLE)})
+BY_NAME: Mapping[str, Parameter] = MappingProxyType({p.name: p for p in TABLE})
+NAMES: tuple[str, ...] = tuple(p.name for p in TABLE)
+
+
+def lookup(name: str) -> Parameter:
+    """Return the table row of ``name`` or raise ParameterError listing close names."""
+    try:
+        return BY_NAME[name]
+    except KeyError:
+        import difflib
+
+        close = difflib.get_close_matches(name, NAMES, n=3)
+        hint = f"; did you mean {', '.join(close)}?" if close else ""
+        raise ParameterError(
+            name, None, f"is not a parameter{hint} (`wheelterrain params` lists all)"
+        ) from None
+
+
+class ParameterSet(Mapping[str, float]):
+    """A complete, validated assignment of every parameter in :data:`TABLE`.
+
+    Immutable; ``with_values`` returns a modified copy. ``vector()`` gives the values in table order,
+    the layout of the CasADi functions' ``p`` input.
+    """
+
+    __slots__ = ("_values",)
+
+    def __init__(self, values: Mapping[str, float] | None = None) -> None:
+        merged = {p.name: float(p.default) for p in TABLE}
+        for name, value in (values or {}).items():
+            merged[name] = lookup(name).check(value)
+        self._values = merged
+
+    def __getitem__(self, name: str) -> float:
+        lookup(name)
+        return self._values[name]
+
+    def __iter__(self):
+        return iter(NAMES)
+
+    def __len__(self) -> int:
+        return len(NAMES)
+
+    def with_values(self, values: Mapping[str, float]) -> ParameterSet:
+        """A copy with ``values`` overriding; every new value is checked."""
+        return ParameterSet({**self._values, **values})
+
+    def vector(self) -> np.ndarray:
+        """Values in table order (the CasADi ``p`` input)."""
+        return np.array([self._values[n] for n in NAMES], dtype=float)
+
+    def __repr__(self) -> str:
+        changed = {k: v for k, v in self._values.items() if v != BY_NAME[k].default}
+        return f"ParameterSet({changed})"
+
+
+def parse_assignments(items: Iterable[str]) -> dict[str, float]:
+    """Parse ``NAME=VALUE`` strings (the CLI's ``--set``). Angles accept a ``deg`` suffix."""
+    out: dict[str, float] = {}
+    for item in items:
+        name, sep, text = item.partition("=")
+        name, text = name.strip(), text.strip()
+        if not sep or not name or not text:
+            raise ParameterError(item, None, "is not of the form NAME=VALUE (e.g. soil.phi=0.45)")
+        param = lookup(name)
+        factor = 1.0
+        if text.lower().endswith("deg"):
+            if param.unit != "rad":
+                raise ParameterError(name, text, f"takes {param.unit}, not deg")
+            text, factor = text[:-3].strip(), DEG
+        try:
+            value = float(text) * factor
+        except ValueError:
+            raise ParameterError(name, text, f"is not a number; {param.valid_range()}") from None
+        out[name] = param.check(value)
+    return out
