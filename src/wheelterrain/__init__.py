@@ -1,3 +1,3 @@
-"""wheelterrain: an open wheel-terrain interaction model for grousered rover wheels on loose soil."""
+"""wheelterrain: an open wheel-terrain model for grousered rover wheels on loose soil."""
 
 __version__ = "0.1.0"

@@ -6,8 +6,9 @@ calibration) calls the functions built here. Nothing else re-derives a formula.
 Conventions
 -----------
 - theta is measured from the downward vertical through the axle, positive toward the direction of
-  travel. Entry angle theta_f = arccos(1 - z/R_c) > 0; exit angle theta_r = -arccos(1 - lambda*z/R_c)
-  <= 0 (lambda = ``model.exit_ratio``; 0 gives the Wong-Reece theta_r = 0).
+  travel. Entry angle theta_f = arccos(1 - z/R_c) > 0; exit angle
+  theta_r = -arccos(1 - lambda*z/R_c) <= 0 (lambda = ``model.exit_ratio``; 0 gives the Wong-Reece
+  theta_r = 0).
 - ``slip`` is the traction slip i = (omega*R_ref - V)/(omega*R_ref) (see :mod:`wheelterrain.slip`
   for the paper's s = i/(1 - i)). Positive when driving.
 - Forces are those of the soil on the wheel: normal force up, drawbar pull forward, torque the
@@ -48,9 +49,9 @@ Choices where the equations are silent, each documented:
 
 Quadrature: the arc is split at theta_m into two Gauss-Legendre panels with a graded map
 theta = theta_f - (theta_f - theta_m)*u**3 (front) and theta = theta_r + (theta_m - theta_r)*u**3
-(rear), u in [0, 1]. The grading removes the (theta_f - theta)**n end-point singularity of the stress,
-so 12 nodes per panel integrate to ~1e-12 relative. Both panels evaluate sigma at the same theta*,
-so the stress is computed once per node pair.
+(rear), u in [0, 1]. The grading removes the (theta_f - theta)**n end-point singularity of the
+stress, so 12 nodes per panel integrate to ~1e-12 relative. Both panels evaluate sigma at the
+same theta*, so the stress is computed once per node pair.
 """
 
 from __future__ import annotations
@@ -229,7 +230,8 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: int):
     Fz_static grows like theta_f**(2n+1) for small theta_f, so in log-log coordinates the residual
     is nearly linear and Newton converges in a few steps from the power-law first guess. A bracket
     [log THETA_MIN, log(pi/2)] is kept; a step that leaves it is replaced by bisection. Returns the
-    sinkage, the relative residual of the final iterate and the capacity (normal force fully buried).
+    sinkage, the relative residual of the final iterate and the capacity (normal force fully
+    buried).
     Callers must check load <= capacity and the residual (``model.steady_state`` does).
     """
     th = ca.SX.sym("theta_f")

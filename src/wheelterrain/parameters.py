@@ -46,11 +46,12 @@ class Parameter:
     choices: Mapping[int, str] | None = None
 
     def check(self, value: float) -> float:
-        """Return ``value`` as float if it is valid for this parameter, else raise ParameterError."""
+        """``value`` as float if valid for this parameter, else raise ParameterError."""
         try:
             number = float(value)
         except (TypeError, ValueError):
-            raise ParameterError(self.name, value, f"is not a number; {self.valid_range()}") from None
+            problem = f"is not a number; {self.valid_range()}"
+            raise ParameterError(self.name, value, problem) from None
         if not math.isfinite(number):
             raise ParameterError(self.name, value, f"must be finite; {self.valid_range()}")
         if not (self.min <= number <= self.max):
@@ -180,7 +181,8 @@ TABLE: tuple[Parameter, ...] = (
        "Max-stress angle coefficient a1 in theta_m = (a0 + a1*i)*theta_f.",
        "Ishigami et al. 2007: 0.15 for lunar simulant (Wong-Reece sand: 0.32)"),
     _P("model.exit_ratio", "1", 0.0, 0.0, 1.0,
-       "Exit-angle ratio lambda: theta_r = -arccos(1 - lambda*z/R_c). 0 = Wong-Reece (theta_r = 0); "
+       "Exit-angle ratio lambda: theta_r = -arccos(1 - lambda*z/R_c). 0 = Wong-Reece "
+       "(theta_r = 0); "
        "Ishigami 2007 uses about 0.9.",
        "Wong & Reece 1967; Ishigami et al. 2007"),
     _P("model.shear_model", "1", 0, 0, 1,
@@ -223,8 +225,8 @@ def lookup(name: str) -> Parameter:
 class ParameterSet(Mapping[str, float]):
     """A complete, validated assignment of every parameter in :data:`TABLE`.
 
-    Immutable; ``with_values`` returns a modified copy. ``vector()`` gives the values in table order,
-    the layout of the CasADi functions' ``p`` input.
+    Immutable; ``with_values`` returns a modified copy. ``vector()`` gives the values in table
+    order, the layout of the CasADi functions' ``p`` input.
     """
 
     __slots__ = ("_values",)
