@@ -45,7 +45,8 @@ Choices where the equations are silent, each documented:
 - The slip-sinkage exponent uses |i| (skid also digs in); the paper only covers i >= 0.
 - The damping term C_f*dz/dt acts only in contact (z > 0), and the total normal force is kept >= 0
   (the soil cannot pull the wheel down). Both are inactive in the quasi-static solve.
-- ``max(cos(theta) - cos(theta_f), 0)`` guards the rounding of a non-negative difference only.
+- cos(theta) - cos(theta_f) and sin(theta_f) - sin(theta) are formed from half angles, exactly
+  non-negative and free of cancellation at small sinkage.
 
 Quadrature: the arc is split at theta_m into two Gauss-Legendre panels with a graded map
 theta = theta_f - (theta_f - theta_m)*u**3 (front) and theta = theta_r + (theta_m - theta_r)*u**3
@@ -68,6 +69,8 @@ from .parameters import INDEX, NAMES
 DEFAULT_NODES = 12
 GRADING = 3
 NEWTON_ITERATIONS = 10
+SCAN_POINTS = 12  # bracketing scan of the sinkage solve, log-spaced in the entry angle
+SCAN_MIN = 1e-4  # rad: smallest scanned entry angle (below it the power-law regime holds)
 THETA_MIN = 1e-12  # rad: lower end of the sinkage-solve bracket (z ~ 1e-26 m)
 FULL_BURIAL = math.pi / 2  # entry angle at sinkage = contact radius
 
@@ -119,6 +122,16 @@ def shear_function(j: ca.SX, P: _P) -> ca.SX:
     return ca.sign(j) * ((1 - hump) * janosi + hump * wong)
 
 
+def _offset_trig(theta_f: ca.SX, x: ca.SX) -> dict:
+    """cos/sin of theta = theta_f - x, and the differences cos(theta) - cos(theta_f) and
+    sin(theta_f) - sin(theta), through half angles so that no difference cancels at small angles
+    (the plain difference loses ~eps/theta_f**2 relative: 1e-4 at theta_f = 1e-6)."""
+    a, h = theta_f - x / 2, x / 2
+    sa, cs, sh, ch = ca.sin(a), ca.cos(a), ca.sin(h), ca.cos(h)
+    return {"x": x, "cos": cs * ch + sa * sh, "sin": sa * ch - cs * sh,
+            "cos_drop": 2 * sa * sh, "sin_drop": 2 * cs * sh}
+
+
 def _arc(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: int, ripple: bool) -> dict:
     """All contact quantities for a given entry angle (no damping). ``ripple=False`` drops it."""
     Rc, Rs, Rref = _radii(P)
@@ -134,17 +147,16 @@ def _arc(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: int, rip
 
     g, w = (ca.DM(a) for a in _graded_rule(nodes))
     d_front, d_rear = theta_f - theta_m, theta_m - theta_r
-    th_front = theta_f - d_front * g  # also theta* of the rear nodes
-    th_rear = theta_r + d_rear * g
+    # x = theta_f - theta at each node, formed without cancellation
+    front = _offset_trig(theta_f, d_front * g)  # also theta* of the rear nodes
+    rear = _offset_trig(theta_f, (theta_f - theta_r) - d_rear * g)
     w_front, w_rear = d_front * w, d_rear * w
-
-    cos_f, sin_f = ca.cos(th_front), ca.sin(th_front)
-    cos_r, sin_r = ca.cos(th_rear), ca.sin(th_rear)
-    sigma0 = k_eq * ca.fmax(cos_f - ca.cos(theta_f), 0) ** n  # shared by both panels
+    cos_f, sin_f, cos_r, sin_r = front["cos"], front["sin"], rear["cos"], rear["sin"]
+    sigma0 = k_eq * front["cos_drop"] ** n  # shared by both panels
 
     v_ratio = (1 - slip) * Rref  # carriage speed / wheel angular speed
-    g_front = shear_function(Rs * (theta_f - th_front) - v_ratio * (ca.sin(theta_f) - sin_f), P)
-    g_rear = shear_function(Rs * (theta_f - th_rear) - v_ratio * (ca.sin(theta_f) - sin_r), P)
+    g_front = shear_function(Rs * front["x"] - v_ratio * front["sin_drop"], P)
+    g_rear = shear_function(Rs * rear["x"] - v_ratio * rear["sin_drop"], P)
 
     def integrals(sigma: ca.SX) -> dict:
         tau_f, tau_r = (c + sigma * tan_phi) * g_front, (c + sigma * tan_phi) * g_rear
@@ -189,7 +201,8 @@ def _arc(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: int, rip
 def _contact(z, z_rate, slip, wheel_angle, P: _P, nodes: int, ripple: bool) -> dict:
     """Contact quantities at sinkage z (m, to the contact circle), with damping C_f*dz/dt."""
     Rc, _, _ = _radii(P)
-    theta_f = ca.acos(1 - ca.fmax(z, 0) / Rc)
+    # arccos(1 - z/R_c) in its half-angle form, accurate for tiny sinkage (1 - z/R_c rounds)
+    theta_f = 2 * ca.asin(ca.sqrt(ca.fmax(z, 0) / (2 * Rc)))
     out = _arc(theta_f, slip, wheel_angle, P, nodes, ripple)
     damping = ca.if_else(z > 0, P["soil.damping"] * z_rate, 0)
     out["normal_force"] = ca.fmax(out["normal_force"] + damping, 0)
@@ -225,41 +238,69 @@ def _symbols():
 
 
 def _sinkage_solve_expr(load, slip, P: _P, nodes: int):
-    """Safeguarded Newton on log(Fz_static) - log(load) in y = log(theta_f), unrolled.
+    """Quasi-static sinkage: the shallowest entry angle at which Fz_static equals the load.
 
-    Fz_static grows like theta_f**(2n+1) for small theta_f, so in log-log coordinates the residual
-    is nearly linear and Newton converges in a few steps from the power-law first guess. A bracket
-    [log THETA_MIN, log(pi/2)] is kept; a step that leaves it is replaced by bisection. Returns the
-    sinkage, the relative residual of the final iterate and the capacity (normal force fully
-    buried).
-    Callers must check load <= capacity and the residual (``model.steady_state`` does).
+    1. Scan Fz_static at SCAN_POINTS log-spaced entry angles up to full burial (pi/2) and keep the
+       first interval in which it reaches the load: the equilibrium a wheel sinking from the
+       surface meets first. (Fz_static(z) is monotone for driving wheels; in extreme braking
+       corners the negative shear pulls the wheel down, it is not, and a load can have several
+       equilibria.)
+    2. Safeguarded Newton in y = log(theta_f) on that bracket, on log(Fz) - log(W) (nearly linear:
+       Fz grows like theta_f**(2n+1)) or (Fz - W)/W where Fz <= 0; a step that leaves the bracket
+       is replaced by regula falsi on the bracket (whose end residuals are tracked), bisection
+       if that fails. Unrolled, so the solve is a pure CasADi expression.
+
+    Returns sinkage, entry angle, the relative residual of the final iterate and the capacity
+    (Fz_static fully buried). Callers must check load <= capacity and the residual
+    (``model.steady_state`` does); the residual is a checked output, not an assumption.
     """
     th = ca.SX.sym("theta_f")
     fz = _arc(th, slip, 0, P, nodes, ripple=False)["normal_force_static"]
     fz_fun = ca.Function("fz_static", [th, slip, P.p], [fz, ca.jacobian(fz, th)])
+    fz_only = ca.Function("fz_static_value", [th, slip, P.p], [fz])
 
-    n = P["soil.n0"] + P["soil.n1"] * ca.fabs(slip)
     log_load = ca.log(ca.fmax(load, 1e-300))
-    capacity, _ = fz_fun(FULL_BURIAL, slip, P.p)
-    lo, hi = ca.SX(math.log(THETA_MIN)), ca.SX(math.log(FULL_BURIAL))
-    y = hi + (log_load - ca.log(capacity)) / (2 * n + 1)
-    y = ca.if_else(ca.logic_and(y > lo, y < hi), y, (lo + hi) / 2)
+    w_safe = ca.fmax(load, 1e-300)
+
+    def residual_of(f):  # sign-consistent residual: log ratio where F > 0, linear where F <= 0
+        return ca.if_else(f > 0, ca.log(ca.fmax(f, 1e-300)) - log_load, (f - load) / w_safe)
+
+    scan = np.concatenate([[THETA_MIN], np.geomspace(SCAN_MIN, FULL_BURIAL, SCAN_POINTS)])
+    values = [fz_only(t, slip, P.p) for t in scan]
+    capacity = values[-1]
+    lo, hi = ca.SX(math.log(scan[0])), ca.SX(math.log(scan[-1]))
+    h_lo, h_hi = residual_of(values[0]), residual_of(values[-1])
+    for k in range(len(scan) - 1, 0, -1):  # the last assignment is the shallowest crossing
+        reached = values[k] >= load
+        hi, h_hi = (ca.if_else(reached, a, b) for a, b in
+                    ((math.log(scan[k]), hi), (residual_of(values[k]), h_hi)))
+        lo, h_lo = (ca.if_else(reached, a, b) for a, b in
+                    ((math.log(scan[k - 1]), lo), (residual_of(values[k - 1]), h_lo)))
+
+    def fallback(lo, hi, h_lo, h_hi):
+        """Regula falsi on the bracket (an end with zero residual is the root itself);
+        bisection if it would leave the bracket."""
+        rf = lo - h_lo * (hi - lo) / ca.fmax(h_hi - h_lo, 1e-300)
+        return ca.if_else(ca.logic_and(rf >= lo, rf <= hi), rf, (lo + hi) / 2)
+
+    y = fallback(lo, hi, h_lo, h_hi)
     for _ in range(NEWTON_ITERATIONS):
         theta = ca.exp(y)
         f, df = fz_fun(theta, slip, P.p)
-        f = ca.fmax(f, 1e-300)
-        h = ca.log(f) - log_load
-        slope = theta * df / f
-        lo = ca.if_else(h <= 0, y, lo)
-        hi = ca.if_else(h > 0, y, hi)
-        step = y - h / ca.fmax(slope, 1e-12)
-        y = ca.if_else(ca.logic_and(step >= lo, step <= hi), step, (lo + hi) / 2)
-    theta = ca.exp(y)
+        h = residual_of(f)
+        slope = theta * df / ca.if_else(f > 0, ca.fmax(f, 1e-300), w_safe)
+        below = h <= 0
+        lo, h_lo = ca.if_else(below, y, lo), ca.if_else(below, h, h_lo)
+        hi, h_hi = ca.if_else(below, hi, y), ca.if_else(below, h_hi, h)
+        step = y - h / ca.fmax(slope, 1e-12)  # F' <= 0 (non-monotone corner): fall back
+        inside = ca.logic_and(step >= lo, step <= hi)
+        y = ca.if_else(inside, step, fallback(lo, hi, h_lo, h_hi))
+    theta = ca.if_else(load > 0, ca.exp(y), 0)
     f, _ = fz_fun(theta, slip, P.p)
     Rc, _, _ = _radii(P)
-    sinkage = ca.if_else(load > 0, Rc * (1 - ca.cos(theta)), 0)
+    sinkage = 2 * Rc * ca.sin(theta / 2) ** 2  # = R_c*(1 - cos(theta)), without cancellation
     residual = ca.if_else(load > 0, (f - load) / ca.fmax(load, 1e-300), 0)
-    return sinkage, residual, capacity
+    return sinkage, theta, residual, capacity
 
 
 @lru_cache(maxsize=4)
@@ -279,11 +320,11 @@ def build(nodes: int = DEFAULT_NODES) -> ModelFunctions:
         list(CONTACT_INPUTS), ["d_state", "d_params"])
 
     load = ca.SX.sym("load")
-    sink, residual, capacity = _sinkage_solve_expr(load, slip, P, nodes)
+    sink, theta, residual, capacity = _sinkage_solve_expr(load, slip, P, nodes)
     sinkage_solve = ca.Function("sinkage_solve", [load, slip, p], [sink, residual, capacity],
                                 list(STEADY_INPUTS), ["sinkage", "residual", "capacity"])
 
-    quasi = _contact(sink, 0, slip, 0, P, nodes, ripple=False)
+    quasi = _arc(theta, slip, 0, P, nodes, ripple=False)  # at the solved angle: no round trip
     steady = ca.Function("steady", [load, slip, p],
                          [sink, *(quasi[k] for k in CONTACT_OUTPUTS), residual, capacity],
                          list(STEADY_INPUTS), list(STEADY_OUTPUTS))

@@ -130,9 +130,10 @@ TABLE: tuple[Parameter, ...] = (
     _P("soil.k_c", "1", 0.63, 0.0, 2000.0,
        "Reece cohesive modulus k_c' (dimensionless); multiplies c, so it has no effect when c = 0.",
        f"{_TABLE2}: 0.63 (Table I: 0)"),
-    _P("soil.k_phi", "1", 80.0, 1.0, 5000.0,
+    _P("soil.k_phi", "1", 80.0, 10.0, 5000.0,
        "Reece frictional modulus k_phi' (dimensionless).",
-       f"{_TABLE2}: 80"),
+       f"{_TABLE2}: 80; range after Wong, Theory of Ground Vehicles (Reece parameters of "
+       "measured soils span tens to a few thousand)"),
     _P("soil.n0", "1", 1.1, 0.3, 2.0,
        "Sinkage exponent at zero slip, n0 in n = n0 + n1*|i|.",
        f"{_TABLE2}: n = 1.1 (Table I: 1)"),
@@ -143,10 +144,11 @@ TABLE: tuple[Parameter, ...] = (
     _P("soil.gamma", "N/m3", 15620.0, 5000.0, 30000.0,
        "Soil weight density gamma (Reece pressure-sinkage law).",
        f"{_TABLE2}: 15620 N/m3 (Table I: 13734)"),
-    _P("soil.shear_modulus", "m", 0.036, 1e-4, 0.2,
+    _P("soil.shear_modulus", "m", 0.036, 5e-4, 0.1,
        "Shear deformation modulus K (Janosi), and the peak-shear displacement K_w of Wong's hump "
        "form.",
-       f"{_TABLE2}: K = 0.036 m; equals Ishigami et al. 2007's K_x (shared/spec/model-notes.md)",
+       f"{_TABLE2}: K = 0.036 m; equals Ishigami et al. 2007's K_x (shared/spec/model-notes.md). "
+       "Range after Wong, Theory of Ground Vehicles (measured K from below 1 mm to a few cm)",
        quantity="Length"),
     _P("soil.residual_ratio", "1", 0.6, 0.1, 1.0,
        "Residual-to-peak shear ratio K_r of Wong's hump shear form (unused with Janosi shear).",

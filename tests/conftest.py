@@ -1,0 +1,28 @@
+"""Shared fixtures; ``classical_reference`` beside this file is the independent Wong-Reece code."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from wheelterrain import presets
+from wheelterrain.parameters import ParameterSet
+
+
+@pytest.fixture(scope="session")
+def table2() -> ParameterSet:
+    return presets.load("paper-table2")
+
+
+def classical_set(R: float, b: float, c: float, phi_deg: float, kc: float, kphi: float, n: float,
+                  gamma: float, K: float, a0: float = 0.4, a1: float = 0.15) -> ParameterSet:
+    """Parameters with every extension off: the classical Wong-Reece wheel."""
+    return ParameterSet({
+        "wheel.radius": R, "wheel.width": b, "soil.cohesion": c, "soil.phi": math.radians(phi_deg),
+        "soil.k_c": kc, "soil.k_phi": kphi, "soil.n0": n, "soil.n1": 0.0, "soil.gamma": gamma,
+        "soil.shear_modulus": K, "model.a0": a0, "model.a1": a1, "model.exit_ratio": 0.0,
+        "model.shear_model": 0, "ripple.k_g": 0.0, "ripple.k_0": 0.0,
+        "model.contact_radius_factor": 0.0, "model.shear_radius_factor": 0.0,
+        "model.slip_radius_factor": 0.0,
+    })

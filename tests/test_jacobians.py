@@ -1,0 +1,103 @@
+"""Exact CasADi Jacobians agree with central finite differences (step 1e-6, relative 1e-6)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from wheelterrain import contact, model
+from wheelterrain.parameters import NAMES, TABLE
+
+STEP = 1e-6
+RTOL = 1e-6
+
+# A point where every extension is on and every derivative is finite and smooth: exit ratio > 0
+# (d theta_r / d lambda is infinite at lambda = 0), slip != 0 (|i| has a kink), a ripple phase
+# where sigma + ripple > 0 on the whole arc (max(., 0) inactive), hump shear.
+POINT = {
+    "model.exit_ratio": 0.6, "model.shear_model": 1, "model.contact_radius_factor": 0.5,
+    "model.shear_radius_factor": 0.7, "model.slip_radius_factor": 0.2, "soil.cohesion": 500.0,
+    "soil.residual_ratio": 0.7,
+}
+
+
+@pytest.fixture(scope="module")
+def point_params(table2):
+    return table2.with_values(POINT)
+
+
+def _scales(p: np.ndarray) -> np.ndarray:
+    """Finite-difference step per parameter: relative to its size, absolute for zeros."""
+    return np.array([max(abs(v), 1e-2 * (t.max - t.min), 1e-3) for v, t in
+                     zip(p, TABLE, strict=True)])
+
+
+def _check(name: str, analytic: np.ndarray, numeric: np.ndarray, out_scale: np.ndarray) -> None:
+    """Compare derivatives already scaled to a change of one input scale (columns), within RTOL of
+    the larger of the derivative and the output's size (rows)."""
+    tol = RTOL * np.maximum(np.abs(analytic), out_scale[:, None])
+    bad = np.abs(analytic - numeric) > tol
+    if bad.any():
+        r, c = np.argwhere(bad)[0]
+        raise AssertionError(f"{name}[{r},{c}]: AD {analytic[r, c]!r} vs FD {numeric[r, c]!r}")
+
+
+@pytest.mark.parametrize("slip", [0.05, 0.3, 0.8, -0.4])
+@pytest.mark.parametrize("sinkage", [0.002, 0.02, 0.05])
+def test_contact_jacobian_matches_central_differences(point_params, slip, sinkage):
+    fns = contact.build()
+    p = point_params.vector()
+    x = np.array([sinkage, 0.01, slip])
+    angle = 0.13 / 12 * 2 * np.pi  # ripple near its crest: sigma + ripple > 0 everywhere
+
+    def forces(x_, p_):
+        out = fns.contact(x_[0], x_[1], x_[2], angle, p_)
+        return np.array([float(out[0]), float(out[1]), float(out[2])])
+
+    d_state, d_params = (np.array(m) for m in fns.contact_jacobian(x[0], x[1], x[2], angle, p))
+    f0 = forces(x, p)
+    x_scale = np.array([sinkage, 0.01, 1.0])  # m, m/s, slip
+    num_state = np.column_stack([
+        (forces(x + STEP * s * e, p) - forces(x - STEP * s * e, p)) / (2 * STEP * s)
+        for s, e in zip(x_scale, np.eye(3), strict=True)])
+    _check("d_state", d_state * x_scale, num_state * x_scale, np.abs(f0))
+
+    h = STEP * _scales(p)
+    num_params = np.column_stack([
+        (forces(x, p + hk * e) - forces(x, p - hk * e)) / (2 * hk)
+        for hk, e in zip(h, np.eye(len(p)), strict=True)])
+    # scale columns: derivative per relative change of the parameter, compared on |force|
+    _check("d_params", d_params * _scales(p), num_params * _scales(p), np.abs(f0))
+
+
+@pytest.mark.parametrize("slip", [0.05, 0.3, 0.8])
+@pytest.mark.parametrize("load", [5.0, 30.0, 62.0])
+def test_steady_jacobian_matches_central_differences(point_params, slip, load):
+    fns = contact.build()
+    p = point_params.vector()
+    keys = ("sinkage", "normal_force", "drawbar_pull", "torque")
+
+    def steady(load_, slip_, p_):
+        out = dict(zip(contact.STEADY_OUTPUTS, fns.steady(load_, slip_, p_), strict=True))
+        return np.array([float(out[k]) for k in keys])
+
+    jac = model.steady_jacobian(point_params, load, slip)
+    y0 = steady(load, slip, p)
+    num_inputs = np.column_stack([
+        (steady(load + STEP * load, slip, p) - steady(load - STEP * load, slip, p))
+        / (2 * STEP * load),
+        (steady(load, slip + STEP, p) - steady(load, slip - STEP, p)) / (2 * STEP)])
+    _check("d_inputs", jac["d_inputs"] * [load, 1.0], num_inputs * [load, 1.0], np.abs(y0))
+    h = STEP * _scales(p)
+    num_params = np.column_stack([
+        (steady(load, slip, p + hk * e) - steady(load, slip, p - hk * e)) / (2 * hk)
+        for hk, e in zip(h, np.eye(len(p)), strict=True)])
+    _check("d_params", jac["d_params"] * _scales(p), num_params * _scales(p), np.abs(y0))
+
+
+def test_jacobians_cover_every_soil_parameter():
+    """The params Jacobian has one column per table row, in table order."""
+    fns = contact.build()
+    assert fns.contact_jacobian.size_out("d_params") == (3, len(NAMES))
+    assert fns.steady_jacobian.size_out("d_params") == (4, len(NAMES))
+    assert fns.steady_jacobian.size_out("d_inputs") == (4, 2)
