@@ -68,7 +68,7 @@ from .parameters import INDEX, NAMES
 
 DEFAULT_NODES = 12
 GRADING = 3
-NEWTON_ITERATIONS = 10
+NEWTON_ITERATIONS = 16  # ~4 suffice when driving; degenerate corners needed up to 16
 SCAN_POINTS = 12  # bracketing scan of the sinkage solve, log-spaced in the entry angle
 SCAN_MIN = 1e-4  # rad: smallest scanned entry angle (below it the power-law regime holds)
 THETA_MIN = 1e-12  # rad: lower end of the sinkage-solve bracket (z ~ 1e-26 m)
@@ -81,7 +81,7 @@ CONTACT_OUTPUTS = (
     "sinkage_exponent", "ripple_amplitude", "normal_force_static",
 )
 STEADY_INPUTS = ("load", "slip", "p")
-STEADY_OUTPUTS = ("sinkage", *CONTACT_OUTPUTS, "residual", "capacity")
+STEADY_OUTPUTS = ("sinkage", *CONTACT_OUTPUTS, "residual", "last_step", "capacity")
 FORCES = ("normal_force", "drawbar_pull", "torque")
 
 
@@ -216,8 +216,9 @@ class ModelFunctions:
     - ``contact(sinkage, sinkage_rate, slip, wheel_angle, p)`` -> CONTACT_OUTPUTS (ripple on).
     - ``contact_jacobian`` -> ``d_state`` (3x3: normal_force, drawbar_pull, torque by sinkage,
       sinkage_rate, slip) and ``d_params`` (3 x len(p)).
-    - ``sinkage_solve(load, slip, p)`` -> ``sinkage``, ``residual`` (relative), ``capacity``
-      (normal force fully buried). Ripple-free, zero sinkage rate.
+    - ``sinkage_solve(load, slip, p)`` -> ``sinkage``, ``residual`` (relative), ``last_step``
+      (last Newton step in log(theta_f)), ``capacity`` (normal force fully buried). Ripple-free,
+      zero sinkage rate.
     - ``steady(load, slip, p)`` -> STEADY_OUTPUTS: the solve plus the ripple-free contact there.
     - ``steady_jacobian(load, slip, p, sinkage)`` -> ``d_inputs`` (4x2: sinkage, normal_force,
       drawbar_pull, torque by load, slip) and ``d_params`` (4 x len(p)), by the implicit function
@@ -247,12 +248,14 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: int):
        equilibria.)
     2. Safeguarded Newton in y = log(theta_f) on that bracket, on log(Fz) - log(W) (nearly linear:
        Fz grows like theta_f**(2n+1)) or (Fz - W)/W where Fz <= 0; a step that leaves the bracket
-       is replaced by regula falsi on the bracket (whose end residuals are tracked), bisection
-       if that fails. Unrolled, so the solve is a pure CasADi expression.
+       is replaced by Illinois regula falsi on the bracket (whose end residuals are tracked),
+       bisection if that fails. Unrolled, so the solve is a pure CasADi expression.
 
-    Returns sinkage, entry angle, the relative residual of the final iterate and the capacity
-    (Fz_static fully buried). Callers must check load <= capacity and the residual
-    (``model.steady_state`` does); the residual is a checked output, not an assumption.
+    Returns sinkage, entry angle, the relative residual of the final iterate, the size of the last
+    step in log(theta_f) and the capacity (Fz_static fully buried). Callers must check
+    load <= capacity and convergence: a small residual, or a last step at rounding level (the
+    root pinned in theta_f when the load is a vanishing fraction of force terms that cancel)
+    (``model.steady_state`` does); convergence is a checked output, not an assumption.
     """
     th = ca.SX.sym("theta_f")
     fz = _arc(th, slip, 0, P, nodes, ripple=False)["normal_force_static"]
@@ -284,23 +287,32 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: int):
         return ca.if_else(ca.logic_and(rf >= lo, rf <= hi), rf, (lo + hi) / 2)
 
     y = fallback(lo, hi, h_lo, h_hi)
+    last_step = ca.SX(math.inf)
+    last_below = ca.SX(-1)  # which end the previous iterate replaced: 1 lo, 0 hi, -1 none
     for _ in range(NEWTON_ITERATIONS):
         theta = ca.exp(y)
         f, df = fz_fun(theta, slip, P.p)
         h = residual_of(f)
         slope = theta * df / ca.if_else(f > 0, ca.fmax(f, 1e-300), w_safe)
         below = h <= 0
+        # Illinois: an end kept twice in a row has its residual halved, so regula falsi
+        # cannot stagnate against it.
+        h_hi = ca.if_else(ca.logic_and(below, last_below == 1), h_hi / 2, h_hi)
+        h_lo = ca.if_else(ca.logic_and(1 - below, last_below == 0), h_lo / 2, h_lo)
+        last_below = below
         lo, h_lo = ca.if_else(below, y, lo), ca.if_else(below, h, h_lo)
         hi, h_hi = ca.if_else(below, hi, y), ca.if_else(below, h_hi, h)
         step = y - h / ca.fmax(slope, 1e-12)  # F' <= 0 (non-monotone corner): fall back
         inside = ca.logic_and(step >= lo, step <= hi)
-        y = ca.if_else(inside, step, fallback(lo, hi, h_lo, h_hi))
+        y_next = ca.if_else(inside, step, fallback(lo, hi, h_lo, h_hi))
+        last_step, y = ca.fabs(y_next - y), y_next
     theta = ca.if_else(load > 0, ca.exp(y), 0)
     f, _ = fz_fun(theta, slip, P.p)
     Rc, _, _ = _radii(P)
     sinkage = 2 * Rc * ca.sin(theta / 2) ** 2  # = R_c*(1 - cos(theta)), without cancellation
     residual = ca.if_else(load > 0, (f - load) / ca.fmax(load, 1e-300), 0)
-    return sinkage, theta, residual, capacity
+    last_step = ca.if_else(load > 0, last_step, 0)
+    return sinkage, theta, residual, last_step, capacity
 
 
 @lru_cache(maxsize=4)
@@ -320,13 +332,15 @@ def build(nodes: int = DEFAULT_NODES) -> ModelFunctions:
         list(CONTACT_INPUTS), ["d_state", "d_params"])
 
     load = ca.SX.sym("load")
-    sink, theta, residual, capacity = _sinkage_solve_expr(load, slip, P, nodes)
-    sinkage_solve = ca.Function("sinkage_solve", [load, slip, p], [sink, residual, capacity],
-                                list(STEADY_INPUTS), ["sinkage", "residual", "capacity"])
+    sink, theta, residual, last_step, capacity = _sinkage_solve_expr(load, slip, P, nodes)
+    sinkage_solve = ca.Function("sinkage_solve", [load, slip, p],
+                                [sink, residual, last_step, capacity], list(STEADY_INPUTS),
+                                ["sinkage", "residual", "last_step", "capacity"])
 
     quasi = _arc(theta, slip, 0, P, nodes, ripple=False)  # at the solved angle: no round trip
     steady = ca.Function("steady", [load, slip, p],
-                         [sink, *(quasi[k] for k in CONTACT_OUTPUTS), residual, capacity],
+                         [sink, *(quasi[k] for k in CONTACT_OUTPUTS), residual, last_step,
+                          capacity],
                          list(STEADY_INPUTS), list(STEADY_OUTPUTS))
 
     # Implicit function theorem at a solved sinkage: Fz_static(z, slip, p) = load.

@@ -19,6 +19,10 @@ from .slip import paper_from_traction, to_traction
 
 RESIDUAL_TOLERANCE = 1e-9
 """Largest accepted relative normal-force residual of the sinkage solve (it reaches ~1e-15)."""
+STEP_TOLERANCE = 1e-13
+"""Alternatively accepted: last Newton step in log(entry angle) at rounding level, i.e. the root
+is pinned in sinkage although the load is too small a part of cancelling force terms for the
+relative force residual to reach RESIDUAL_TOLERANCE."""
 
 
 def _params(params: Mapping[str, float] | ParameterSet) -> ParameterSet:
@@ -68,7 +72,7 @@ def capacity(params: Mapping[str, float] | ParameterSet, slip: float,
     """Static normal force [N] with the wheel buried to its contact radius: the largest load."""
     ps = _params(params)
     i = to_traction(slip, slip_definition)
-    return float(_contact.build().sinkage_solve(1.0, i, ps.vector())[2])
+    return float(_contact.build().sinkage_solve(1.0, i, ps.vector())[3])
 
 
 def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: float,
@@ -88,10 +92,13 @@ def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: 
     out = _named(_contact.build().steady(w, i, ps.vector()), _contact.STEADY_OUTPUTS)
     if w > out["capacity"]:
         raise LoadTooLargeError(w, out["capacity"], contact_radius(ps))
-    if not abs(out["residual"]) <= RESIDUAL_TOLERANCE:
+    converged = (abs(out["residual"]) <= RESIDUAL_TOLERANCE
+                 or out["last_step"] <= STEP_TOLERANCE)
+    if not converged:
         raise SolveError(
             f"sinkage solve did not converge for load {w:g} N, slip {i:g}: relative residual "
-            f"{out['residual']:.3g} > {RESIDUAL_TOLERANCE:g}")
+            f"{out['residual']:.3g} > {RESIDUAL_TOLERANCE:g} and last step "
+            f"{out['last_step']:.3g} > {STEP_TOLERANCE:g} in log(entry angle)")
     out.update(load=w, slip=i, slip_paper=paper_from_traction(i))
     return out
 

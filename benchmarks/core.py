@@ -1,0 +1,124 @@
+"""Core-model speed: force evaluations and quasi-static solves, interpreted and compiled.
+
+    python benchmarks/core.py [--points 100000] [--repeats 5] [--no-compile]
+
+Prints the median of repeats for:
+- one contact-force evaluation called from Python (casadi Function call);
+- per point through Function.map over N points (CasADi's virtual machine);
+- the same mapped Functions generated as C, compiled with the machine's C compiler (-O3) and
+  loaded with casadi.external;
+- quasi-static sinkage solves per second, both ways;
+- the baseline measured in the same run: the independent scipy-quad Wong-Reece reference of the
+  tests (tests/classical_reference.py), per force evaluation and per solve.
+One core: CasADi's serial map; no threads.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from wheelterrain import contact, presets
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def median_time(fn, repeats: int) -> float:
+    fn()  # warm-up
+    times = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return statistics.median(times)
+
+
+def compile_external(fn: ca.Function, workdir: Path) -> ca.Function:
+    """Generate C for ``fn``, compile it into a shared library and load it back."""
+    compiler = shutil.which("cc") or shutil.which("gcc")
+    if compiler is None:
+        raise RuntimeError("no C compiler (cc/gcc) on PATH")
+    c_file = workdir / f"{fn.name()}.c"
+    fn.generate(str(c_file.name), {"with_header": False})
+    Path(c_file.name).replace(c_file)
+    so = workdir / f"{fn.name()}.so"
+    subprocess.run([compiler, "-O3", "-march=native", "-fPIC", "-shared", str(c_file), "-o",
+                    str(so), "-lm"], check=True)
+    return ca.external(fn.name(), str(so))
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--points", type=int, default=100_000)
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--no-compile", action="store_true")
+    args = parser.parse_args(argv)
+    n = args.points
+
+    fns = contact.build()
+    p = presets.load("paper-table2").vector()
+    rng = np.random.default_rng(0)
+    z = rng.uniform(0.005, 0.045, n)
+    slip = rng.uniform(0.0, 0.5, n)
+    load = rng.uniform(20.0, 60.0, n)
+    P = np.tile(p[:, None], (1, n))
+    zeros = np.zeros(n)
+
+    print(f"core benchmark: {n} points, median of {args.repeats}, one core, "
+          f"{fns.nodes} nodes per panel, {contact.NEWTON_ITERATIONS} Newton steps")
+    single = median_time(lambda: [fns.contact(0.03, 0.0, 0.2, 0.0, p) for _ in range(200)],
+                         args.repeats) / 200
+    print(f"  force eval, one call from Python      : {single * 1e6:9.2f} us")
+
+    contact_map = fns.contact.map(n)
+    solve_map = fns.sinkage_solve.map(n)
+    t_map = median_time(lambda: contact_map(z, zeros, slip, zeros, P), args.repeats) / n
+    t_solve = median_time(lambda: solve_map(load, slip, P), max(1, args.repeats // 2)) / n
+    print(f"  force eval, Function.map (CasADi VM)   : {t_map * 1e6:9.3f} us/pt "
+          f"= {1 / t_map:10.3g} /s")
+    print(f"  sinkage solve, Function.map (VM)       : {t_solve * 1e6:9.3f} us/pt "
+          f"= {1 / t_solve:10.3g} /s")
+
+    if not args.no_compile:
+        with tempfile.TemporaryDirectory() as tmp:
+            work = Path(tmp)
+            t0 = time.perf_counter()
+            c_contact = compile_external(contact_map, work)
+            c_solve = compile_external(solve_map, work)
+            build = time.perf_counter() - t0
+            tc_map = median_time(lambda: c_contact(z, zeros, slip, zeros, P), args.repeats) / n
+            tc_solve = median_time(lambda: c_solve(load, slip, P), args.repeats) / n
+            check = np.max(np.abs(np.array(c_contact(z, zeros, slip, zeros, P)[1])
+                                  - np.array(contact_map(z, zeros, slip, zeros, P)[1])))
+        print(f"  (generated C compiled in {build:.1f} s; max |DP(C) - DP(VM)| = {check:.1e} N)")
+        print(f"  force eval, mapped + compiled C        : {tc_map * 1e6:9.3f} us/pt "
+              f"= {1 / tc_map:10.3g} /s   (goal >= 1e6 /s)")
+        print(f"  sinkage solve, mapped + compiled C     : {tc_solve * 1e6:9.3f} us/pt "
+              f"= {1 / tc_solve:10.3g} /s   (goal >= 1e5 /s)")
+
+    sys.path.insert(0, str(ROOT / "tests"))  # the reference lives with the tests it serves
+    from classical_reference import Classical
+
+    ref = Classical(R=0.05, b=0.075, c=0.0, phi=np.radians(23), kc=0.63, kphi=80, n=1.1,
+                    gamma=15620, K=0.036)
+    t_ref = median_time(lambda: ref.forces(0.03, 0.2), args.repeats)
+    t_ref_solve = median_time(lambda: ref.sinkage(62.0, 0.2), 1)
+    print(f"  baseline: scipy-quad reference, force  : {t_ref * 1e6:9.1f} us "
+          f"(mapped VM {t_ref / t_map:6.0f}x faster"
+          + ("" if args.no_compile else f", compiled {t_ref / tc_map:7.0f}x") + ")")
+    print(f"  baseline: scipy reference, solve       : {t_ref_solve * 1e6:9.1f} us "
+          f"(mapped VM {t_ref_solve / t_solve:6.0f}x faster"
+          + ("" if args.no_compile else f", compiled {t_ref_solve / tc_solve:7.0f}x") + ")")
+
+
+if __name__ == "__main__":
+    main()

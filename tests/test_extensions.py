@@ -1,0 +1,71 @@
+"""The extensions beyond the classical wheel behave as documented."""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from wheelterrain import contact, model
+from wheelterrain.parameters import INDEX
+
+
+def test_ripple_follows_the_wheel_angle_with_the_grouser_period(table2):
+    period = 2 * math.pi / table2["grouser.count"]
+    angles = np.linspace(0, period, 7)
+    fz = [model.contact_forces(table2, 0.03, 0.2, wheel_angle=a)["normal_force"] for a in angles]
+    assert fz[0] == pytest.approx(fz[-1], rel=1e-12)  # periodic in the wheel angle
+    assert max(fz) - min(fz) > 0.5  # and really rippling (N)
+    static = model.contact_forces(table2, 0.03, 0.2)["normal_force_static"]
+    # the clipped ripple averages close to, not exactly at, the ripple-free force
+    mean = np.mean([model.contact_forces(table2, 0.03, 0.2, wheel_angle=a)["normal_force"]
+                    for a in np.linspace(0, period, 64, endpoint=False)])
+    assert mean == pytest.approx(static, rel=0.05)
+
+
+def test_ripple_off_when_both_coefficients_are_zero(table2):
+    ps = table2.with_values({"ripple.k_g": 0.0, "ripple.k_0": 0.0})
+    a = model.contact_forces(ps, 0.03, 0.2, wheel_angle=0.1)
+    b = model.contact_forces(ps, 0.03, 0.2, wheel_angle=1.3)
+    assert a["normal_force"] == b["normal_force"]
+    assert a["ripple_amplitude"] == 0.0
+
+
+def test_wong_hump_peaks_at_K_and_tends_to_the_residual_ratio(table2):
+    j = ca.SX.sym("j")
+    p = ca.SX.sym("p", len(INDEX))
+    g = ca.Function("g", [j, p], [contact.shear_function(j, contact._P(p))])
+    ps = table2.with_values({"model.shear_model": 1, "soil.residual_ratio": 0.6}).vector()
+    K = table2["soil.shear_modulus"]
+    assert float(g(K, ps)) == pytest.approx(1.0, rel=1e-14)
+    assert float(g(50 * K, ps)) == pytest.approx(0.6, rel=1e-9)
+    assert float(g(-K, ps)) == pytest.approx(-1.0, rel=1e-14)  # odd
+    janosi = table2.with_values({"model.shear_model": 0}).vector()
+    assert float(g(K, janosi)) == pytest.approx(1 - math.exp(-1), rel=1e-14)
+
+
+def test_damping_acts_only_in_contact_and_never_pulls(table2):
+    still = model.contact_forces(table2, 0.02, 0.2)["normal_force"]
+    sinking = model.contact_forces(table2, 0.02, 0.2, sinkage_rate=0.01)["normal_force"]
+    assert sinking - still == pytest.approx(table2["soil.damping"] * 0.01, rel=1e-3)
+    rising = model.contact_forces(table2, 0.02, 0.2, sinkage_rate=-10.0)["normal_force"]
+    assert rising == 0.0
+
+
+def test_grouser_tip_radius_gives_positive_pull_at_zero_paper_slip(table2):
+    """model-notes: contact at the tips with slip referenced to the rim gives traction at s = 0."""
+    rim = model.steady_state(table2, 62, 0.0)
+    tips = model.steady_state(table2.with_values({"model.contact_radius_factor": 1.0,
+                                                  "model.shear_radius_factor": 1.0}), 62, 0.0)
+    assert rim["drawbar_pull"] < 0 < tips["gross_thrust"]
+    assert tips["drawbar_pull"] > rim["drawbar_pull"]
+
+
+def test_slip_sinkage_exponent_deepens_with_slip(table2):
+    flat = table2.with_values({"soil.n1": 0.0})
+    z_flat = [model.steady_state(flat, 62, i)["sinkage"] for i in (0.0, 0.4)]
+    z_n1 = [model.steady_state(table2, 62, i)["sinkage"] for i in (0.0, 0.4)]
+    assert z_n1[0] == pytest.approx(z_flat[0], rel=1e-12)  # n1 has no effect at zero slip
+    assert z_n1[1] - z_n1[0] > z_flat[1] - z_flat[0]

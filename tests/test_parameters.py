@@ -1,0 +1,74 @@
+"""The parameter table, the presets and the slip definitions."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from wheelterrain import presets
+from wheelterrain.errors import InputError, ParameterError
+from wheelterrain.parameters import TABLE, ParameterSet, parse_assignments
+from wheelterrain.slip import paper_from_traction, to_traction, traction_from_paper
+
+
+def test_every_row_is_complete_and_its_default_valid():
+    assert len({p.name for p in TABLE}) == len(TABLE)
+    for p in TABLE:
+        assert p.unit, p.name
+        assert p.description, p.name
+        assert p.source, p.name
+        assert p.min <= p.default <= p.max, p.name
+        assert "." in p.name, p.name
+
+
+def test_paper_presets_carry_the_paper_values():
+    t1, t2 = presets.load("paper-table1"), presets.load("paper-table2")
+    expected2 = {"soil.k_c": 0.63, "soil.k_phi": 80, "soil.shear_modulus": 0.036, "soil.n0": 1.1,
+                 "soil.gamma": 15620, "soil.gamma_variation": 1562, "soil.n1": 1.15,
+                 "soil.phi": math.radians(23), "soil.cohesion": 0, "grouser.height": 0.01,
+                 "soil.damping": 800, "ripple.k_g": 0.07, "ripple.k_0": 0.035,
+                 "wheel.radius": 0.05, "wheel.width": 0.075, "grouser.count": 12,
+                 "grouser.thickness": 0.001, "wheel.mass": 1.0}
+    for name, value in expected2.items():
+        assert t2[name] == pytest.approx(value, rel=1e-15), name
+    expected1 = {"soil.k_c": 0, "soil.n0": 1.0, "soil.gamma": 13734, "soil.phi": math.radians(28),
+                 "ripple.k_g": 0.06, "ripple.k_0": 0.03, "soil.gamma_variation": 1373.4}
+    for name, value in expected1.items():
+        assert t1[name] == pytest.approx(value, rel=1e-15), name
+
+
+def test_preset_documents_its_readings():
+    doc = presets.read("paper-table2")
+    assert "0.0075" in doc["provenance"]["readings"]["wheel.width"]
+
+
+def test_parameter_set_rejects_bad_values_with_the_range():
+    with pytest.raises(ParameterError, match=r"wheel.width = -1 is out of range; valid range"):
+        ParameterSet({"wheel.width": -1})
+    with pytest.raises(ParameterError, match="is not a parameter"):
+        ParameterSet({"wheel.diameter": 0.1})
+    with pytest.raises(ParameterError, match="must be a whole number"):
+        ParameterSet({"grouser.count": 2.5})
+
+
+def test_assignments_parse_degrees_only_for_angles():
+    assert parse_assignments(["soil.phi=45deg"])["soil.phi"] == pytest.approx(math.pi / 4)
+    with pytest.raises(ParameterError, match="takes m, not deg"):
+        parse_assignments(["wheel.radius=3deg"])
+
+
+@pytest.mark.parametrize("s", [0.0, 0.25, 0.5, 0.75, -0.4, 10.0])
+def test_slip_definitions_are_inverse(s):
+    i = traction_from_paper(s)
+    assert paper_from_traction(i) == pytest.approx(s, rel=1e-14)
+    assert 1 - i == pytest.approx(1 / (1 + s), rel=1e-14)
+    assert to_traction(s, "paper") == pytest.approx(i, rel=1e-15)
+
+
+def test_slip_validation():
+    assert math.isinf(paper_from_traction(1.0))
+    with pytest.raises(InputError, match="slip_definition"):
+        to_traction(0.1, "wheel")
+    with pytest.raises(InputError, match=r"valid range \[-1, 1\]"):
+        to_traction(-1.2, "traction")
