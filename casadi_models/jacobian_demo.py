@@ -25,7 +25,9 @@ def main() -> None:
     for k, name in enumerate(rows):
         print(f"  {name:18} load {jac['d_inputs'][k, 0] * 0.62:+.4g}   "
               f"slip {jac['d_inputs'][k, 1] * slip * 0.01:+.4g}")
-    per_pct = jac["d_params"] * values * 0.01
+    # parameters at zero have no 1 % change (and d/d exit_ratio is infinite at 0): skip them
+    per_pct = np.multiply(jac["d_params"], values * 0.01, out=np.zeros_like(jac["d_params"]),
+                          where=values != 0)
     order = np.argsort(-np.abs(per_pct[2]))[:5]
     print("drawbar pull per 1 % change of the most influential parameters:")
     for j in order:
