@@ -219,6 +219,8 @@ class ModelFunctions:
     - ``sinkage_solve(load, slip, p)`` -> ``sinkage``, ``residual`` (relative), ``last_step``
       (last Newton step in log(theta_f)), ``capacity`` (normal force fully buried). Ripple-free,
       zero sinkage rate.
+    - ``capacity(slip, p)`` -> ``capacity``: static normal force fully buried (sinkage = R_c),
+      the largest load the wheel can carry; the same expression the solve checks against.
     - ``steady(load, slip, p)`` -> STEADY_OUTPUTS: the solve plus the ripple-free contact there.
     - ``steady_jacobian(load, slip, p, sinkage)`` -> ``d_inputs`` (4x2: sinkage, normal_force,
       drawbar_pull, torque by load, slip) and ``d_params`` (4 x len(p)), by the implicit function
@@ -228,6 +230,7 @@ class ModelFunctions:
     contact: ca.Function
     contact_jacobian: ca.Function
     sinkage_solve: ca.Function
+    capacity: ca.Function
     steady: ca.Function
     steady_jacobian: ca.Function
     nodes: int
@@ -262,8 +265,8 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: int):
     fz_fun = ca.Function("fz_static", [th, slip, P.p], [fz, ca.jacobian(fz, th)])
     fz_only = ca.Function("fz_static_value", [th, slip, P.p], [fz])
 
-    log_load = ca.log(ca.fmax(load, 1e-300))
     w_safe = ca.fmax(load, 1e-300)
+    log_load = ca.log(w_safe)
 
     def residual_of(f):  # sign-consistent residual: log ratio where F > 0, linear where F <= 0
         return ca.if_else(f > 0, ca.log(ca.fmax(f, 1e-300)) - log_load, (f - load) / w_safe)
@@ -310,7 +313,7 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: int):
     f, _ = fz_fun(theta, slip, P.p)
     Rc, _, _ = _radii(P)
     sinkage = 2 * Rc * ca.sin(theta / 2) ** 2  # = R_c*(1 - cos(theta)), without cancellation
-    residual = ca.if_else(load > 0, (f - load) / ca.fmax(load, 1e-300), 0)
+    residual = ca.if_else(load > 0, (f - load) / w_safe, 0)
     last_step = ca.if_else(load > 0, last_step, 0)
     return sinkage, theta, residual, last_step, capacity
 
@@ -336,6 +339,7 @@ def build(nodes: int = DEFAULT_NODES) -> ModelFunctions:
     sinkage_solve = ca.Function("sinkage_solve", [load, slip, p],
                                 [sink, residual, last_step, capacity], list(STEADY_INPUTS),
                                 ["sinkage", "residual", "last_step", "capacity"])
+    capacity_fn = ca.Function("capacity", [slip, p], [capacity], ["slip", "p"], ["capacity"])
 
     quasi = _arc(theta, slip, 0, P, nodes, ripple=False)  # at the solved angle: no round trip
     steady = ca.Function("steady", [load, slip, p],
@@ -355,4 +359,5 @@ def build(nodes: int = DEFAULT_NODES) -> ModelFunctions:
     d_params = ca.vertcat(dz_dp, ca.jacobian(ys, p) + dy_dz @ dz_dp)
     steady_jacobian = ca.Function("steady_jacobian", [load, slip, p, z], [d_inputs, d_params],
                                   [*STEADY_INPUTS, "sinkage"], ["d_inputs", "d_params"])
-    return ModelFunctions(contact, contact_jacobian, sinkage_solve, steady, steady_jacobian, nodes)
+    return ModelFunctions(contact, contact_jacobian, sinkage_solve, capacity_fn, steady,
+                          steady_jacobian, nodes)

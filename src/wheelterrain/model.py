@@ -72,7 +72,7 @@ def capacity(params: Mapping[str, float] | ParameterSet, slip: float,
     """Static normal force [N] with the wheel buried to its contact radius: the largest load."""
     ps = _params(params)
     i = to_traction(slip, slip_definition)
-    return float(_contact.build().sinkage_solve(1.0, i, ps.vector())[3])
+    return float(_contact.build().capacity(i, ps.vector()))
 
 
 def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: float,
