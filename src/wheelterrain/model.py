@@ -34,8 +34,11 @@ def _finite(name: str, value: float, lo: float = -math.inf, hi: float = math.inf
         number = float(value)
     except (TypeError, ValueError):
         raise InputError(name, value, "is not a number") from None
-    if not math.isfinite(number) or not lo <= number <= hi:
-        raise InputError(name, value, f"is out of range; valid range [{lo:g}, {hi:g}]")
+    valid = f"valid range [{lo:g}, {hi:g}]"
+    if not math.isfinite(number):
+        raise InputError(name, value, f"must be finite; {valid}")
+    if not lo <= number <= hi:
+        raise InputError(name, value, f"is out of range; {valid}")
     return number
 
 
