@@ -48,11 +48,17 @@ Choices where the equations are silent, each documented:
 - cos(theta) - cos(theta_f) and sin(theta_f) - sin(theta) are formed from half angles, exactly
   non-negative and free of cancellation at small sinkage.
 
-Quadrature: the arc is split at theta_m into two Gauss-Legendre panels with a graded map
-theta = theta_f - (theta_f - theta_m)*u**3 (front) and theta = theta_r + (theta_m - theta_r)*u**3
-(rear), u in [0, 1]. The grading removes the (theta_f - theta)**n end-point singularity of the
-stress, so 12 nodes per panel integrate to ~1e-12 relative. Both panels evaluate sigma at the
-same theta*, so the stress is computed once per node pair.
+Quadrature: the arc is split at theta_m into a front panel [theta_m, theta_f] and a rear panel
+[theta_r, theta_m]. Both are parametrised by one offset g in [0, 1] (front:
+theta = theta_f - (theta_f - theta_m)*g, rear: theta = theta_r + (theta_m - theta_r)*g), so a rear
+node's theta* is a front node's theta and the stress is computed once per node pair. g = 0 is the
+(theta_f - theta)**n end-point singularity of the stress in both panels; graded Gauss-Legendre maps
+(u**3-like at the singular end) remove it. Where the shear displacement j changes sign on the arc
+(braking, or a slip radius larger than the shear radius) the odd shear law has a kink and, for a
+small shear modulus K, a boundary layer of width ~K/|dj/dtheta| on both sides; both panels are then
+split at the offset of that reversal (found by safeguarded Newton) into sub-panels graded toward
+it. DEFAULT_NODES = (16, 10) nodes per panel before and after the split; measured against adaptive
+quadrature over the test grid (tests/test_classical.py): ~1e-9 relative driving, ~1e-7 braking.
 """
 
 from __future__ import annotations
@@ -66,11 +72,12 @@ import numpy as np
 
 from .parameters import INDEX, NAMES
 
-DEFAULT_NODES = 12
+DEFAULT_NODES = (16, 10)  # per panel: up to the shear reversal, after it
 GRADING = 3
 NEWTON_ITERATIONS = 16  # ~4 suffice when driving; degenerate corners needed up to 16
 SCAN_POINTS = 12  # bracketing scan of the sinkage solve, log-spaced in the entry angle
 SCAN_MIN = 1e-4  # rad: smallest scanned entry angle (below it the power-law regime holds)
+REVERSAL_ITERATIONS = 10  # safeguarded Newton steps locating the shear reversal
 THETA_MIN = 1e-12  # rad: lower end of the sinkage-solve bracket (z ~ 1e-26 m)
 FULL_BURIAL = math.pi / 2  # entry angle at sinkage = contact radius
 
@@ -85,11 +92,57 @@ STEADY_OUTPUTS = ("sinkage", *CONTACT_OUTPUTS, "residual", "last_step", "capacit
 FORCES = ("normal_force", "drawbar_pull", "torque")
 
 
-def _graded_rule(nodes: int) -> tuple[np.ndarray, np.ndarray]:
-    """Graded Gauss-Legendre rule on [0, 1]: offsets u**3 and weights 3*u**2*w."""
-    x, w = np.polynomial.legendre.leggauss(nodes)
-    u, w = (x + 1.0) / 2.0, w / 2.0
-    return u**GRADING, GRADING * u ** (GRADING - 1) * w
+def _split_rule(split: ca.SX, nodes: tuple[int, int]) -> tuple[ca.SX, ca.SX]:
+    """Offsets g in [0, 1] and weights of a panel split at ``split`` into two graded
+    Gauss-Legendre sub-panels of ``nodes[0]`` and ``nodes[1]`` nodes.
+
+    [0, split]: quintic map 10u^3 - 15u^4 + 6u^5, graded like u^3 at both ends (the stress
+    singularity at g = 0, the shear reversal at the split); it is the whole panel when the shear
+    keeps its sign (split = 1). [split, 1]: u^3 graded toward the reversal.
+    """
+    x1, w1 = np.polynomial.legendre.leggauss(nodes[0])
+    u1, w1 = (x1 + 1.0) / 2.0, w1 / 2.0
+    x2, w2 = np.polynomial.legendre.leggauss(nodes[1])
+    u2, w2 = (x2 + 1.0) / 2.0, w2 / 2.0
+    s1, ds1 = u1**3 * (10 - 15 * u1 + 6 * u1**2), 30 * u1**2 * (1 - u1) ** 2 * w1
+    s2, ds2 = u2**GRADING, GRADING * u2 ** (GRADING - 1) * w2
+    g = ca.vertcat(split * ca.DM(s1), split + (1 - split) * ca.DM(s2))
+    weights = ca.vertcat(split * ca.DM(ds1), (1 - split) * ca.DM(ds2))
+    return g, weights
+
+
+def _reversal_offset(theta_f, theta_r, d_front, d_rear, Rs, v_ratio) -> ca.SX:
+    """Where the shear displacement j changes sign on the arc, as the offset g in [0, 1] shared by
+    both quadrature panels (front: theta = theta_f - d_front*g, rear: theta = theta_r + d_rear*g),
+    so that a panel edge sits on the kink of the odd shear law; 1 when j keeps its sign.
+
+    With x = theta_f - theta, j(x) = R_s*x - v*(sin(theta_f) - sin(theta_f - x)), v = (1 - i)*R_ref,
+    j'(x) = R_s - v*cos(theta). j rises from 0 at the entry while v*cos(theta) < R_s, peaks where
+    cos(theta) = R_s/v (theta = theta_c), and falls while |theta| < theta_c: a braked wheel
+    (v > R_s) has its reversal on that falling stretch, found by Newton safeguarded by bisection.
+    A second reversal beyond -theta_c needs an exit angle past -theta_c under deep braking; it is
+    not split (its kink then costs accuracy, not robustness).
+    """
+    ratio = Rs / ca.fmax(v_ratio, 1e-300)
+    theta_c = ca.if_else(ratio < 1, ca.acos(ca.fmin(ratio, 1)), math.pi)
+    span = theta_f - theta_r
+
+    def j(x):
+        return Rs * x - v_ratio * 2 * ca.cos(theta_f - x / 2) * ca.sin(x / 2)
+
+    lo = ca.fmax(theta_f - theta_c, 0)  # the peak of j
+    hi = ca.fmin(span, theta_f + theta_c)
+    crossing = ca.logic_and(theta_c < theta_f, j(hi) < 0)
+    x = hi
+    for _ in range(REVERSAL_ITERATIONS):
+        f = j(x)
+        lo, hi = ca.if_else(f > 0, x, lo), ca.if_else(f > 0, hi, x)
+        step = x - f / (Rs - v_ratio * ca.cos(theta_f - x))
+        x = ca.if_else(ca.logic_and(step >= lo, step <= hi), step, (lo + hi) / 2)
+    front = x / ca.fmax(d_front, 1e-300)
+    rear = (span - x) / ca.fmax(d_rear, 1e-300)
+    offset = ca.if_else(x <= d_front, front, rear)
+    return ca.if_else(crossing, ca.fmin(ca.fmax(offset, 0), 1), 1)
 
 
 class _P:
@@ -132,7 +185,8 @@ def _offset_trig(theta_f: ca.SX, x: ca.SX) -> dict:
             "cos_drop": 2 * sa * sh, "sin_drop": 2 * cs * sh}
 
 
-def _arc(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: int, ripple: bool) -> dict:
+def _arc(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tuple[int, int],
+         ripple: bool) -> dict:
     """All contact quantities for a given entry angle (no damping). ``ripple=False`` drops it."""
     Rc, Rs, Rref = _radii(P)
     b = P["wheel.width"]
@@ -145,8 +199,10 @@ def _arc(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: int, rip
     theta_r = -2 * ca.asin(ca.sqrt(lam) * ca.sin(theta_f / 2))
     theta_m = (P["model.a0"] + P["model.a1"] * slip) * theta_f
 
-    g, w = (ca.DM(a) for a in _graded_rule(nodes))
+    v_ratio = (1 - slip) * Rref  # carriage speed / wheel angular speed
     d_front, d_rear = theta_f - theta_m, theta_m - theta_r
+    split = _reversal_offset(theta_f, theta_r, d_front, d_rear, Rs, v_ratio)
+    g, w = _split_rule(split, nodes)
     # x = theta_f - theta at each node, formed without cancellation
     front = _offset_trig(theta_f, d_front * g)  # also theta* of the rear nodes
     rear = _offset_trig(theta_f, (theta_f - theta_r) - d_rear * g)
@@ -154,7 +210,6 @@ def _arc(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: int, rip
     cos_f, sin_f, cos_r, sin_r = front["cos"], front["sin"], rear["cos"], rear["sin"]
     sigma0 = k_eq * front["cos_drop"] ** n  # shared by both panels
 
-    v_ratio = (1 - slip) * Rref  # carriage speed / wheel angular speed
     g_front = shear_function(Rs * front["x"] - v_ratio * front["sin_drop"], P)
     g_rear = shear_function(Rs * rear["x"] - v_ratio * rear["sin_drop"], P)
 
@@ -198,7 +253,7 @@ def _arc(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: int, rip
     }
 
 
-def _contact(z, z_rate, slip, wheel_angle, P: _P, nodes: int, ripple: bool) -> dict:
+def _contact(z, z_rate, slip, wheel_angle, P: _P, nodes: tuple[int, int], ripple: bool) -> dict:
     """Contact quantities at sinkage z (m, to the contact circle), with damping C_f*dz/dt."""
     Rc, _, _ = _radii(P)
     # arccos(1 - z/R_c) in its half-angle form, accurate for tiny sinkage (1 - z/R_c rounds)
@@ -233,7 +288,7 @@ class ModelFunctions:
     capacity: ca.Function
     steady: ca.Function
     steady_jacobian: ca.Function
-    nodes: int
+    nodes: tuple[int, int]
 
 
 def _symbols():
@@ -241,7 +296,7 @@ def _symbols():
             ca.SX.sym("wheel_angle"), ca.SX.sym("p", len(NAMES)))
 
 
-def _sinkage_solve_expr(load, slip, P: _P, nodes: int):
+def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int]):
     """Quasi-static sinkage: the shallowest entry angle at which Fz_static equals the load.
 
     1. Scan Fz_static at SCAN_POINTS log-spaced entry angles up to full burial (pi/2) and keep the
@@ -249,10 +304,12 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: int):
        surface meets first. (Fz_static(z) is monotone for driving wheels; in extreme braking
        corners the negative shear pulls the wheel down, it is not, and a load can have several
        equilibria.)
-    2. Safeguarded Newton in y = log(theta_f) on that bracket, on log(Fz) - log(W) (nearly linear:
-       Fz grows like theta_f**(2n+1)) or (Fz - W)/W where Fz <= 0; a step that leaves the bracket
-       is replaced by Illinois regula falsi on the bracket (whose end residuals are tracked),
-       bisection if that fails. Unrolled, so the solve is a pure CasADi expression.
+    2. Safeguarded Newton in y = log(theta_f) on that bracket, on asinh(Fz/W) - asinh(1): monotone
+       in Fz, ~log(Fz/W) and so nearly linear in y where Fz >> W (Fz grows like
+       theta_f**(2n+1)), and of moderate size where braking shear makes Fz negative (a plain
+       (Fz - W)/W there is huge next to the log branch and stalls regula falsi); a step that
+       leaves the bracket is replaced by Illinois regula falsi on the bracket (whose end
+       residuals are tracked), bisection if that fails. Unrolled: a pure CasADi expression.
 
     Returns sinkage, entry angle, the relative residual of the final iterate, the size of the last
     step in log(theta_f) and the capacity (Fz_static fully buried). Callers must check
@@ -266,10 +323,10 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: int):
     fz_only = ca.Function("fz_static_value", [th, slip, P.p], [fz])
 
     w_safe = ca.fmax(load, 1e-300)
-    log_load = ca.log(w_safe)
+    offset = math.asinh(1.0)
 
-    def residual_of(f):  # sign-consistent residual: log ratio where F > 0, linear where F <= 0
-        return ca.if_else(f > 0, ca.log(ca.fmax(f, 1e-300)) - log_load, (f - load) / w_safe)
+    def residual_of(f):  # monotone in F, zero at F = W, ~log(F/W) for F >> W, finite for F <= 0
+        return ca.asinh(f / w_safe) - offset
 
     scan = np.concatenate([[THETA_MIN], np.geomspace(SCAN_MIN, FULL_BURIAL, SCAN_POINTS)])
     values = [fz_only(t, slip, P.p) for t in scan]
@@ -296,7 +353,7 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: int):
         theta = ca.exp(y)
         f, df = fz_fun(theta, slip, P.p)
         h = residual_of(f)
-        slope = theta * df / ca.if_else(f > 0, ca.fmax(f, 1e-300), w_safe)
+        slope = theta * df / (w_safe * ca.sqrt(1 + (f / w_safe) ** 2))
         below = h <= 0
         # Illinois: an end kept twice in a row has its residual halved, so regula falsi
         # cannot stagnate against it.
@@ -319,7 +376,7 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: int):
 
 
 @lru_cache(maxsize=4)
-def build(nodes: int = DEFAULT_NODES) -> ModelFunctions:
+def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
     """Build (once per ``nodes``) every CasADi Function of the model."""
     z, z_rate, slip, angle, p = _symbols()
     P = _P(p)
