@@ -136,5 +136,101 @@ def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definiti
         click.echo(f"{key:22} {value:14.6g} {unit}{extra}")
 
 
+
+@main.command(epilog=EPILOG)
+@click.option("--out", default="build", show_default=True, type=click.Path(file_okay=False),
+              help="Directory to write WheelTerrain.fmu and SingleWheelRig.fmu into.")
+def build(out: str) -> None:
+    """Build the FMI 2.0 co-simulation FMUs (pythonfmu flavour).
+
+    \b
+    Writes OUT/WheelTerrain.fmu (the contact model; every table parameter is an FMU
+    parameter with its structured name) and OUT/SingleWheelRig.fmu (the paper's rig).
+    The host needs Python with numpy, casadi and pythonfmu's runtime; the wheelterrain
+    package is bundled inside. Try one alone:
+      fmpy simulate build/WheelTerrain.fmu --start-values quasi_static true soil.phi 0.45
+    """
+    from .fmubuild import BuildError
+    from .fmubuild import build as build_fmus
+
+    try:
+        for path in build_fmus(out):
+            click.echo(f"wrote {path}")
+    except BuildError as err:
+        click.echo(f"error: {err}", err=True)
+        sys.exit(EXIT_USAGE)
+
+
+@main.command(epilog=EPILOG)
+@preset_option
+@set_option
+@click.option("--fmu-dir", default="build", show_default=True,
+              type=click.Path(file_okay=False), help="Where `wheelterrain build` wrote the FMUs.")
+@click.option("--json", "json_file", type=click.Path(dir_okay=False),
+              help="Also write the results as JSON to this file.")
+@click.option("--out", default="validation/output", show_default=True,
+              type=click.Path(file_okay=False),
+              help="Directory for the time-series CSVs, the PNG plots and the SSP files.")
+@click.option("--step", default=1e-3, show_default=True, type=click.FloatRange(1e-5, 0.05),
+              help="Communication step [s].")
+@click.option("--stop", default=30.0, show_default=True, type=click.FloatRange(12.0, 3600.0),
+              help="Simulated time per case [s] (averages start after 10 s).")
+def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_file: str | None,
+              out: str, step: float, stop: float) -> None:
+    """Reproduce the paper's C1-C4 by co-simulating the two FMUs with fmpy.
+
+    \b
+    Each case: the rig drives the wheel at 3 cm/s rim speed with the carriage at
+    3 cm/s/(1 + s), s = 0, 0.25, 0.5, 0.75, under 62 N. After a 10 s settling time the
+    means are taken over whole grouser periods up to the stop time, and printed against
+    the experiment and the paper's own simulation (Table III). Writes OUT/<case>.csv,
+    OUT/<case>.png, OUT/means.png and OUT/<case>.ssp.
+    """
+    from pathlib import Path
+
+    from . import cosim, plots, ssp
+
+    ps = _load(preset, assignments)
+    out_dir = Path(out)
+    paper = cosim.table3()
+    try:
+        with click.progressbar(length=len(paper["cases"]), label="co-simulating C1-C4",
+                               file=sys.stderr) as bar:
+            results = cosim.reproduce(Path(fmu_dir), ps, step=step, stop=stop,
+                                      progress=lambda case: bar.update(0 if case == "C1" else 1))
+            bar.update(1)
+    except FileNotFoundError as err:
+        click.echo(f"error: {err}", err=True)
+        sys.exit(EXIT_USAGE)
+    rows = cosim.comparison(results)
+    mae = cosim.mean_absolute_errors(rows)
+    name = preset if not assignments else f"{preset} with {' '.join(assignments)}"
+    click.echo(f"C1-C4 co-simulation, preset {name}, step {step:g} s, {stop:g} s per case "
+               f"(wall time {sum(r.wall_time for r in results):.1f} s)")
+    click.echo(cosim.format_table(rows, mae))
+    experiment = {row["case"]: row["experiment"] for row in paper["cases"]}
+    for r in results:
+        cosim.write_csv(out_dir / f"{r.case}.csv", r)
+        plots.time_series(r, experiment[r.case], out_dir / f"{r.case}.png")
+        ssp.write(out_dir / f"{r.case}.ssp", Path(fmu_dir), r.case, ps, r.slip_paper,
+                  paper["load_N"], paper["wheel_speed_m_per_s"], stop, step)
+    plots.means_bar_chart(rows, out_dir / "means.png", preset)
+    click.echo(f"wrote {out_dir}/C1..C4.csv, C1..C4.png, means.png, C1..C4.ssp")
+    if json_file:
+        payload = {"preset": preset, "set": list(assignments), "step": step, "stop": stop,
+                   "averaging_windows": {r.case: list(r.window) for r in results},
+                   "cases": [{"case": row["case"], "slip_paper": row["slip_paper"],
+                              "drawbar_pull": row["drawbar_pull"],
+                              "normal_force": row["normal_force"], "sinkage": row["sinkage"],
+                              "experiment": {k: row[f"{k}_experiment"] for k in
+                                             ("drawbar_pull", "normal_force", "sinkage")},
+                              "paper_simulation": {k: row[f"{k}_paper_simulation"] for k in
+                                                   ("drawbar_pull", "normal_force", "sinkage")}}
+                             for row in rows],
+                   "mean_absolute_error": mae,
+                   "wall_time_s": sum(r.wall_time for r in results)}
+        cosim.write_atomic(Path(json_file), json.dumps(payload, indent=2) + "\n")
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()

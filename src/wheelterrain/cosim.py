@@ -1,0 +1,270 @@
+"""The co-simulation master: SingleWheelRig.fmu + WheelTerrain.fmu under fmpy, the C1-C4 runs.
+
+Coupling, per communication step h (fixed), Gauss-Seidel on the algebraic terrain:
+1. the rig's state outputs at t (sinkage, sinkage rate, wheel speed, carriage speed) are set as
+   WheelTerrain's inputs;
+2. WheelTerrain's forces at t (direct feedthrough: evaluated from those inputs and the wheel
+   angle at t) are set as the rig's inputs;
+3. both FMUs step t -> t + h (the rig integrates its motion with the forces held, the terrain
+   advances the wheel angle).
+
+Averages: the start-up transient (the wheel settling into the soil from the surface) is waited
+out for SETTLE_TIME; the mean is then taken over the largest whole number of grouser periods
+2*pi/(n_g*omega_ref) that ends at the stop time, so the ripple averages out exactly in the
+steady state.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import rig
+from .parameters import TABLE, ParameterSet
+
+STOP_TIME = 30.0  # s, per case (the paper's runs are ~30 s)
+STEP = 1e-3  # s, communication step
+SETTLE_TIME = 10.0  # s: transient waited out before averaging (it settles in ~2 s)
+RECORD = ("sinkage", "normal_force", "drawbar_pull", "torque", "slip", "slip_paper",
+          "wheel_speed", "carriage_speed", "motor_torque", "wheel_angle")
+TABLE3 = Path(__file__).resolve().parents[2] / "validation" / "paper_table3.json"
+
+
+@dataclass
+class CaseResult:
+    case: str
+    slip_paper: float
+    means: dict[str, float]
+    window: tuple[float, float]
+    series: dict[str, np.ndarray] = field(repr=False)
+    wall_time: float = 0.0
+
+
+def slip_radius(ps: ParameterSet) -> float:
+    return ps["wheel.radius"] + ps["model.slip_radius_factor"] * ps["grouser.height"]
+
+
+def rig_parameters(ps: ParameterSet, slip_paper: float, load: float,
+                   rim_speed: float) -> dict[str, float]:
+    values = rig.defaults()
+    values.update({"rig.load": load, "rig.mass": load / rig.STANDARD_GRAVITY,
+                   "rig.rim_speed": rim_speed, "rig.slip_paper": slip_paper,
+                   "rig.slip_radius": slip_radius(ps)})
+    for name, value in values.items():
+        rig.check(name, value)
+    return values
+
+
+def averaging_window(ps: ParameterSet, rim_speed: float, stop: float,
+                     settle: float = SETTLE_TIME) -> tuple[float, float]:
+    """[start, stop]: the most whole grouser periods that fit after ``settle``."""
+    omega = rim_speed / slip_radius(ps)
+    count = ps["grouser.count"]
+    if count <= 0 or omega <= 0:
+        return settle, stop
+    period = 2 * math.pi / (count * omega)
+    periods = math.floor((stop - settle) / period)
+    return (stop - periods * period, stop) if periods >= 1 else (settle, stop)
+
+
+class _Instance:
+    """One FMU instance through fmpy's FMU2Slave with name -> value reference maps."""
+
+    def __init__(self, path: Path, unzip: str, name: str, log: Callable | None = None) -> None:
+        from fmpy import read_model_description
+        from fmpy.fmi2 import FMU2Slave
+
+        md = read_model_description(str(path))
+        self.vr = {v.name: v.valueReference for v in md.modelVariables}
+        self.types = {v.name: v.type for v in md.modelVariables}
+        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip,
+                             modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+        self.fmu.instantiate(loggingOn=log is not None)
+
+    def set(self, values: dict[str, float]) -> None:
+        for name, value in values.items():
+            kind = self.types[name]
+            if kind == "Real":
+                self.fmu.setReal([self.vr[name]], [float(value)])
+            elif kind == "Integer":
+                self.fmu.setInteger([self.vr[name]], [int(value)])
+            else:
+                self.fmu.setBoolean([self.vr[name]], [bool(value)])
+
+    def refs(self, names) -> list[int]:
+        return [self.vr[n] for n in names]
+
+    def close(self) -> None:
+        self.fmu.terminate()
+        self.fmu.freeInstance()
+
+
+def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, rim_speed: float,
+             case: str = "", stop: float = STOP_TIME, step: float = STEP,
+             unzipped: dict[str, str] | None = None, settle: float = SETTLE_TIME) -> CaseResult:
+    """Co-simulate one rig case; returns means over the averaging window and the series."""
+    from fmpy import extract
+
+    fmu_dir = Path(fmu_dir)
+    paths = {name: fmu_dir / f"{name}.fmu" for name in ("WheelTerrain", "SingleWheelRig")}
+    for path in paths.values():
+        if not path.is_file():
+            raise FileNotFoundError(f"{path} not found: run `wheelterrain build --out {fmu_dir}`")
+    own = unzipped is None
+    unzipped = unzipped or {name: extract(str(p)) for name, p in paths.items()}
+    started = time.perf_counter()
+    terrain = _Instance(paths["WheelTerrain"], unzipped["WheelTerrain"], "terrain")
+    rig_fmu = _Instance(paths["SingleWheelRig"], unzipped["SingleWheelRig"], "rig")
+    try:
+        for inst in (terrain, rig_fmu):
+            inst.fmu.setupExperiment(startTime=0.0, stopTime=stop)
+            inst.fmu.enterInitializationMode()
+        terrain.set({p.name: ps[p.name] for p in TABLE})
+        terrain.set({"quasi_static": False})
+        rig_fmu.set(rig_parameters(ps, slip_paper, load, rim_speed))
+        for inst in (terrain, rig_fmu):
+            inst.fmu.exitInitializationMode()
+
+        states = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")
+        rig_out, ter_in = rig_fmu.refs(states), terrain.refs(states)
+        forces = ("normal_force", "drawbar_pull", "torque")
+        ter_out = terrain.refs((*forces, "slip", "slip_paper", "wheel_angle"))
+        rig_in, rig_rec = rig_fmu.refs(forces), rig_fmu.refs(("motor_torque",))
+        n = round(stop / step)
+        data = np.empty((n + 1, len(RECORD) + 1))
+        get_r, get_t = rig_fmu.fmu.getReal, terrain.fmu.getReal
+        set_r, set_t = rig_fmu.fmu.setReal, terrain.fmu.setReal
+        step_r, step_t = rig_fmu.fmu.doStep, terrain.fmu.doStep
+        t = 0.0
+        for k in range(n + 1):
+            t = k * step
+            x = get_r(rig_out)
+            set_t(ter_in, x)
+            y = get_t(ter_out)
+            set_r(rig_in, y[:3])
+            data[k] = (t, x[0], y[0], y[1], y[2], y[3], y[4], x[2], x[3], get_r(rig_rec)[0],
+                       y[5])
+            if k < n:
+                step_r(t, step)
+                step_t(t, step)
+    finally:
+        terrain.close()
+        rig_fmu.close()
+        if own:
+            for d in unzipped.values():
+                shutil.rmtree(d, ignore_errors=True)
+    wall = time.perf_counter() - started
+    series = {"time": data[:, 0], **{name: data[:, j + 1] for j, name in enumerate(RECORD)}}
+    start, end = averaging_window(ps, rim_speed, stop, settle)
+    # samples at t in [start, end): a whole number of periods of a sampled signal
+    mask = (series["time"] >= start - 0.5 * step) & (series["time"] < end - 0.5 * step)
+    means = {name: float(np.mean(series[name][mask])) for name in RECORD}
+    return CaseResult(case, slip_paper, means, (start, end), series, wall)
+
+
+def table3() -> dict:
+    return json.loads(TABLE3.read_text())
+
+
+def reproduce(fmu_dir: Path, ps: ParameterSet, step: float = STEP, stop: float = STOP_TIME,
+              progress: Callable[[str], None] | None = None) -> list[CaseResult]:
+    """C1-C4 as co-simulations (one extraction of each FMU reused for all cases)."""
+    from fmpy import extract
+
+    paper = table3()
+    paths = {name: Path(fmu_dir) / f"{name}.fmu" for name in ("WheelTerrain", "SingleWheelRig")}
+    for path in paths.values():
+        if not path.is_file():
+            raise FileNotFoundError(f"{path} not found: run `wheelterrain build --out {fmu_dir}`")
+    unzipped = {name: extract(str(p)) for name, p in paths.items()}
+    try:
+        results = []
+        for row in paper["cases"]:
+            if progress:
+                progress(row["case"])
+            results.append(run_case(fmu_dir, ps, row["slip_paper"], paper["load_N"],
+                                    paper["wheel_speed_m_per_s"], row["case"], stop, step,
+                                    unzipped))
+        return results
+    finally:
+        for d in unzipped.values():
+            shutil.rmtree(d, ignore_errors=True)
+
+
+def comparison(results: list[CaseResult]) -> list[dict]:
+    """Rows of the Table III comparison: simulated means, experiment, paper's simulation."""
+    paper = {row["case"]: row for row in table3()["cases"]}
+    rows = []
+    for r in results:
+        p = paper[r.case]
+        row = {"case": r.case, "slip_paper": r.slip_paper}
+        for key in ("drawbar_pull", "normal_force", "sinkage"):
+            row[key] = r.means[key]
+            row[f"{key}_experiment"] = p["experiment"][key]
+            row[f"{key}_paper_simulation"] = p["paper_simulation"][key]
+            row[f"{key}_error"] = r.means[key] - p["experiment"][key]
+        rows.append(row)
+    return rows
+
+
+def mean_absolute_errors(rows: list[dict]) -> dict[str, float]:
+    out = {}
+    for key in ("drawbar_pull", "normal_force", "sinkage"):
+        out[key] = float(np.mean([abs(r[f"{key}_error"]) for r in rows]))
+        out[f"{key}_paper_simulation"] = float(np.mean(
+            [abs(r[f"{key}_paper_simulation"] - r[f"{key}_experiment"]) for r in rows]))
+    return out
+
+
+def format_table(rows: list[dict], mae: dict[str, float]) -> str:
+    head = (f"{'case':4} {'s':>5} | {'DP sim':>7} {'DP exp':>7} {'DP pap':>7} {'err':>7} | "
+            f"{'Fz sim':>7} {'Fz exp':>7} {'Fz pap':>7} {'err':>6} | "
+            f"{'z sim':>6} {'z exp':>6} {'z pap':>6} {'err':>6}")
+    units = f"{'':4} {'':>5} | {'[N]':>31} | {'[N]':>30} | {'[mm]':>27}"
+    lines = [head, units, "-" * len(head)]
+    for r in rows:
+        lines.append(
+            f"{r['case']:4} {r['slip_paper']:5.2f} | {r['drawbar_pull']:7.2f} "
+            f"{r['drawbar_pull_experiment']:7.2f} {r['drawbar_pull_paper_simulation']:7.2f} "
+            f"{r['drawbar_pull_error']:+7.2f} | {r['normal_force']:7.2f} "
+            f"{r['normal_force_experiment']:7.2f} {r['normal_force_paper_simulation']:7.2f} "
+            f"{r['normal_force_error']:+6.2f} | {1e3 * r['sinkage']:6.2f} "
+            f"{1e3 * r['sinkage_experiment']:6.2f} {1e3 * r['sinkage_paper_simulation']:6.2f} "
+            f"{1e3 * r['sinkage_error']:+6.2f}")
+    lines.append("-" * len(head))
+    lines.append(
+        f"mean absolute error vs experiment: drawbar pull {mae['drawbar_pull']:.2f} N "
+        f"(paper's simulation {mae['drawbar_pull_paper_simulation']:.2f} N), normal force "
+        f"{mae['normal_force']:.2f} N ({mae['normal_force_paper_simulation']:.2f} N), sinkage "
+        f"{1e3 * mae['sinkage']:.2f} mm ({1e3 * mae['sinkage_paper_simulation']:.2f} mm)")
+    return "\n".join(lines)
+
+
+def write_atomic(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file: never a half-written result."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def write_csv(path: Path, result: CaseResult, every: int = 10) -> None:
+    names = ["time", *RECORD]
+    data = np.column_stack([result.series[n] for n in names])[::every]
+    lines = [",".join(names)] + [",".join(f"{x:.10g}" for x in row) for row in data]
+    write_atomic(path, "\n".join(lines) + "\n")

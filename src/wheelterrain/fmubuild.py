@@ -1,0 +1,200 @@
+"""Build WheelTerrain.fmu and SingleWheelRig.fmu with pythonfmu, then make their
+modelDescription.xml what a Modelica-minded FMI importer expects.
+
+pythonfmu 0.7 writes no units, types, ranges or dependencies (shared/spec/fmi-notes.md). After its
+build, :func:`finish_model_description` rewrites modelDescription.xml inside the FMU from the
+same :class:`wheelterrain.slaves.Var` lists the slaves register:
+
+- UnitDefinitions with SI base-unit exponents, display units deg (angles) and mm (sinkage);
+- TypeDefinitions: one SimpleType per quantity, named after its Modelica.Units.SI type where
+  one exists (``Modelica.Units.SI.Velocity``), else ``wheelterrain.<Quantity>``;
+- declaredType, unit, min/max and a description on every variable, displayUnit where useful;
+- ModelStructure: Outputs with their direct dependencies on inputs, InitialUnknowns;
+- a DefaultExperiment (from the slave class).
+
+The wheelterrain package itself is bundled into resources/, so the FMU needs only numpy and
+casadi in the host's Python.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+import zipfile
+from pathlib import Path
+from xml.dom import minidom
+from xml.etree import ElementTree as ET
+
+from . import slaves
+
+PACKAGE_DIR = Path(__file__).resolve().parent
+REPO_DIR = PACKAGE_DIR.parents[1]
+SOURCES = {"WheelTerrain": "wheelterrain_slave_terrain.py",
+           "SingleWheelRig": "wheelterrain_slave_rig.py"}
+VARIABLES = {"WheelTerrain": slaves.terrain_variables, "SingleWheelRig": slaves.rig_variables}
+
+# unit -> SI base-unit exponents (FMI 2 BaseUnit attributes)
+BASE_UNITS: dict[str, dict[str, int]] = {
+    "1": {},
+    "m": {"m": 1},
+    "m/s": {"m": 1, "s": -1},
+    "rad": {"rad": 1},
+    "rad/s": {"rad": 1, "s": -1},
+    "kg": {"kg": 1},
+    "kg.m2": {"kg": 1, "m": 2},
+    "N": {"kg": 1, "m": 1, "s": -2},
+    "N.m": {"kg": 1, "m": 2, "s": -2},
+    "Pa": {"kg": 1, "m": -1, "s": -2},
+    "N/m3": {"kg": 1, "m": -2, "s": -2},
+    "N.s/m": {"kg": 1, "s": -1},
+}
+DISPLAY_UNITS = {"rad": {"deg": 57.29577951308232}, "m": {"mm": 1000.0}}
+MODELICA_SI = {"Length", "Velocity", "Angle", "AngularVelocity", "Mass", "MomentOfInertia",
+               "Force", "Torque", "Pressure", "TranslationalDampingConstant",
+               "DimensionlessRatio"}
+NON_SI_QUANTITY = {"N/m3": "WeightDensity"}
+
+
+class BuildError(RuntimeError):
+    """The FMU could not be built; the message says why."""
+
+
+def source_dir() -> Path:
+    path = REPO_DIR / "fmu_src"
+    if not (path / SOURCES["WheelTerrain"]).is_file():
+        raise BuildError(f"slave scripts not found in {path}: `wheelterrain build` runs from a "
+                         "source checkout (pip install -e .)")
+    return path
+
+
+def build(out: Path, models: tuple[str, ...] = tuple(SOURCES)) -> list[Path]:
+    """Build the pythonfmu FMUs into ``out``; returns their paths."""
+    from pythonfmu.builder import FmuBuilder
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    built = []
+    for name in models:
+        script = source_dir() / SOURCES[name]
+        with tempfile.TemporaryDirectory(prefix="wheelterrain_build_") as tmp:
+            staged = Path(tmp) / "wheelterrain"
+            shutil.copytree(PACKAGE_DIR, staged,
+                            ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+            fmu = FmuBuilder.build_FMU(script, dest=tmp, project_files=[staged],
+                                       canGetAndSetFMUstate=True, canSerializeFMUstate=True)
+            finish_model_description(Path(fmu), name)
+            target = out / f"{name}.fmu"
+            partial = target.with_suffix(".fmu.part")
+            shutil.copyfile(fmu, partial)
+            os.replace(partial, target)  # never a half-written FMU under the final name
+        built.append(target)
+    return built
+
+
+def _type_name(v: slaves.Var) -> str:
+    if v.type == "Boolean":
+        return "wheelterrain.Switch"
+    if v.type == "Integer":
+        return "wheelterrain.Count"
+    quantity = v.quantity or NON_SI_QUANTITY.get(v.unit) or (
+        "DimensionlessRatio" if v.unit == "1" else None)
+    if quantity is None:
+        raise BuildError(f"variable {v.name}: unit {v.unit!r} has no quantity")
+    prefix = "Modelica.Units.SI" if quantity in MODELICA_SI else "wheelterrain"
+    return f"{prefix}.{quantity}"
+
+
+def _fmt(x: float) -> str:
+    return repr(float(x))
+
+
+def finish_model_description(fmu: Path, model: str) -> None:
+    """Rewrite modelDescription.xml inside ``fmu`` (see the module docstring)."""
+    variables = {v.name: v for v in VARIABLES[model]()}
+    with zipfile.ZipFile(fmu) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+        members = {info.filename: z.read(info.filename) for info in z.infolist()}
+
+    for tag in ("UnitDefinitions", "TypeDefinitions"):
+        for old in root.findall(tag):
+            root.remove(old)
+    model_vars = root.find("ModelVariables")
+    scalars = list(model_vars)
+    index = {sv.get("name"): k + 1 for k, sv in enumerate(scalars)}
+    missing = set(variables) ^ set(index)
+    if missing:
+        raise BuildError(f"{model}: slave and variable list disagree on {sorted(missing)}")
+
+    # units and types actually used
+    units = sorted({v.unit for v in variables.values() if v.type == "Real"})
+    types: dict[str, slaves.Var] = {}
+    for v in variables.values():
+        types.setdefault(_type_name(v), v)
+
+    unit_defs = ET.Element("UnitDefinitions")
+    for unit in units:
+        u = ET.SubElement(unit_defs, "Unit", name=unit)
+        ET.SubElement(u, "BaseUnit", {k: str(e) for k, e in BASE_UNITS[unit].items()})
+        for display, factor in DISPLAY_UNITS.get(unit, {}).items():
+            ET.SubElement(u, "DisplayUnit", name=display, factor=_fmt(factor))
+    type_defs = ET.Element("TypeDefinitions")
+    for name in sorted(types):
+        v = types[name]
+        st = ET.SubElement(type_defs, "SimpleType", name=name)
+        if v.type == "Real":
+            ET.SubElement(st, "Real", quantity=name.rsplit(".", 1)[1], unit=v.unit)
+        else:
+            ET.SubElement(st, v.type)
+    # FMI 2 order: ..., UnitDefinitions, TypeDefinitions, LogCategories, DefaultExperiment, ...
+    position = list(root).index(root.find("CoSimulation")) + 1
+    root.insert(position, unit_defs)
+    root.insert(position + 1, type_defs)
+
+    for sv in scalars:
+        v = variables[sv.get("name")]
+        sv.set("description", v.description)
+        typed = sv[0]
+        typed.set("declaredType", _type_name(v))
+        if v.type == "Real":
+            typed.set("unit", v.unit)
+            if v.display_unit:
+                typed.set("displayUnit", v.display_unit)
+        if v.type in ("Real", "Integer") and v.min is not None:
+            cast = _fmt if v.type == "Real" else (lambda x: str(int(x)))
+            typed.set("min", cast(v.min))
+            typed.set("max", cast(v.max))
+        if v.causality in ("parameter", "input") and v.start is not None:
+            if v.type == "Boolean":
+                typed.set("start", "true" if v.start else "false")
+            elif v.type == "Integer":
+                typed.set("start", str(int(v.start)))
+            else:
+                typed.set("start", _fmt(v.start))
+        # element order inside a ScalarVariable: the type element first
+        sv[:] = [typed, *[c for c in sv if c is not typed]]
+
+    structure = root.find("ModelStructure")
+    structure.clear()
+    outputs = ET.SubElement(structure, "Outputs")
+    initial = ET.SubElement(structure, "InitialUnknowns")
+    for sv in scalars:
+        v = variables[sv.get("name")]
+        if v.causality != "output":
+            continue
+        deps = " ".join(str(index[d]) for d in (v.depends_on or ()))
+        kinds = " ".join("dependent" for _ in (v.depends_on or ()))
+        attrs = {"index": str(index[v.name]), "dependencies": deps}
+        if deps:
+            attrs["dependenciesKind"] = kinds
+        ET.SubElement(outputs, "Unknown", attrs)
+        ET.SubElement(initial, "Unknown", index=str(index[v.name]))
+
+    text = minidom.parseString(ET.tostring(root, encoding="unicode")).toprettyxml(indent="  ")
+    text = "\n".join(line for line in text.splitlines() if line.strip())
+    members["modelDescription.xml"] = text.encode("utf-8")
+    partial = fmu.with_suffix(".rewrite")
+    with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
+        for name, data in members.items():
+            z.writestr(name, data)
+    os.replace(partial, fmu)

@@ -1,0 +1,69 @@
+"""Plots of the C1-C4 co-simulation: time series per case (like the paper's figures) and the
+means against Table III. matplotlib with the Agg backend (no display needed)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+from .cosim import CaseResult
+
+
+def _save(fig, path: Path) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    partial = path.with_name(f".{path.stem}.part.png")
+    fig.savefig(partial, dpi=120)
+    plt.close(fig)
+    os.replace(partial, path)  # never a half-written plot
+
+
+def time_series(result: CaseResult, experiment: dict, path: Path) -> None:
+    """Drawbar pull, normal force and sinkage over time, the averaging window shaded, the
+    experiment's mean as a dashed line."""
+    s = result.series
+    fig, axes = plt.subplots(3, 1, figsize=(8, 7.5), sharex=True)
+    rows = (("drawbar_pull", "drawbar pull [N]", 1.0), ("normal_force", "normal force [N]", 1.0),
+            ("sinkage", "sinkage [mm]", 1e3))
+    for ax, (key, label, scale) in zip(axes, rows, strict=True):
+        ax.plot(s["time"], scale * s[key], lw=0.8, label="co-simulation (fmpy)")
+        ax.axhline(scale * result.means[key], color="C0", ls=":",
+                   label=f"window mean {scale * result.means[key]:.2f}")
+        ax.axhline(scale * experiment[key], color="C3", ls="--",
+                   label=f"experiment mean {scale * experiment[key]:.2f}")
+        ax.axvspan(*result.window, color="0.9", zorder=0)
+        ax.set_ylabel(label)
+        ax.legend(loc="best", fontsize=8)
+        ax.grid(alpha=0.3)
+    axes[-1].set_xlabel("time [s] (shaded: averaging window)")
+    fig.suptitle(f"{result.case}: slip s = {result.slip_paper:g} (paper's definition)")
+    fig.tight_layout()
+    _save(fig, path)
+
+
+def means_bar_chart(rows: list[dict], path: Path, preset: str) -> None:
+    """Simulated means, experiment and the paper's own simulation per case."""
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4))
+    cases = [r["case"] for r in rows]
+    x = np.arange(len(cases))
+    for ax, (key, label, scale) in zip(axes, (("drawbar_pull", "drawbar pull [N]", 1.0),
+                                              ("normal_force", "normal force [N]", 1.0),
+                                              ("sinkage", "sinkage [mm]", 1e3)), strict=True):
+        w = 0.27
+        ax.bar(x - w, [scale * r[key] for r in rows], w, label=f"this model ({preset})")
+        ax.bar(x, [scale * r[f"{key}_experiment"] for r in rows], w, label="experiment")
+        ax.bar(x + w, [scale * r[f"{key}_paper_simulation"] for r in rows], w,
+               label="paper's simulation")
+        ax.axhline(0, color="k", lw=0.6)
+        ax.set_xticks(x, cases)
+        ax.set_ylabel(label)
+        ax.grid(axis="y", alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.suptitle("C1-C4 means against Table III")
+    fig.tight_layout()
+    _save(fig, path)

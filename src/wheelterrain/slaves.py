@@ -1,0 +1,443 @@
+"""What runs inside the FMUs: the behaviour behind the thin pythonfmu slave scripts in fmu_src/.
+
+The scripts only declare ``class WheelTerrain(Fmi2Slave)`` / ``class SingleWheelRig(Fmi2Slave)``
+(pythonfmu finds the class by that literal pattern) and delegate here. No physics lives here
+either: forces come from :mod:`wheelterrain.contact`, the rig from :mod:`wheelterrain.rig`.
+
+What this layer adds around pythonfmu (shared/spec/fmi-notes.md):
+- every variable is declared once in a :class:`Var` list that both the slave and the
+  modelDescription post-processor (:mod:`wheelterrain.fmubuild`) read, so names, units, ranges
+  and descriptions cannot drift apart;
+- bad parameters and inputs never raise into pythonfmu (an exception there is fmi2Fatal): the
+  setter stores the value, logs an error naming the variable and its valid range, and the next
+  doStep refuses with a logged reason (pythonfmu maps a refused step to fmi2Discard);
+- get/set FMU state covers the internal state (wheel angle, rig states, error flags), not only
+  the registered variables.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import contact, presets, rig
+from .errors import ParameterError
+from .parameters import TABLE, Parameter
+
+SPEED_FLOOR = 1e-9  # m/s: below this the wheel and the carriage are both at rest (slip 0)
+
+
+@dataclass(frozen=True)
+class Var:
+    """One FMU variable, as the slave registers it and as modelDescription.xml describes it."""
+
+    name: str
+    causality: str  # parameter | input | output
+    description: str
+    unit: str = "1"
+    quantity: str | None = None
+    display_unit: str | None = None
+    type: str = "Real"  # Real | Integer | Boolean
+    start: float | None = None
+    min: float | None = None
+    max: float | None = None
+    depends_on: tuple[str, ...] | None = None  # outputs: the inputs they depend on directly
+
+
+def _parameter_var(p: Parameter, start: float) -> Var:
+    kind = "Integer" if p.kind in ("integer", "enum") else "Real"
+    return Var(p.name, "parameter", f"{p.description} [{p.source}]", p.unit, p.quantity,
+               p.display_unit, kind, start, p.min, p.max)
+
+
+def _preset_values() -> dict[str, float]:
+    return dict(presets.load(presets.DEFAULT_PRESET))
+
+
+TERRAIN_INPUTS = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "load")
+_ALL_IN = TERRAIN_INPUTS
+
+
+def terrain_variables() -> list[Var]:
+    start = _preset_values()
+    rim_speed = rig.defaults()["rig.rim_speed"]
+    omega = rim_speed / start["wheel.radius"]
+    variables = [_parameter_var(p, start[p.name]) for p in TABLE]
+    variables += [
+        Var("quasi_static", "parameter",
+            "true: solve the sinkage that carries the input 'load' (grouser-period mean, ripple "
+            "off, as `wheelterrain steady`); false: forces at the input sinkage and sinkage rate "
+            "(ripple on, contact damping on)", type="Boolean", start=False),
+        Var("sinkage", "input", "Sinkage of the wheel below the undisturbed soil surface, "
+            "measured to the contact circle (dynamic mode)", "m", "Length", "mm", start=0.02,
+            min=-1.0, max=1.0),
+        Var("sinkage_rate", "input", "Rate of sinkage, positive downward (dynamic mode)", "m/s",
+            "Velocity", start=0.0, min=-100.0, max=100.0),
+        Var("wheel_speed", "input", "Wheel angular velocity, positive when driving forward",
+            "rad/s", "AngularVelocity", start=omega, min=-1.0e3, max=1.0e3),
+        Var("carriage_speed", "input", "Forward speed of the wheel axle (carriage)", "m/s",
+            "Velocity", start=rim_speed, min=-100.0, max=100.0),
+        Var("load", "input", "Vertical load on the wheel (quasi-static mode)", "N", "Force",
+            start=62.0, min=0.0, max=1.0e5),
+    ]
+    forces = [
+        ("normal_force", "Normal (vertical) force of the soil on the wheel, up", "N", "Force"),
+        ("drawbar_pull", "Drawbar pull: net forward force of the soil on the wheel", "N",
+         "Force"),
+        ("torque", "Resistive torque of the soil about the axle (what the motor must supply)",
+         "N.m", "Torque"),
+        ("gross_thrust", "Gross thrust: forward part of the shear stress", "N", "Force"),
+        ("compaction_resistance", "Compaction resistance: backward part of the normal stress",
+         "N", "Force"),
+        ("contact_sinkage", "Sinkage the forces were evaluated at: the input in dynamic mode, "
+         "the solved one in quasi-static mode", "m", "Length"),
+        ("slip", "Traction slip i = (omega*R_ref - V)/(omega*R_ref) used by the model "
+         "(regularised: (omega*R_ref - V)/max(|omega*R_ref|, |V|) when braking)", "1", None),
+        ("slip_paper", "Slip in the paper's definition s = (omega*R_ref - V)/V (0 with the "
+         "carriage at rest)", "1", None),
+        ("entry_angle", "Entry angle theta_f of the contact arc", "rad", "Angle"),
+        ("exit_angle", "Exit angle theta_r of the contact arc (<= 0)", "rad", "Angle"),
+        ("max_stress_angle", "Angle theta_m of the maximum normal stress", "rad", "Angle"),
+        ("contact_length", "Contact length R_c*(sin(theta_f) - sin(theta_r))", "m", "Length"),
+        ("mean_pressure", "Mean contact pressure of the ripple-free stress", "Pa", "Pressure"),
+        ("ripple_amplitude", "Amplitude A of the grouser stress ripple (0 in quasi-static mode)",
+         "Pa", "Pressure"),
+    ]
+    for name, text, unit, quantity in forces:
+        display = "deg" if unit == "rad" else ("mm" if name == "contact_sinkage" else None)
+        variables.append(Var(name, "output", text, unit, quantity, display, depends_on=_ALL_IN))
+    variables.append(Var("wheel_angle", "output",
+                         "Wheel rotation angle, integrated from wheel_speed (phase of the "
+                         "grouser ripple)", "rad", "Angle", "deg", depends_on=()))
+    return variables
+
+
+RIG_OUTPUTS = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "motor_torque",
+               "sensor.drawbar_pull", "sensor.normal_force", "sensor.sinkage",
+               "sensor.slip_paper")
+
+
+def rig_variables() -> list[Var]:
+    variables = [Var(p.name, "parameter", f"{p.description} [{p.source}]", p.unit, p.quantity,
+                     p.display_unit, "Real", p.default, p.min, p.max) for p in rig.RIG_TABLE]
+    variables += [
+        Var("normal_force", "input", "Normal force of the soil on the wheel (from WheelTerrain)",
+            "N", "Force", start=0.0, min=-1.0e6, max=1.0e6),
+        Var("drawbar_pull", "input", "Drawbar pull of the soil on the wheel (from WheelTerrain)",
+            "N", "Force", start=0.0, min=-1.0e6, max=1.0e6),
+        Var("torque", "input", "Resistive soil torque about the axle (from WheelTerrain)", "N.m",
+            "Torque", start=0.0, min=-1.0e6, max=1.0e6),
+        Var("sinkage", "output", "Wheel sinkage (state of the vertical motion), positive down",
+            "m", "Length", "mm", depends_on=()),
+        Var("sinkage_rate", "output", "Sinkage rate, positive down", "m/s", "Velocity",
+            depends_on=()),
+        Var("wheel_speed", "output", "Wheel angular velocity (state of the speed loop)", "rad/s",
+            "AngularVelocity", depends_on=()),
+        Var("carriage_speed", "output", "Carriage speed set by the rig, rim_speed/(1 + s)",
+            "m/s", "Velocity", depends_on=()),
+        Var("motor_torque", "output", "Torque the wheel motor's speed controller applies",
+            "N.m", "Torque", depends_on=()),
+        Var("sensor.drawbar_pull", "output", "Drawbar pull the rig's force sensor reads", "N",
+            "Force", depends_on=("drawbar_pull",)),
+        Var("sensor.normal_force", "output", "Normal force the rig's force sensor reads", "N",
+            "Force", depends_on=("normal_force",)),
+        Var("sensor.sinkage", "output", "Sinkage the rig's potentiometer reads", "m", "Length",
+            "mm", depends_on=()),
+        Var("sensor.slip_paper", "output", "Slip in the paper's definition from the measured "
+            "wheel and carriage speeds", "1", depends_on=()),
+    ]
+    return variables
+
+
+# --------------------------------------------------------------------------------------------
+# The slave behaviours
+
+
+class _Core:
+    """Shared plumbing: values by name, registration with pythonfmu, deferred error reporting."""
+
+    model_name = ""
+
+    def __init__(self, slave, variables: list[Var]) -> None:
+        self.slave = slave
+        self.vars = {v.name: v for v in variables}
+        self.values: dict[str, float] = {}
+        self.errors: dict[str, str] = {}
+        for v in variables:
+            if v.start is not None:
+                self.values[v.name] = v.start
+        self._register(variables)
+
+    # --- registration ---------------------------------------------------------------------
+    def _register(self, variables: list[Var]) -> None:
+        from pythonfmu import Boolean, Fmi2Causality, Fmi2Variability, Integer, Real
+
+        kinds = {"Real": Real, "Integer": Integer, "Boolean": Boolean}
+        for v in variables:
+            causality = getattr(Fmi2Causality, v.causality)
+            variability = (Fmi2Variability.tunable if v.causality == "parameter"
+                           else Fmi2Variability.continuous if v.type == "Real"
+                           else Fmi2Variability.discrete)
+            getter = self._getter(v.name)
+            setter = None if v.causality == "output" else self._setter(v.name)
+            var = kinds[v.type](v.name, causality=causality, description=v.description,
+                                variability=variability, getter=getter, setter=setter)
+            self.slave.register_variable(var, nested=False)
+
+    def _getter(self, name: str) -> Callable[[], float]:
+        def get():
+            if self.vars[name].causality == "output":
+                self.refresh()
+            return self.values.get(name, 0.0)
+        return get
+
+    def _setter(self, name: str) -> Callable[[float], None]:
+        def put(value):
+            self.values[name] = value
+            self.validate(name, value)
+            self.dirty = True
+        return put
+
+    dirty = True
+
+    # --- checking ---------------------------------------------------------------------------
+    def validate(self, name: str, value) -> None:
+        """Record (and log, at error level) what is wrong with ``value``; forget an old error
+        once the value is valid again."""
+        message = self.problem(name, value)
+        if message is None:
+            self.errors.pop(name, None)
+        else:
+            self.errors[name] = message
+            self.log_error(message)
+
+    def problem(self, name: str, value) -> str | None:
+        v = self.vars[name]
+        if v.type == "Boolean":
+            return None
+        try:
+            self.check_value(name, float(value))
+        except ParameterError as exc:
+            return str(exc)
+        return None
+
+    def check_value(self, name: str, value: float) -> None:
+        v = self.vars[name]
+        if not math.isfinite(value):
+            raise ParameterError(name, value, f"must be finite; valid range [{v.min:g}, "
+                                 f"{v.max:g}] {v.unit}")
+        if v.min is not None and not v.min <= value <= v.max:
+            raise ParameterError(name, value, f"is out of range; valid range [{v.min:g}, "
+                                 f"{v.max:g}] {v.unit}")
+
+    def log_error(self, message: str) -> None:
+        from pythonfmu.enums import Fmi2Status
+        self.slave.log(f"{self.model_name}: {message}", Fmi2Status.error)
+
+    def refuse_if_invalid(self) -> bool:
+        """True if the instance may step; else log every reason and refuse."""
+        if not self.errors:
+            return True
+        for message in self.errors.values():
+            self.log_error(f"step refused: {message}")
+        return False
+
+    # --- state --------------------------------------------------------------------------------
+    def get_state(self) -> dict:
+        return {"values": dict(self.values), "errors": dict(self.errors),
+                "internal": self.internal_state()}
+
+    def set_state(self, state: dict) -> None:
+        self.values = dict(state["values"])
+        self.errors = dict(state["errors"])
+        self.set_internal_state(state["internal"])
+        self.dirty = True
+
+    def internal_state(self) -> dict:  # pragma: no cover - overridden
+        return {}
+
+    def set_internal_state(self, state: dict) -> None:  # pragma: no cover - overridden
+        pass
+
+    def refresh(self) -> None:  # pragma: no cover - overridden
+        pass
+
+
+class TerrainCore(_Core):
+    """WheelTerrain: contact forces from the core model, fed by the wheel's states."""
+
+    model_name = "WheelTerrain"
+
+    def __init__(self, slave) -> None:
+        self.functions = contact.build()
+        super().__init__(slave, terrain_variables())
+        self.angle = 0.0
+        self.time = 0.0
+        self.outputs_valid = False
+
+    def internal_state(self) -> dict:
+        return {"angle": self.angle, "time": self.time}
+
+    def set_internal_state(self, state: dict) -> None:
+        self.angle, self.time = float(state["angle"]), float(state["time"])
+
+    def problem(self, name: str, value) -> str | None:
+        if name in self.vars and self.vars[name].causality == "parameter" and name in _TABLE_BY:
+            try:
+                _TABLE_BY[name].check(value)
+            except ParameterError as exc:
+                return str(exc)
+            return None
+        return super().problem(name, value)
+
+    def slip_radius(self) -> float:
+        v = self.values
+        return v["wheel.radius"] + v["model.slip_radius_factor"] * v["grouser.height"]
+
+    def slips(self) -> tuple[float, float]:
+        """Traction slip (regularised when braking) and the paper's slip from the inputs."""
+        rim = self.values["wheel_speed"] * self.slip_radius()
+        speed = self.values["carriage_speed"]
+        scale = max(abs(rim), abs(speed))
+        if scale < SPEED_FLOOR:
+            return 0.0, 0.0
+        traction = (rim - speed) / scale
+        paper = (rim - speed) / abs(speed) if abs(speed) >= SPEED_FLOOR else math.copysign(
+            1.0 / SPEED_FLOOR, rim - speed)
+        return traction, paper
+
+    def refresh(self) -> None:
+        """Recompute the outputs from the current inputs, parameters and wheel angle."""
+        if not self.dirty:
+            return
+        self.dirty = False
+        if self.errors:
+            return  # keep the last valid outputs; the next doStep refuses with the reason
+        v = self.values
+        p = np.array([float(v[p.name]) for p in TABLE])
+        traction, paper = self.slips()
+        if traction < -1.0 or traction > 1.0:  # reversed wheel against the carriage
+            self.errors["slip"] = (f"slip {traction:g} outside the model's domain [-1, 1] "
+                                   "(wheel turning against the carriage's motion)")
+            self.log_error(self.errors["slip"])
+            return
+        self.errors.pop("slip", None)
+        if v["quasi_static"]:
+            load = float(v["load"])
+            out = self.functions.steady(load, traction, p)
+            named = dict(zip(contact.STEADY_OUTPUTS, (float(x) for x in out), strict=True))
+            problem = _steady_problem(load, traction, named)
+            if problem:
+                self.errors["load"] = problem
+                self.log_error(problem)
+                return
+            self.errors.pop("load", None)
+            sinkage = named["sinkage"]
+        else:
+            sinkage = float(v["sinkage"])
+            out = self.functions.contact(sinkage, float(v["sinkage_rate"]), traction,
+                                         self.angle, p)
+            named = dict(zip(contact.CONTACT_OUTPUTS, (float(x) for x in out), strict=True))
+        for name in ("normal_force", "drawbar_pull", "torque", "gross_thrust",
+                     "compaction_resistance", "entry_angle", "exit_angle", "max_stress_angle",
+                     "contact_length", "mean_pressure", "ripple_amplitude"):
+            v[name] = named[name]
+        v["contact_sinkage"] = sinkage
+        v["slip"], v["slip_paper"] = traction, paper
+        v["wheel_angle"] = self.angle
+
+    def initialize(self) -> None:
+        self.dirty = True
+        self.refresh()
+
+    def do_step(self, t: float, h: float) -> bool:
+        """Check the step's inputs, advance the wheel angle. The outputs at the end of the step
+        are computed when first read (a master that sets new inputs first pays for one
+        evaluation per step, not two); a problem found then refuses the next step."""
+        self.refresh()
+        if not self.refuse_if_invalid():
+            return False
+        self.angle += float(self.values["wheel_speed"]) * h
+        self.time = t + h
+        self.dirty = True
+        return True
+
+
+_TABLE_BY = {p.name: p for p in TABLE}
+
+
+def _steady_problem(load: float, slip: float, out: dict) -> str | None:
+    """The reason a quasi-static solve result must not be used, or None (the same checks as
+    :func:`wheelterrain.model.steady_state`)."""
+    from .model import RESIDUAL_TOLERANCE, STEP_TOLERANCE
+
+    if load > out["capacity"]:
+        return (f"load {load:g} N exceeds what the wheel can carry fully buried at slip "
+                f"{slip:g} ({out['capacity']:.6g} N); valid range [0, {out['capacity']:.6g}] N")
+    if not (abs(out["residual"]) <= RESIDUAL_TOLERANCE or out["last_step"] <= STEP_TOLERANCE):
+        return f"sinkage solve did not converge for load {load:g} N at slip {slip:g}"
+    return None
+
+
+class RigCore(_Core):
+    """SingleWheelRig: carriage, speed-controlled wheel motor, vertical motion (rig.step)."""
+
+    model_name = "SingleWheelRig"
+
+    def __init__(self, slave) -> None:
+        super().__init__(slave, rig_variables())
+        self.state = rig.initial_state(self.params())
+        self.motor_torque = 0.0
+        self.started = False
+
+    def params(self) -> dict[str, float]:
+        return {name: float(self.values[name]) for name in rig.RIG_NAMES}
+
+    def internal_state(self) -> dict:
+        return {"state": list(self.state), "motor_torque": self.motor_torque,
+                "started": self.started}
+
+    def set_internal_state(self, state: dict) -> None:
+        self.state = tuple(float(x) for x in state["state"])
+        self.motor_torque = float(state["motor_torque"])
+        self.started = bool(state["started"])
+
+    def initialize(self) -> None:
+        if not self.errors:
+            self.state = rig.initial_state(self.params())
+        self.started = True
+        self.dirty = True
+        self.refresh()
+
+    def refresh(self) -> None:
+        if not self.dirty:
+            return
+        self.dirty = False
+        if self.errors:
+            return
+        p = self.params()
+        _, carriage = rig.references(p)
+        z, z_rate, omega, _ = self.state
+        v = self.values
+        v["sinkage"], v["sinkage_rate"], v["wheel_speed"] = z, z_rate, omega
+        v["carriage_speed"] = carriage
+        v["motor_torque"] = self.motor_torque
+        v["sensor.drawbar_pull"] = float(v["drawbar_pull"])
+        v["sensor.normal_force"] = float(v["normal_force"])
+        v["sensor.sinkage"] = z
+        rim = omega * p["rig.slip_radius"]
+        v["sensor.slip_paper"] = (rim - carriage) / carriage
+
+    def do_step(self, t: float, h: float) -> bool:
+        if not self.refuse_if_invalid():
+            return False
+        u = (float(self.values["normal_force"]), float(self.values["drawbar_pull"]),
+             float(self.values["torque"]))
+        self.state, self.motor_torque = rig.step(self.state, u, self.params(), h)
+        self.dirty = True
+        self.refresh()
+        return True
+

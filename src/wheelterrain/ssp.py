@@ -1,0 +1,110 @@
+"""An SSP 1.0 file per C1-C4 case: the two FMUs, their connections and every parameter value,
+so the same system runs in any SSP master (fmpy.ssp here; ecos for the native flavour).
+
+Layout of ``<case>.ssp`` (a zip): SystemStructure.ssd and resources/{WheelTerrain,
+SingleWheelRig}.fmu. Parameters are inline ssv:ParameterSets in each component's
+ParameterBindings. ``quasi_static`` is left at its default (false): the SSP runs the dynamic
+co-simulation.
+"""
+
+from __future__ import annotations
+
+import os
+import zipfile
+from pathlib import Path
+from xml.etree import ElementTree as ET
+
+from .cosim import rig_parameters
+from .parameters import TABLE, ParameterSet
+
+NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+      "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
+      "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues"}
+STATES = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")
+FORCES = ("normal_force", "drawbar_pull", "torque")
+RIG_OUTPUTS = (*STATES, "motor_torque", "sensor.drawbar_pull", "sensor.normal_force",
+               "sensor.sinkage")
+TERRAIN_OUTPUTS = (*FORCES, "slip", "slip_paper", "contact_sinkage", "wheel_angle")
+
+
+def _q(prefix: str, tag: str) -> str:
+    return f"{{{NS[prefix]}}}{tag}"
+
+
+def _component(elements, name: str, source: str, inputs, outputs, params: dict) -> None:
+    comp = ET.SubElement(elements, _q("ssd", "Component"), name=name,
+                         type="application/x-fmu-sharedlibrary", source=source)
+    connectors = ET.SubElement(comp, _q("ssd", "Connectors"))
+    for kind, names in (("input", inputs), ("output", outputs)):
+        for n in names:
+            c = ET.SubElement(connectors, _q("ssd", "Connector"), name=n, kind=kind)
+            ET.SubElement(c, _q("ssc", "Real"))
+    bindings = ET.SubElement(comp, _q("ssd", "ParameterBindings"))
+    binding = ET.SubElement(bindings, _q("ssd", "ParameterBinding"))
+    values = ET.SubElement(binding, _q("ssd", "ParameterValues"))
+    pset = ET.SubElement(values, _q("ssv", "ParameterSet"), version="1.0", name=f"{name}-values")
+    plist = ET.SubElement(pset, _q("ssv", "Parameters"))
+    for key, (kind, value) in params.items():
+        p = ET.SubElement(plist, _q("ssv", "Parameter"), name=key)
+        ET.SubElement(p, _q("ssv", kind), value=repr(value) if kind == "Real" else str(value))
+
+
+def system_description(case: str, ps: ParameterSet, slip_paper: float, load: float,
+                       rim_speed: float, stop: float, step: float) -> bytes:
+    for prefix, uri in NS.items():
+        ET.register_namespace(prefix, uri)
+    root = ET.Element(_q("ssd", "SystemStructureDescription"), version="1.0",
+                      name=f"SingleWheelRig-{case}")
+    system = ET.SubElement(root, _q("ssd", "System"), name=case,
+                           description=f"Rashid wheel on the single-wheel rig, case {case}: "
+                           f"slip s = {slip_paper:g} (paper's definition), load {load:g} N")
+    elements = ET.SubElement(system, _q("ssd", "Elements"))
+    kinds = {p.name: ("Integer" if p.kind in ("integer", "enum") else "Real") for p in TABLE}
+    terrain_params = {p.name: (kinds[p.name], int(ps[p.name]) if kinds[p.name] == "Integer"
+                               else float(ps[p.name])) for p in TABLE}
+    rig_params = {k: ("Real", float(v))
+                  for k, v in rig_parameters(ps, slip_paper, load, rim_speed).items()}
+    _component(elements, "rig", "resources/SingleWheelRig.fmu", FORCES, RIG_OUTPUTS, rig_params)
+    _component(elements, "terrain", "resources/WheelTerrain.fmu", STATES, TERRAIN_OUTPUTS,
+               terrain_params)
+    connections = ET.SubElement(system, _q("ssd", "Connections"))
+    for n in STATES:
+        ET.SubElement(connections, _q("ssd", "Connection"), startElement="rig",
+                      startConnector=n, endElement="terrain", endConnector=n)
+    for n in FORCES:
+        ET.SubElement(connections, _q("ssd", "Connection"), startElement="terrain",
+                      startConnector=n, endElement="rig", endConnector=n)
+    ET.SubElement(root, _q("ssd", "DefaultExperiment"), startTime="0.0", stopTime=repr(stop))
+    ET.indent(root)
+    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def write(path: Path, fmu_dir: Path, case: str, ps: ParameterSet, slip_paper: float,
+          load: float, rim_speed: float, stop: float, step: float) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    partial = path.with_name(f".{path.name}.part")
+    with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("SystemStructure.ssd",
+                   system_description(case, ps, slip_paper, load, rim_speed, stop, step))
+        for name in ("SingleWheelRig", "WheelTerrain"):
+            z.write(Path(fmu_dir) / f"{name}.fmu", f"resources/{name}.fmu")
+    os.replace(partial, path)
+    return path
+
+
+def simulate_with_fmpy(path: Path, stop: float, step: float):
+    """Run an SSP written by :func:`write` with fmpy.ssp. fmpy reads the inline parameter
+    bindings but does not apply them itself; they are passed on as its parameter_set."""
+    from fmpy.ssp.simulation import simulate_ssp
+    from fmpy.ssp.ssd import Parameter, ParameterSet, read_ssd
+
+    ssd = read_ssd(str(path))
+    merged = ParameterSet(name="bindings")
+    for comp in ssd.system.elements:
+        for binding in comp.parameterBindings:
+            for pset in binding.parameterValues:
+                for p in pset.parameters:
+                    merged.parameters.append(Parameter(name=f"{comp.name}.{p.name}",
+                                                       type=p.type, value=p.value))
+    return simulate_ssp(str(path), stop_time=stop, step_size=step, parameter_set=merged)

@@ -1,0 +1,44 @@
+"""`wheelterrain build` and `wheelterrain reproduce` (contract in shared/design.md), end to end
+through the installed console script."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+from wheelterrain import model, presets
+from wheelterrain.slip import traction_from_paper
+
+
+def wt(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "wheelterrain.cli", *args], cwd=cwd,
+                          capture_output=True, text=True, check=False)
+
+
+def test_build_then_reproduce_writes_the_contract(tmp_path):
+    built = wt("build", "--out", "fmus", cwd=tmp_path)
+    assert built.returncode == 0, built.stderr
+    assert (tmp_path / "fmus" / "WheelTerrain.fmu").is_file()
+    assert (tmp_path / "fmus" / "SingleWheelRig.fmu").is_file()
+
+    run = wt("reproduce", "--fmu-dir", "fmus", "--json", "r.json", "--out", "out",
+             "--stop", "12", "--step", "0.002", cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert "mean absolute error vs experiment" in run.stdout
+    data = json.loads((tmp_path / "r.json").read_text())
+    assert data["preset"] == presets.DEFAULT_PRESET
+    assert [c["case"] for c in data["cases"]] == ["C1", "C2", "C3", "C4"]
+    ps = presets.load(data["preset"])
+    for c in data["cases"]:
+        assert {"slip_paper", "drawbar_pull", "normal_force", "sinkage"} <= set(c)
+        q = model.steady_state(ps, 62.0, traction_from_paper(c["slip_paper"]))
+        assert abs(c["drawbar_pull"] - q["drawbar_pull"]) < 1e-3 * abs(q["drawbar_pull"])
+    for name in ("C1.csv", "C4.png", "means.png", "C3.ssp"):
+        assert (tmp_path / "out" / name).stat().st_size > 0
+
+
+def test_reproduce_without_fmus_says_how_to_build(tmp_path):
+    run = wt("reproduce", "--fmu-dir", "nowhere", cwd=tmp_path)
+    assert run.returncode == 2
+    assert "wheelterrain build" in run.stderr

@@ -1,0 +1,226 @@
+"""Gates on the built pythonfmu FMUs (shared/spec/fmi-notes.md): validation, default experiment,
+agreement with the core model, several instances, FMU state, reset, bad input."""
+
+from __future__ import annotations
+
+import csv
+import math
+import shutil
+import subprocess
+import sys
+
+import pytest
+from fmpy import extract, simulate_fmu
+from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
+
+from fmu_support import Instance
+from wheelterrain import fmubuild, model, presets
+from wheelterrain.parameters import TABLE
+
+NAMES = ("WheelTerrain", "SingleWheelRig")
+
+
+@pytest.fixture(scope="session")
+def fmus(tmp_path_factory):
+    out = tmp_path_factory.mktemp("fmus")
+    fmubuild.build(out)
+    unzip = {name: extract(str(out / f"{name}.fmu")) for name in NAMES}
+    yield {"dir": out, **{name: out / f"{name}.fmu" for name in NAMES}, "unzip": unzip}
+    for d in unzip.values():
+        shutil.rmtree(d, ignore_errors=True)
+
+
+def terrain(fmus, name="terrain", **values):
+    return Instance(fmus["WheelTerrain"], fmus["unzip"]["WheelTerrain"], name).start(values)
+
+
+def rig(fmus, name="rig", **values):
+    return Instance(fmus["SingleWheelRig"], fmus["unzip"]["SingleWheelRig"], name).start(values)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_validate_reports_no_problems(fmus, name):
+    assert validate_fmu(str(fmus[name])) == []
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_default_experiment_simulates(fmus, name):
+    result = simulate_fmu(str(fmus[name]))
+    assert result["time"][-1] == pytest.approx(1.0)
+    for field in result.dtype.names:
+        assert all(math.isfinite(v) for v in result[field])
+
+
+def test_model_description_is_modelica_friendly(fmus):
+    from fmpy import read_model_description
+
+    md = read_model_description(str(fmus["WheelTerrain"]))
+    by_name = {v.name: v for v in md.modelVariables}
+    assert {p.name for p in TABLE} <= set(by_name)
+    for v in md.modelVariables:
+        assert v.description, v.name
+        assert v.declaredType is not None, v.name
+    phi = by_name["soil.phi"]
+    assert phi.declaredType.name == "Modelica.Units.SI.Angle"
+    assert phi.unit == "rad"
+    assert phi.displayUnit == "deg"
+    assert float(phi.max) == TABLE[[p.name for p in TABLE].index("soil.phi")].max
+    assert by_name["drawbar_pull"].declaredType.name == "Modelica.Units.SI.Force"
+    units = {u.name: u for u in md.unitDefinitions}
+    assert units["N"].baseUnit.kg == 1
+    assert units["N"].baseUnit.s == -2
+    outputs = {u.variable.name: u for u in md.outputs}
+    assert {d.name for d in outputs["drawbar_pull"].dependencies} >= {"sinkage", "wheel_speed"}
+    assert outputs["wheel_angle"].dependencies == []
+    assert md.defaultExperiment.stepSize == "0.001"
+
+
+@pytest.mark.parametrize(("slip", "phi"), [(0.0, 0.45), (0.2, 0.40), (0.43, 0.42)])
+def test_quasi_static_fmpy_cli_matches_steady(fmus, tmp_path, slip, phi):
+    ps = presets.load("paper-table2").with_values({"soil.phi": phi})
+    omega = 0.6
+    speed = omega * ps["wheel.radius"] * (1 - slip)
+    out = tmp_path / "qs.csv"
+    subprocess.run([sys.executable, "-m", "fmpy", "simulate", str(fmus["WheelTerrain"]),
+                    "--start-values", "quasi_static", "true", "soil.phi", repr(phi),
+                    "wheel_speed", repr(omega), "carriage_speed", repr(speed), "load", "62",
+                    "--output-variables", "contact_sinkage", "drawbar_pull", "slip",
+                    "--output-file", str(out)], check=True)
+    with out.open() as f:
+        rows = list(csv.DictReader(f))
+    fmu_slip = float(rows[-1]["slip"])
+    want = model.steady_state(ps, 62.0, fmu_slip)
+    assert fmu_slip == pytest.approx(slip, rel=1e-12, abs=1e-15)
+    for row in rows:
+        assert float(row["contact_sinkage"]) == pytest.approx(want["sinkage"], rel=1e-9)
+        assert float(row["drawbar_pull"]) == pytest.approx(want["drawbar_pull"], rel=1e-9)
+
+
+def test_dynamic_mode_matches_contact_forces(fmus):
+    ps = presets.load("paper-table2")
+    t = terrain(fmus, sinkage=0.03, sinkage_rate=0.002, wheel_speed=0.6, carriage_speed=0.024)
+    try:
+        got = t.get("normal_force", "drawbar_pull", "torque", "slip", "wheel_angle")
+        want = model.contact_forces(ps, 0.03, got[3], sinkage_rate=0.002, wheel_angle=got[4])
+        for k, key in enumerate(("normal_force", "drawbar_pull", "torque")):
+            assert got[k] == pytest.approx(want[key], rel=1e-12)
+    finally:
+        t.close()
+
+
+def test_several_instances_and_both_fmus_in_one_process(fmus):
+    a = terrain(fmus, "a", sinkage=0.02, wheel_speed=0.6, carriage_speed=0.03)
+    b = terrain(fmus, "b", **{"soil.phi": 0.5, "sinkage": 0.02, "wheel_speed": 0.6,
+                              "carriage_speed": 0.02})
+    r1 = rig(fmus, "r1")
+    r2 = rig(fmus, "r2", **{"rig.load": 40.0, "rig.slip_paper": 0.5})
+    try:
+        fa, fb = a.get("drawbar_pull"), b.get("drawbar_pull")
+        assert fa != fb  # independent parameters and inputs
+        for k in range(20):
+            for inst in (a, b, r1, r2):
+                inst.fmu.doStep(k * 1e-3, 1e-3)
+        assert a.get("wheel_angle") == pytest.approx(20 * 0.6e-3)
+        single = terrain(fmus, "single", sinkage=0.02, wheel_speed=0.6, carriage_speed=0.03)
+        for k in range(20):
+            single.fmu.doStep(k * 1e-3, 1e-3)
+        assert single.get("drawbar_pull") == a.get("drawbar_pull")
+        single.close()
+        assert r2.get("carriage_speed") == pytest.approx(0.03 / 1.5)
+        assert r1.get("carriage_speed") == pytest.approx(0.03)
+    finally:
+        for inst in (a, b, r1, r2):
+            inst.close()
+
+
+@pytest.mark.parametrize("serialize", [False, True])
+def test_fmu_state_round_trip_restores_internal_state(fmus, serialize):
+    t = terrain(fmus, sinkage=0.03, wheel_speed=0.6, carriage_speed=0.024)
+    r = rig(fmus, **{"rig.slip_paper": 0.25})
+    try:
+        def run(n, k0):
+            trace = []
+            for k in range(k0, k0 + n):
+                x = r.get("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")
+                t.set(dict(zip(("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed"), x,
+                               strict=True)))
+                f = t.get("normal_force", "drawbar_pull", "torque")
+                r.set(dict(zip(("normal_force", "drawbar_pull", "torque"), f, strict=True)))
+                r.fmu.doStep(k * 1e-3, 1e-3)
+                t.fmu.doStep(k * 1e-3, 1e-3)
+                trace.append((*x, *f, t.get("wheel_angle")))
+            return trace
+
+        run(50, 0)
+        states = [inst.fmu.getFMUstate() for inst in (t, r)]
+        if serialize:
+            blobs = [inst.fmu.serializeFMUstate(s) for inst, s in zip((t, r), states,
+                                                                       strict=True)]
+            for inst, s in zip((t, r), states, strict=True):
+                inst.fmu.freeFMUstate(s)
+            states = [inst.fmu.deSerializeFMUstate(b) for inst, b in zip((t, r), blobs,
+                                                                          strict=True)]
+        first = run(40, 50)
+        for inst, s in zip((t, r), states, strict=True):
+            inst.fmu.setFMUstate(s)
+        again = run(40, 50)
+        assert again == first  # bit-identical: wheel angle, rig states and inputs all restored
+    finally:
+        t.close()
+        r.close()
+
+
+def test_reset_restores_the_start(fmus):
+    t = terrain(fmus, sinkage=0.03, wheel_speed=0.6, carriage_speed=0.024)
+    try:
+        before = t.get("drawbar_pull", "wheel_angle")
+        for k in range(30):
+            t.fmu.doStep(k * 1e-3, 1e-3)
+        assert t.get("wheel_angle") != before[1]
+        t.fmu.reset()
+        t.start({"sinkage": 0.03, "wheel_speed": 0.6, "carriage_speed": 0.024})
+        assert t.get("drawbar_pull", "wheel_angle") == before
+    finally:
+        t.close()
+
+
+@pytest.mark.parametrize(("name", "value", "needle"), [
+    ("soil.phi", float("nan"), "soil.phi"),
+    ("wheel.width", -0.075, "wheel.width"),
+    ("soil.phi", math.pi / 2, "soil.phi"),
+])
+def test_bad_parameter_is_refused_with_a_logged_reason(fmus, name, value, needle):
+    t = terrain(fmus, sinkage=0.03)
+    try:
+        t.set({name: value})
+        with pytest.raises(FMICallException) as info:
+            t.fmu.doStep(0.0, 1e-3)
+        assert info.value.status in (2, 3)  # fmi2Discard or fmi2Error, never fatal
+        assert any(needle in m and "valid range" in m for m in t.errors()), t.log
+        t.set({name: presets.load("paper-table2")[name]})  # recovers once valid again
+        t.fmu.doStep(0.0, 1e-3)
+    finally:
+        t.close()
+
+
+def test_impossible_operating_point_is_refused_with_the_capacity(fmus):
+    t = terrain(fmus, quasi_static=True, load=5000.0)
+    try:
+        with pytest.raises(FMICallException) as info:
+            t.fmu.doStep(0.0, 1e-3)
+        assert info.value.status in (2, 3)
+        assert any("exceeds what the wheel can carry" in m for m in t.errors()), t.log
+    finally:
+        t.close()
+
+
+def test_bad_rig_parameter_is_refused(fmus):
+    r = rig(fmus)
+    try:
+        r.set({"rig.mass": -1.0})
+        with pytest.raises(FMICallException):
+            r.fmu.doStep(0.0, 1e-3)
+        assert any("rig.mass" in m for m in r.errors())
+    finally:
+        r.close()
