@@ -224,3 +224,15 @@ def test_bad_rig_parameter_is_refused(fmus):
         assert any("rig.mass" in m for m in r.errors())
     finally:
         r.close()
+
+
+def test_wheelterrain_ships_and_uses_the_compiled_model(fmus):
+    from wheelterrain import native
+
+    if native.compiler() is None:
+        pytest.skip("no C compiler: the FMU is built for the CasADi VM")
+    t = Instance(fmus["WheelTerrain"], fmus["unzip"]["WheelTerrain"], "c").start()
+    try:
+        assert any("evaluated by compiled C" in m for _, m in t.log), t.log
+    finally:
+        t.close()

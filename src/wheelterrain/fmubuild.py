@@ -26,7 +26,7 @@ from pathlib import Path
 from xml.dom import minidom
 from xml.etree import ElementTree as ET
 
-from . import slaves
+from . import contact, native, slaves
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 REPO_DIR = PACKAGE_DIR.parents[1]
@@ -68,8 +68,15 @@ def source_dir() -> Path:
     return path
 
 
-def build(out: Path, models: tuple[str, ...] = tuple(SOURCES)) -> list[Path]:
-    """Build the pythonfmu FMUs into ``out``; returns their paths."""
+def build(out: Path, models: tuple[str, ...] = tuple(SOURCES),
+          compiled: bool = True) -> list[Path]:
+    """Build the pythonfmu FMUs into ``out``; returns their paths.
+
+    ``compiled``: also generate the contact Function as C, compile it and ship the library in
+    WheelTerrain's bundled package (``_compiled/contact.so``), which the slave then calls
+    instead of the CasADi VM. Without a C compiler the FMU is built without it (same results,
+    slower); a compiler that fails is an error.
+    """
     from pythonfmu.builder import FmuBuilder
 
     out = Path(out)
@@ -80,7 +87,12 @@ def build(out: Path, models: tuple[str, ...] = tuple(SOURCES)) -> list[Path]:
         with tempfile.TemporaryDirectory(prefix="wheelterrain_build_") as tmp:
             staged = Path(tmp) / "wheelterrain"
             shutil.copytree(PACKAGE_DIR, staged,
-                            ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+                            ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "_compiled"))
+            if compiled and name == "WheelTerrain" and native.compiler() is not None:
+                try:
+                    native.compile_function(contact.build().contact, staged / "_compiled")
+                except native.CompileError as err:
+                    raise BuildError(str(err)) from err
             fmu = FmuBuilder.build_FMU(script, dest=tmp, project_files=[staged],
                                        canGetAndSetFMUstate=True, canSerializeFMUstate=True)
             finish_model_description(Path(fmu), name)

@@ -20,14 +20,36 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-from . import contact, presets, rig
+from . import contact, native, presets, rig
 from .errors import ParameterError
 from .parameters import TABLE, Parameter
 
 SPEED_FLOOR = 1e-9  # m/s: below this the wheel and the carriage are both at rest (slip 0)
+
+
+def contact_evaluator(functions: contact.ModelFunctions, resources: str | None = None):
+    """(evaluate, how): the contact Function as compiled C when the FMU build shipped it in
+    resources/wheelterrain/_compiled (same CasADi Function, generated and compiled; ~10 us per
+    call instead of ~70), else the CasADi VM. The library is used only if its fingerprint
+    matches the Function in this process (a host may import its own wheelterrain first)."""
+    places = [Path(resources) / "wheelterrain" / "_compiled"] if resources else []
+    places.append(Path(__file__).resolve().parent / "_compiled")
+    for place in places:
+        library = place / "contact.so"
+        if library.is_file():
+            try:
+                return native.CompiledFunction(library, functions.contact), "compiled C"
+            except (OSError, native.CompileError):
+                continue  # another platform or another version: the VM gives the same numbers
+
+    def vm(*args):
+        return [float(x) for x in functions.contact(*args)]
+
+    return vm, "CasADi VM"
 
 
 @dataclass(frozen=True)
@@ -273,7 +295,11 @@ class TerrainCore(_Core):
 
     def __init__(self, slave) -> None:
         self.functions = contact.build()
+        self.evaluate, self.evaluator = contact_evaluator(self.functions,
+                                                          getattr(slave, "resources", None))
         super().__init__(slave, terrain_variables())
+        from pythonfmu.enums import Fmi2Status
+        slave.log(f"WheelTerrain: contact model evaluated by {self.evaluator}", Fmi2Status.ok)
         self.angle = 0.0
         self.time = 0.0
         self.outputs_valid = False
@@ -317,7 +343,7 @@ class TerrainCore(_Core):
         if self.errors:
             return  # keep the last valid outputs; the next doStep refuses with the reason
         v = self.values
-        p = np.array([float(v[p.name]) for p in TABLE])
+        p = [float(v[p.name]) for p in TABLE]
         traction, paper = self.slips()
         if traction < -1.0 or traction > 1.0:  # reversed wheel against the carriage
             self.errors["slip"] = (f"slip {traction:g} outside the model's domain [-1, 1] "
@@ -327,7 +353,7 @@ class TerrainCore(_Core):
         self.errors.pop("slip", None)
         if v["quasi_static"]:
             load = float(v["load"])
-            out = self.functions.steady(load, traction, p)
+            out = self.functions.steady(load, traction, np.array(p))
             named = dict(zip(contact.STEADY_OUTPUTS, (float(x) for x in out), strict=True))
             problem = _steady_problem(load, traction, named)
             if problem:
@@ -338,9 +364,8 @@ class TerrainCore(_Core):
             sinkage = named["sinkage"]
         else:
             sinkage = float(v["sinkage"])
-            out = self.functions.contact(sinkage, float(v["sinkage_rate"]), traction,
-                                         self.angle, p)
-            named = dict(zip(contact.CONTACT_OUTPUTS, (float(x) for x in out), strict=True))
+            out = self.evaluate(sinkage, float(v["sinkage_rate"]), traction, self.angle, p)
+            named = dict(zip(contact.CONTACT_OUTPUTS, out, strict=True))
         for name in ("normal_force", "drawbar_pull", "torque", "gross_thrust",
                      "compaction_resistance", "entry_angle", "exit_angle", "max_stress_angle",
                      "contact_length", "mean_pressure", "ripple_amplitude"):

@@ -1,0 +1,31 @@
+"""The compiled-C route (wheelterrain.native) gives the CasADi VM's numbers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from wheelterrain import contact, native, presets
+
+
+@pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
+def test_compiled_contact_equals_the_vm(tmp_path):
+    fn = contact.build().contact
+    compiled = native.CompiledFunction(native.compile_function(fn, tmp_path), fn)
+    rng = np.random.default_rng(7)
+    base = presets.load("paper-table2")
+    for _ in range(200):
+        ps = base.with_values({"soil.phi": rng.uniform(0.2, 0.7),
+                               "soil.n1": rng.uniform(0.0, 1.5),
+                               "ripple.phase": rng.uniform(-3, 3)})
+        z, rate = rng.uniform(0.0, 0.05), rng.uniform(-0.1, 0.1)
+        slip, angle = rng.uniform(-0.9, 0.99), rng.uniform(-50, 50)
+        want = [float(x) for x in fn(z, rate, slip, angle, ps.vector())]
+        got = compiled(z, rate, slip, angle, list(ps.vector()))
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
+
+
+def test_missing_compiler_is_a_clear_error(tmp_path, monkeypatch):
+    monkeypatch.setenv("CC", str(tmp_path / "no-such-cc"))
+    with pytest.raises(native.CompileError, match="cannot run the C compiler"):
+        native.compile_function(contact.build().contact, tmp_path)
