@@ -29,3 +29,22 @@ def test_missing_compiler_is_a_clear_error(tmp_path, monkeypatch):
     monkeypatch.setenv("CC", str(tmp_path / "no-such-cc"))
     with pytest.raises(native.CompileError, match="cannot run the C compiler"):
         native.compile_function(contact.build().contact, tmp_path)
+
+
+@pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
+@pytest.mark.parametrize("which", [0, 1])
+def test_compiled_fmu_functions_equal_the_vm(tmp_path, which):
+    from wheelterrain import fmu_model
+
+    fn = fmu_model.terrain_functions()[which]
+    compiled = native.CompiledFunction(native.compile_function(fn, tmp_path), fn)
+    rng = np.random.default_rng(11)
+    p = list(presets.load("paper-table2").vector())
+    for _ in range(30):
+        u = [rng.uniform(0, 0.04), rng.uniform(-0.05, 0.05), rng.uniform(0.1, 1.0),
+             rng.uniform(0.0, 0.04), rng.uniform(1.0, 100.0)]
+        args = (u, rng.uniform(-10, 10), p) if which == 0 else (u, p)
+        want = [np.asarray(x, dtype=float).ravel() for x in fn(*args)]
+        got = compiled(*args)
+        np.testing.assert_allclose(np.asarray(got[0]), want[0], rtol=1e-12, atol=1e-12)
+        assert got[1:] == pytest.approx([float(want[1][0]), float(want[2][0])], rel=1e-12)

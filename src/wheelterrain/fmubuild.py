@@ -26,7 +26,7 @@ from pathlib import Path
 from xml.dom import minidom
 from xml.etree import ElementTree as ET
 
-from . import contact, native, slaves
+from . import fmu_model, native, slaves
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 REPO_DIR = PACKAGE_DIR.parents[1]
@@ -72,9 +72,9 @@ def build(out: Path, models: tuple[str, ...] = tuple(SOURCES),
           compiled: bool = True) -> list[Path]:
     """Build the pythonfmu FMUs into ``out``; returns their paths.
 
-    ``compiled``: also generate the contact Function as C, compile it and ship the library in
-    WheelTerrain's bundled package (``_compiled/contact.so``), which the slave then calls
-    instead of the CasADi VM. Without a C compiler the FMU is built without it (same results,
+    ``compiled``: also generate WheelTerrain's Functions (:mod:`wheelterrain.fmu_model`) as C,
+    compile them and ship the libraries in its bundled package (``_compiled/*.so``), which the
+    slave then calls instead of the CasADi VM. Without a C compiler the FMU is built without it (same results,
     slower); a compiler that fails is an error.
     """
     from pythonfmu.builder import FmuBuilder
@@ -90,7 +90,8 @@ def build(out: Path, models: tuple[str, ...] = tuple(SOURCES),
                             ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "_compiled"))
             if compiled and name == "WheelTerrain" and native.compiler() is not None:
                 try:
-                    native.compile_function(contact.build().contact, staged / "_compiled")
+                    for fn in fmu_model.terrain_functions():
+                        native.compile_function(fn, staged / "_compiled")
                 except native.CompileError as err:
                     raise BuildError(str(err)) from err
             fmu = FmuBuilder.build_FMU(script, dest=tmp, project_files=[staged],

@@ -24,30 +24,29 @@ from pathlib import Path
 
 import numpy as np
 
-from . import contact, native, presets, rig
+from . import fmu_model, native, presets, rig
 from .errors import ParameterError
 from .parameters import TABLE, Parameter
 
-SPEED_FLOOR = 1e-9  # m/s: below this the wheel and the carriage are both at rest (slip 0)
 
-
-def contact_evaluator(functions: contact.ModelFunctions, resources: str | None = None):
-    """(evaluate, how): the contact Function as compiled C when the FMU build shipped it in
+def compiled_or_vm(fn, resources: str | None = None):
+    """(evaluate, how): ``fn`` as the compiled C that `wheelterrain build` shipped in
     resources/wheelterrain/_compiled (same CasADi Function, generated and compiled; ~10 us per
-    call instead of ~70), else the CasADi VM. The library is used only if its fingerprint
-    matches the Function in this process (a host may import its own wheelterrain first)."""
+    call instead of ~70), else the CasADi VM. A library is used only if its fingerprint matches
+    ``fn`` in this process (a Python host may have imported its own wheelterrain first)."""
     places = [Path(resources) / "wheelterrain" / "_compiled"] if resources else []
     places.append(Path(__file__).resolve().parent / "_compiled")
     for place in places:
-        library = place / "contact.so"
+        library = place / f"{fn.name()}.so"
         if library.is_file():
             try:
-                return native.CompiledFunction(library, functions.contact), "compiled C"
+                return native.CompiledFunction(library, fn), "compiled C"
             except (OSError, native.CompileError):
                 continue  # another platform or another version: the VM gives the same numbers
 
     def vm(*args):
-        return [float(x) for x in functions.contact(*args)]
+        return [np.asarray(x, dtype=float).ravel().tolist() if x.numel() > 1 else float(x)
+                for x in fn(*args)]
 
     return vm, "CasADi VM"
 
@@ -79,8 +78,7 @@ def _preset_values() -> dict[str, float]:
     return dict(presets.load(presets.DEFAULT_PRESET))
 
 
-TERRAIN_INPUTS = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "load")
-_ALL_IN = TERRAIN_INPUTS
+_ALL_IN = fmu_model.TERRAIN_INPUTS
 
 
 def terrain_variables() -> list[Var]:
@@ -135,11 +133,6 @@ def terrain_variables() -> list[Var]:
                          "Wheel rotation angle, integrated from wheel_speed (phase of the "
                          "grouser ripple)", "rad", "Angle", "deg", depends_on=()))
     return variables
-
-
-RIG_OUTPUTS = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "motor_torque",
-               "sensor.drawbar_pull", "sensor.normal_force", "sensor.sinkage",
-               "sensor.slip_paper")
 
 
 def rig_variables() -> list[Var]:
@@ -294,9 +287,10 @@ class TerrainCore(_Core):
     model_name = "WheelTerrain"
 
     def __init__(self, slave) -> None:
-        self.functions = contact.build()
-        self.evaluate, self.evaluator = contact_evaluator(self.functions,
-                                                          getattr(slave, "resources", None))
+        dynamic, quasi = fmu_model.terrain_functions()
+        resources = getattr(slave, "resources", None)
+        self.dynamic, self.evaluator = compiled_or_vm(dynamic, resources)
+        self.quasi_static, _ = compiled_or_vm(quasi, resources)
         super().__init__(slave, terrain_variables())
         from pythonfmu.enums import Fmi2Status
         slave.log(f"WheelTerrain: contact model evaluated by {self.evaluator}", Fmi2Status.ok)
@@ -319,59 +313,27 @@ class TerrainCore(_Core):
             return None
         return super().problem(name, value)
 
-    def slip_radius(self) -> float:
-        v = self.values
-        return v["wheel.radius"] + v["model.slip_radius_factor"] * v["grouser.height"]
-
-    def slips(self) -> tuple[float, float]:
-        """Traction slip (regularised when braking) and the paper's slip from the inputs."""
-        rim = self.values["wheel_speed"] * self.slip_radius()
-        speed = self.values["carriage_speed"]
-        scale = max(abs(rim), abs(speed))
-        if scale < SPEED_FLOOR:
-            return 0.0, 0.0
-        traction = (rim - speed) / scale
-        paper = (rim - speed) / abs(speed) if abs(speed) >= SPEED_FLOOR else math.copysign(
-            1.0 / SPEED_FLOOR, rim - speed)
-        return traction, paper
-
     def refresh(self) -> None:
         """Recompute the outputs from the current inputs, parameters and wheel angle."""
         if not self.dirty:
             return
         self.dirty = False
-        if self.errors:
+        if any(name not in _OWN_ERRORS for name in self.errors):
             return  # keep the last valid outputs; the next doStep refuses with the reason
         v = self.values
-        p = [float(v[p.name]) for p in TABLE]
-        traction, paper = self.slips()
-        if traction < -1.0 or traction > 1.0:  # reversed wheel against the carriage
-            self.errors["slip"] = (f"slip {traction:g} outside the model's domain [-1, 1] "
-                                   "(wheel turning against the carriage's motion)")
-            self.log_error(self.errors["slip"])
-            return
-        self.errors.pop("slip", None)
+        u = [float(v[name]) for name in fmu_model.TERRAIN_INPUTS]
+        p = [float(v[prm.name]) for prm in TABLE]
         if v["quasi_static"]:
-            load = float(v["load"])
-            out = self.functions.steady(load, traction, np.array(p))
-            named = dict(zip(contact.STEADY_OUTPUTS, (float(x) for x in out), strict=True))
-            problem = _steady_problem(load, traction, named)
-            if problem:
-                self.errors["load"] = problem
-                self.log_error(problem)
-                return
-            self.errors.pop("load", None)
-            sinkage = named["sinkage"]
+            y, status, info = self.quasi_static(u, p)
         else:
-            sinkage = float(v["sinkage"])
-            out = self.evaluate(sinkage, float(v["sinkage_rate"]), traction, self.angle, p)
-            named = dict(zip(contact.CONTACT_OUTPUTS, out, strict=True))
-        for name in ("normal_force", "drawbar_pull", "torque", "gross_thrust",
-                     "compaction_resistance", "entry_angle", "exit_angle", "max_stress_angle",
-                     "contact_length", "mean_pressure", "ripple_amplitude"):
-            v[name] = named[name]
-        v["contact_sinkage"] = sinkage
-        v["slip"], v["slip_paper"] = traction, paper
+            y, status, info = self.dynamic(u, self.angle, p)
+        for name in _OWN_ERRORS:
+            self.errors.pop(name, None)
+        if status != fmu_model.STATUS_OK:
+            self.errors[_OWN_ERRORS[0]] = terrain_problem(int(status), info, u)
+            self.log_error(self.errors[_OWN_ERRORS[0]])
+            return
+        v.update(zip(fmu_model.TERRAIN_OUTPUTS, y, strict=True))
         v["wheel_angle"] = self.angle
 
     def initialize(self) -> None:
@@ -394,17 +356,19 @@ class TerrainCore(_Core):
 _TABLE_BY = {p.name: p for p in TABLE}
 
 
-def _steady_problem(load: float, slip: float, out: dict) -> str | None:
-    """The reason a quasi-static solve result must not be used, or None (the same checks as
-    :func:`wheelterrain.model.steady_state`)."""
-    from .model import RESIDUAL_TOLERANCE, STEP_TOLERANCE
+_OWN_ERRORS = ("operating point",)
 
-    if load > out["capacity"]:
-        return (f"load {load:g} N exceeds what the wheel can carry fully buried at slip "
-                f"{slip:g} ({out['capacity']:.6g} N); valid range [0, {out['capacity']:.6g}] N")
-    if not (abs(out["residual"]) <= RESIDUAL_TOLERANCE or out["last_step"] <= STEP_TOLERANCE):
-        return f"sinkage solve did not converge for load {load:g} N at slip {slip:g}"
-    return None
+
+def terrain_problem(status: int, info: float, u: list[float]) -> str:
+    """The message for a status of :mod:`wheelterrain.fmu_model`'s terrain Functions."""
+    load = u[fmu_model.TERRAIN_INPUTS.index("load")]
+    if status == fmu_model.STATUS_SLIP:
+        return (f"slip {info:g} outside the model's domain [-1, 1] (wheel turning against the "
+                "carriage's motion)")
+    if status == fmu_model.STATUS_LOAD:
+        return (f"load {load:g} N exceeds what the wheel can carry fully buried "
+                f"({info:.6g} N); valid range [0, {info:.6g}] N")
+    return f"sinkage solve did not converge for load {load:g} N"
 
 
 class RigCore(_Core):
@@ -443,18 +407,10 @@ class RigCore(_Core):
         self.dirty = False
         if self.errors:
             return
-        p = self.params()
-        _, carriage = rig.references(p)
-        z, z_rate, omega, _ = self.state
         v = self.values
-        v["sinkage"], v["sinkage_rate"], v["wheel_speed"] = z, z_rate, omega
-        v["carriage_speed"] = carriage
-        v["motor_torque"] = self.motor_torque
-        v["sensor.drawbar_pull"] = float(v["drawbar_pull"])
-        v["sensor.normal_force"] = float(v["normal_force"])
-        v["sensor.sinkage"] = z
-        rim = omega * p["rig.slip_radius"]
-        v["sensor.slip_paper"] = (rim - carriage) / carriage
+        u = tuple(float(v[name]) for name in rig.FORCE_INPUTS)
+        y = fmu_model.rig_outputs(self.state, u, self.params(), self.motor_torque)
+        v.update(zip(fmu_model.RIG_OUTPUTS, y, strict=True))
 
     def do_step(self, t: float, h: float) -> bool:
         if not self.refuse_if_invalid():

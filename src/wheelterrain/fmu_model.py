@@ -1,0 +1,120 @@
+"""What each FMU computes per step, as CasADi Functions shared by both FMU flavours.
+
+The pythonfmu slaves (:mod:`wheelterrain.slaves`) and the native C wrapper (fmu_src/native/) call
+the same Functions: the pythonfmu flavour through the CasADi VM or the same generated C, the
+native flavour through the generated C only. So the two flavours agree by construction, and the
+glue in each wrapper is bookkeeping (values, modes, messages), not arithmetic.
+
+WheelTerrain
+    ``terrain_dynamic(u, angle, p) -> (y, status, info)`` and
+    ``terrain_quasi_static(u, p) -> (y, status, info)`` with u = TERRAIN_INPUTS, y =
+    TERRAIN_OUTPUTS (without wheel_angle, which the wrapper integrates). ``status``: STATUS_OK,
+    STATUS_SLIP (wheel turning against the carriage: traction slip outside [-1, 1]; ``info`` is
+    the slip), STATUS_LOAD (load beyond the capacity; ``info`` is the capacity),
+    STATUS_UNCONVERGED (the solve's convergence check failed). On a status other than OK the
+    wrappers keep their previous outputs and refuse the next step with the reason.
+SingleWheelRig
+    ``rig_step`` (:func:`wheelterrain.rig.build`) and ``rig_outputs(x, u, p, motor_torque) -> y``
+    with y = RIG_OUTPUTS.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import casadi as ca
+
+from . import contact, rig
+from .model import RESIDUAL_TOLERANCE, STEP_TOLERANCE
+from .parameters import INDEX, NAMES
+
+SPEED_FLOOR = 1e-9  # m/s: below this the wheel and the carriage are both at rest (slip 0)
+TERRAIN_INPUTS = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "load")
+TERRAIN_OUTPUTS = ("normal_force", "drawbar_pull", "torque", "gross_thrust",
+                   "compaction_resistance", "contact_sinkage", "slip", "slip_paper",
+                   "entry_angle", "exit_angle", "max_stress_angle", "contact_length",
+                   "mean_pressure", "ripple_amplitude")
+RIG_OUTPUTS = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "motor_torque",
+               "sensor.drawbar_pull", "sensor.normal_force", "sensor.sinkage",
+               "sensor.slip_paper")
+STATUS_OK, STATUS_SLIP, STATUS_LOAD, STATUS_UNCONVERGED = 0, 1, 2, 3
+
+
+def slips(wheel_speed, carriage_speed, slip_radius):
+    """(traction slip, paper's slip) from the wheel's and the carriage's speeds.
+
+    Traction slip i = (omega*R - V)/(omega*R) when driving; regularised to
+    (omega*R - V)/max(|omega*R|, |V|) so that braking (V > omega*R) gives the skid ratio in
+    [-1, 0] and zero speeds give 0. The paper's s = (omega*R - V)/V, +-1/SPEED_FLOOR with the
+    carriage at rest.
+    """
+    rim = wheel_speed * slip_radius
+    difference = rim - carriage_speed
+    scale = ca.fmax(ca.fabs(rim), ca.fabs(carriage_speed))
+    at_rest = scale < SPEED_FLOOR
+    traction = ca.if_else(at_rest, 0, difference / ca.fmax(scale, SPEED_FLOOR))
+    still = ca.fabs(carriage_speed) < SPEED_FLOOR
+    paper = ca.if_else(at_rest, 0, ca.if_else(
+        still, ca.if_else(difference >= 0, 1 / SPEED_FLOOR, -1 / SPEED_FLOOR),
+        difference / ca.fmax(ca.fabs(carriage_speed), SPEED_FLOOR)))
+    return traction, paper
+
+
+def _slip_radius(p):
+    return (p[INDEX["wheel.radius"]]
+            + p[INDEX["model.slip_radius_factor"]] * p[INDEX["grouser.height"]])
+
+
+@lru_cache(maxsize=2)
+def terrain_functions() -> tuple[ca.Function, ca.Function]:
+    fns = contact.build()
+    u, angle, p = ca.MX.sym("u", len(TERRAIN_INPUTS)), ca.MX.sym("angle"), ca.MX.sym(
+        "p", len(NAMES))
+    sinkage, rate, omega, speed, load = (u[k] for k in range(len(TERRAIN_INPUTS)))
+    traction, paper = slips(omega, speed, _slip_radius(p))
+    slip_bad = ca.logic_or(traction < -1, traction > 1)
+    safe_slip = ca.fmin(ca.fmax(traction, -1), 1)  # only used when the status is OK
+
+    out = dict(zip(contact.CONTACT_OUTPUTS, fns.contact(sinkage, rate, safe_slip, angle, p),
+                   strict=True))
+    out.update(contact_sinkage=sinkage, slip=traction, slip_paper=paper)
+    y = ca.vertcat(*(out[k] for k in TERRAIN_OUTPUTS))
+    dynamic = ca.Function("terrain_dynamic", [u, angle, p],
+                          [y, ca.if_else(slip_bad, STATUS_SLIP, STATUS_OK), traction],
+                          ["u", "angle", "p"], ["y", "status", "info"])
+
+    steady = dict(zip(contact.STEADY_OUTPUTS, fns.steady_calls(load, safe_slip, p), strict=True))
+    steady.update(contact_sinkage=steady["sinkage"], slip=traction, slip_paper=paper,
+                  ripple_amplitude=0)
+    y = ca.vertcat(*(steady[k] for k in TERRAIN_OUTPUTS))
+    too_heavy = load > steady["capacity"]
+    converged = ca.logic_or(ca.fabs(steady["residual"]) <= RESIDUAL_TOLERANCE,
+                            steady["last_step"] <= STEP_TOLERANCE)
+    status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(
+        too_heavy, STATUS_LOAD, ca.if_else(converged, STATUS_OK, STATUS_UNCONVERGED)))
+    info = ca.if_else(slip_bad, traction, steady["capacity"])
+    quasi = ca.Function("terrain_quasi_static", [u, p], [y, status, info], ["u", "p"],
+                        ["y", "status", "info"])
+    return dynamic, quasi
+
+
+def rig_outputs(x, u, p, motor_torque):
+    """RIG_OUTPUTS from the rig state x, the soil forces u, the rig parameters ``p[name]`` and
+    the motor torque; plain arithmetic on floats or CasADi symbols."""
+    z, z_rate, omega, _ = x
+    normal_force, drawbar_pull, _ = u
+    _, carriage = rig.references(p)
+    slip_paper = (omega * p["rig.slip_radius"] - carriage) / carriage
+    return (z, z_rate, omega, carriage, motor_torque, drawbar_pull, normal_force, z, slip_paper)
+
+
+@lru_cache(maxsize=1)
+def rig_functions() -> tuple[ca.Function, ca.Function]:
+    x, u = ca.SX.sym("x", len(rig.STATES)), ca.SX.sym("u", len(rig.FORCE_INPUTS))
+    p, torque = ca.SX.sym("p", len(rig.RIG_NAMES)), ca.SX.sym("motor_torque")
+    named = {name: p[k] for k, name in enumerate(rig.RIG_NAMES)}
+    y = rig_outputs(tuple(x[k] for k in range(len(rig.STATES))),
+                    tuple(u[k] for k in range(len(rig.FORCE_INPUTS))), named, torque)
+    outputs = ca.Function("rig_outputs", [x, u, p, torque], [ca.vertcat(*y)],
+                          ["x", "u", "p", "motor_torque"], ["y"])
+    return rig.build(), outputs
