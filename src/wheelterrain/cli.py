@@ -139,22 +139,34 @@ def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definiti
 
 @main.command(epilog=EPILOG)
 @click.option("--out", default="build", show_default=True, type=click.Path(file_okay=False),
-              help="Directory to write WheelTerrain.fmu and SingleWheelRig.fmu into.")
-def build(out: str) -> None:
-    """Build the FMI 2.0 co-simulation FMUs (pythonfmu flavour).
+              help="Directory for the FMUs (the native flavour goes to OUT/native).")
+@click.option("--flavor", type=click.Choice(["pythonfmu", "native", "all"]), default="pythonfmu",
+              show_default=True, help="Which FMUs to build.")
+def build(out: str, flavor: str) -> None:
+    """Build the FMI 2.0 co-simulation FMUs WheelTerrain.fmu and SingleWheelRig.fmu.
 
     \b
-    Writes OUT/WheelTerrain.fmu (the contact model; every table parameter is an FMU
-    parameter with its structured name) and OUT/SingleWheelRig.fmu (the paper's rig).
-    The host needs Python with numpy, casadi and pythonfmu's runtime; the wheelterrain
-    package is bundled inside. Try one alone:
+    pythonfmu (OUT/): for Python hosts (fmpy); the host needs numpy and casadi, the
+      wheelterrain package is bundled inside. Every table parameter is an FMU parameter.
+    native (OUT/native/): CasADi-generated C of the same model in our own FMI 2.0
+      wrapper; no Python at run time, for any FMI host (C masters, system simulators,
+      ecos). Needs a C compiler to build; ships its C sources in sources/.
+    Both have the same modelDescription (names, units, structure). Try one alone:
       fmpy simulate build/WheelTerrain.fmu --start-values quasi_static true soil.phi 0.45
     """
+    from pathlib import Path
+
     from .fmubuild import BuildError
-    from .fmubuild import build as build_fmus
+    from .fmubuild import build as build_pythonfmu
+    from .nativebuild import build as build_native
 
     try:
-        for path in build_fmus(out):
+        paths = []
+        if flavor in ("pythonfmu", "all"):
+            paths += build_pythonfmu(out)
+        if flavor in ("native", "all"):
+            paths += build_native(Path(out) / "native")
+        for path in paths:
             click.echo(f"wrote {path}")
     except BuildError as err:
         click.echo(f"error: {err}", err=True)

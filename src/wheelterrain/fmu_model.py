@@ -109,7 +109,8 @@ def rig_outputs(x, u, p, motor_torque):
 
 
 @lru_cache(maxsize=1)
-def rig_functions() -> tuple[ca.Function, ca.Function]:
+def rig_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
+    """(rig_step, rig_outputs, rig_initial(p) -> x0)."""
     x, u = ca.SX.sym("x", len(rig.STATES)), ca.SX.sym("u", len(rig.FORCE_INPUTS))
     p, torque = ca.SX.sym("p", len(rig.RIG_NAMES)), ca.SX.sym("motor_torque")
     named = {name: p[k] for k, name in enumerate(rig.RIG_NAMES)}
@@ -117,4 +118,6 @@ def rig_functions() -> tuple[ca.Function, ca.Function]:
                     tuple(u[k] for k in range(len(rig.FORCE_INPUTS))), named, torque)
     outputs = ca.Function("rig_outputs", [x, u, p, torque], [ca.vertcat(*y)],
                           ["x", "u", "p", "motor_torque"], ["y"])
-    return rig.build(), outputs
+    initial = ca.Function("rig_initial", [p], [ca.vertcat(*rig.initial_state(named))], ["p"],
+                          ["x0"])
+    return rig.build(), outputs, initial

@@ -74,8 +74,8 @@ def build(out: Path, models: tuple[str, ...] = tuple(SOURCES),
 
     ``compiled``: also generate WheelTerrain's Functions (:mod:`wheelterrain.fmu_model`) as C,
     compile them and ship the libraries in its bundled package (``_compiled/*.so``), which the
-    slave then calls instead of the CasADi VM. Without a C compiler the FMU is built without it (same results,
-    slower); a compiler that fails is an error.
+    slave then calls instead of the CasADi VM. Without a C compiler the FMU is built without
+    them (same results, slower); a compiler that fails is an error.
     """
     from pythonfmu.builder import FmuBuilder
 

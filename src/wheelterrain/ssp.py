@@ -3,8 +3,9 @@ so the same system runs in any SSP master (fmpy.ssp here; ecos for the native fl
 
 Layout of ``<case>.ssp`` (a zip): SystemStructure.ssd and resources/{WheelTerrain,
 SingleWheelRig}.fmu. Parameters are inline ssv:ParameterSets in each component's
-ParameterBindings. ``quasi_static`` is left at its default (false): the SSP runs the dynamic
-co-simulation.
+ParameterBindings, all named after the case (ecos applies a named set at init:
+``EcosSimulation.init(0, "C2")``; fmpy.ssp is given them by :func:`simulate_with_fmpy`).
+``quasi_static`` is left at its default (false): the SSP runs the dynamic co-simulation.
 """
 
 from __future__ import annotations
@@ -31,7 +32,8 @@ def _q(prefix: str, tag: str) -> str:
     return f"{{{NS[prefix]}}}{tag}"
 
 
-def _component(elements, name: str, source: str, inputs, outputs, params: dict) -> None:
+def _component(elements, name: str, source: str, inputs, outputs, params: dict,
+               set_name: str) -> None:
     comp = ET.SubElement(elements, _q("ssd", "Component"), name=name,
                          type="application/x-fmu-sharedlibrary", source=source)
     connectors = ET.SubElement(comp, _q("ssd", "Connectors"))
@@ -42,7 +44,7 @@ def _component(elements, name: str, source: str, inputs, outputs, params: dict) 
     bindings = ET.SubElement(comp, _q("ssd", "ParameterBindings"))
     binding = ET.SubElement(bindings, _q("ssd", "ParameterBinding"))
     values = ET.SubElement(binding, _q("ssd", "ParameterValues"))
-    pset = ET.SubElement(values, _q("ssv", "ParameterSet"), version="1.0", name=f"{name}-values")
+    pset = ET.SubElement(values, _q("ssv", "ParameterSet"), version="1.0", name=set_name)
     plist = ET.SubElement(pset, _q("ssv", "Parameters"))
     for key, (kind, value) in params.items():
         p = ET.SubElement(plist, _q("ssv", "Parameter"), name=key)
@@ -64,9 +66,10 @@ def system_description(case: str, ps: ParameterSet, slip_paper: float, load: flo
                                else float(ps[p.name])) for p in TABLE}
     rig_params = {k: ("Real", float(v))
                   for k, v in rig_parameters(ps, slip_paper, load, rim_speed).items()}
-    _component(elements, "rig", "resources/SingleWheelRig.fmu", FORCES, RIG_OUTPUTS, rig_params)
+    _component(elements, "rig", "resources/SingleWheelRig.fmu", FORCES, RIG_OUTPUTS, rig_params,
+               case)
     _component(elements, "terrain", "resources/WheelTerrain.fmu", STATES, TERRAIN_OUTPUTS,
-               terrain_params)
+               terrain_params, case)
     connections = ET.SubElement(system, _q("ssd", "Connections"))
     for n in STATES:
         ET.SubElement(connections, _q("ssd", "Connection"), startElement="rig",
@@ -108,3 +111,20 @@ def simulate_with_fmpy(path: Path, stop: float, step: float):
                     merged.parameters.append(Parameter(name=f"{comp.name}.{p.name}",
                                                        type=p.type, value=p.value))
     return simulate_ssp(str(path), stop_time=stop, step_size=step, parameter_set=merged)
+
+
+def simulate_with_ecos(path: Path, case: str, stop: float, step: float, csv: Path,
+                       variables: tuple[str, ...]) -> None:
+    """Run an SSP written by :func:`write` in ecos (ecospy), applying the case's parameter set,
+    and write ``variables`` ("component::name") at every step to ``csv``."""
+    from ecospy import EcosSimulation
+
+    sim = EcosSimulation(step_size=step, ssp_path=str(path))
+    try:
+        sim.add_csv_writer(str(csv), identifiers=list(variables), decimation_factor=1)
+        if not sim.init(0.0, case):
+            raise RuntimeError(f"ecos could not initialise {path} with parameter set {case}")
+        sim.step_until(stop)
+        sim.terminate()
+    finally:
+        sim.free()

@@ -1,0 +1,601 @@
+/*
+ * FMI 2.0 co-simulation wrapper of the native wheelterrain FMUs.
+ *
+ * One translation unit per FMU: this file includes two files that `wheelterrain build --flavor
+ * native` generates for WheelTerrain or SingleWheelRig: model_vars.h (the variable table, the
+ * GUID, and the C that CasADi generates from the very Functions the Python flavour calls,
+ * wheelterrain.fmu_model) and model_hooks.c (model_work, model_reset, model_initialize,
+ * model_refresh, model_step: copying values in and out of those Functions). No arithmetic of the
+ * model is written by hand.
+ *
+ * What this wrapper adds: the FMI 2 call-sequence state machine, the GUID check, logging
+ * categories (errors are always reported, whether logging is on or not), checks of every set
+ * value against its declared range (fmi2Error and a logged reason naming the variable and the
+ * range), fmi2Discard with the reason when a step cannot be taken, get/set/serialize of the
+ * whole instance state, and no global mutable state (any number of instances).
+ */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi2Functions.h"
+
+typedef enum { T_REAL, T_INTEGER, T_BOOLEAN } VarType;
+typedef enum { C_PARAMETER, C_INPUT, C_OUTPUT } Causality;
+
+typedef struct {
+    const char *name;
+    VarType type;
+    Causality causality;
+    double start;
+    int has_range;
+    double min, max;
+    const char *unit;
+} VarInfo;
+
+typedef enum {
+    S_INSTANTIATED = 1,
+    S_INITIALIZATION = 2,
+    S_STEP_COMPLETE = 4,
+    S_TERMINATED = 8,
+    S_ERROR = 16,
+} ModeBit;
+
+#define MAX_MESSAGE 512
+
+#include "model_vars.h" /* VARS, N_VARS, N_STATES, MODEL_NAME, MODEL_GUID, CasADi functions */
+
+/* The instance state that get/set/serialize FMU state carries, as one plain block. */
+typedef struct {
+    unsigned magic;
+    double v[N_VARS];
+    int invalid[N_VARS];
+    double s[N_STATES];
+    int dirty;
+    int operating_error;
+    int mode;
+    double time;
+    char operating_message[MAX_MESSAGE];
+} Block;
+
+#define BLOCK_MAGIC 0x57544631u /* "WTF1" */
+
+typedef struct Instance {
+    Block b;
+    fmi2CallbackFunctions cb;
+    char *name;
+    int logging_on;
+    int log_categories; /* bit k: category k enabled */
+    casadi_int *iw;
+    casadi_real *w;
+    const casadi_real **arg;
+    casadi_real **res;
+} Instance;
+
+/* Grow the work sizes to cover one more CasADi Function (its generated <name>_work). */
+typedef int (*WorkSizes)(casadi_int *, casadi_int *, casadi_int *, casadi_int *);
+static void cover(WorkSizes f, casadi_int *sz_arg, casadi_int *sz_res, casadi_int *sz_iw,
+                  casadi_int *sz_w) {
+    casadi_int a = 0, r = 0, i = 0, w = 0;
+    f(&a, &r, &i, &w);
+    if (a > *sz_arg) *sz_arg = a;
+    if (r > *sz_res) *sz_res = r;
+    if (i > *sz_iw) *sz_iw = i;
+    if (w > *sz_w) *sz_w = w;
+}
+
+#include "model_hooks.c"
+
+static const char *CATEGORIES[] = {"logEvents", "logStatusWarning", "logStatusDiscard",
+                                   "logStatusError", "logStatusFatal", "logAll"};
+#define N_CATEGORIES 6
+
+static void log_message(Instance *c, fmi2Status status, int category, const char *fmt, ...) {
+    char text[MAX_MESSAGE * 2];
+    va_list ap;
+    int is_error = status == fmi2Error || status == fmi2Fatal || status == fmi2Discard;
+    if (c == NULL || c->cb.logger == NULL) return;
+    /* errors (and discards) always reach the host; other messages when logging is on and their
+       category is enabled */
+    if (!is_error && !(c->logging_on && (c->log_categories & (1 << category)))) return;
+    va_start(ap, fmt);
+    vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    /* The logger's message is a format string (FMI 2.0, 2.1.5): pass the finished text with any
+       '%' doubled, and no arguments, so formatting and non-formatting hosts both print it. */
+    {
+        char escaped[sizeof text * 2];
+        size_t j = 0;
+        for (size_t i = 0; text[i] != '\0' && j + 2 < sizeof escaped; i++) {
+            if (text[i] == '%') escaped[j++] = '%';
+            escaped[j++] = text[i];
+        }
+        escaped[j] = '\0';
+        c->cb.logger(c->cb.componentEnvironment, c->name, status, CATEGORIES[category],
+                     escaped);
+    }
+}
+
+#define LOG_ERROR(c, ...) log_message((c), fmi2Error, 3, __VA_ARGS__)
+#define LOG_DISCARD(c, ...) log_message((c), fmi2Discard, 2, __VA_ARGS__)
+
+static const char *mode_name(int mode) {
+    switch (mode) {
+    case S_INSTANTIATED: return "instantiated";
+    case S_INITIALIZATION: return "initialization mode";
+    case S_STEP_COMPLETE: return "step complete";
+    case S_TERMINATED: return "terminated";
+    default: return "error";
+    }
+}
+
+/* 1 if the call is allowed in the current mode, else log and 0. */
+static int allowed(Instance *c, const char *function, int modes) {
+    if (c == NULL) return 0;
+    if (c->b.mode & modes) return 1;
+    LOG_ERROR(c, "%s: illegal call sequence (the instance is in %s)", function,
+              mode_name(c->b.mode));
+    return 0;
+}
+
+/* ---- value checks ------------------------------------------------------------------------- */
+
+static int check_value(Instance *c, fmi2ValueReference vr, double value) {
+    const VarInfo *v = &VARS[vr];
+    if (v->type == T_BOOLEAN) return 1;
+    if (!isfinite(value)) {
+        LOG_ERROR(c, "%s: %s = %g must be finite; valid range [%g, %g] %s", MODEL_NAME, v->name,
+                  value, v->min, v->max, v->unit);
+        return 0;
+    }
+    if (v->has_range && (value < v->min || value > v->max)) {
+        LOG_ERROR(c, "%s: %s = %g is out of range; valid range [%g, %g] %s", MODEL_NAME, v->name,
+                  value, v->min, v->max, v->unit);
+        return 0;
+    }
+    return 1;
+}
+
+static int any_invalid(Instance *c, int report) {
+    int bad = 0;
+    for (int k = 0; k < N_VARS; k++) {
+        if (c->b.invalid[k]) {
+            bad = 1;
+            if (report)
+                LOG_DISCARD(c, "%s: step refused: %s = %g is invalid (see the error logged when "
+                            "it was set); valid range [%g, %g] %s", MODEL_NAME, VARS[k].name,
+                            c->b.v[k], VARS[k].min, VARS[k].max, VARS[k].unit);
+        }
+    }
+    return bad;
+}
+
+static void refresh(Instance *c) {
+    if (!c->b.dirty || any_invalid(c, 0)) return;
+    c->b.dirty = 0;
+    c->b.operating_error = 0;
+    if (model_refresh(c, c->b.operating_message) != 0) {
+        c->b.operating_error = 1;
+        LOG_ERROR(c, "%s: %s", MODEL_NAME, c->b.operating_message);
+    }
+}
+
+/* ---- common functions ------------------------------------------------------------------- */
+
+const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+const char *fmi2GetVersion(void) { return fmi2Version; }
+
+fmi2Status fmi2SetDebugLogging(fmi2Component comp, fmi2Boolean loggingOn, size_t n,
+                               const fmi2String categories[]) {
+    Instance *c = (Instance *)comp;
+    if (c == NULL) return fmi2Error;
+    c->logging_on = loggingOn;
+    if (n == 0) {
+        c->log_categories = loggingOn ? ~0 : 0;
+        return fmi2OK;
+    }
+    for (size_t i = 0; i < n; i++) {
+        int found = 0;
+        for (int k = 0; k < N_CATEGORIES; k++) {
+            if (strcmp(categories[i], CATEGORIES[k]) == 0) {
+                if (loggingOn) c->log_categories |= 1 << k;
+                else c->log_categories &= ~(1 << k);
+                found = 1;
+            }
+        }
+        if (!found) {
+            LOG_ERROR(c, "fmi2SetDebugLogging: unknown log category '%s'", categories[i]);
+            return fmi2Error;
+        }
+    }
+    return fmi2OK;
+}
+
+static void set_defaults(Instance *c) {
+    memset(&c->b, 0, sizeof c->b);
+    c->b.magic = BLOCK_MAGIC;
+    for (int k = 0; k < N_VARS; k++) c->b.v[k] = VARS[k].start;
+    c->b.dirty = 1;
+    c->b.mode = S_INSTANTIATED;
+    model_reset(c);
+}
+
+fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
+                              fmi2String resourceLocation, const fmi2CallbackFunctions *functions,
+                              fmi2Boolean visible, fmi2Boolean loggingOn) {
+    Instance *c;
+    casadi_int sz_arg, sz_res, sz_iw, sz_w;
+    (void)resourceLocation;
+    (void)visible;
+    if (functions == NULL || functions->allocateMemory == NULL || functions->freeMemory == NULL)
+        return NULL;
+    c = (Instance *)functions->allocateMemory(1, sizeof(Instance));
+    if (c == NULL) return NULL;
+    c->cb = *functions;
+    c->name = (char *)functions->allocateMemory(strlen(name ? name : "") + 1, 1);
+    if (c->name == NULL) {
+        functions->freeMemory(c);
+        return NULL;
+    }
+    strcpy(c->name, name ? name : "");
+    c->logging_on = loggingOn;
+    c->log_categories = loggingOn ? ~0 : 0;
+    if (type != fmi2CoSimulation) {
+        LOG_ERROR(c, "fmi2Instantiate: %s is a co-simulation FMU (fmuType %d requested)",
+                  MODEL_NAME, (int)type);
+        functions->freeMemory(c->name);
+        functions->freeMemory(c);
+        return NULL;
+    }
+    if (guid == NULL || strcmp(guid, MODEL_GUID) != 0) {
+        LOG_ERROR(c, "fmi2Instantiate: wrong GUID '%s' for %s (expected '%s')",
+                  guid ? guid : "(null)", MODEL_NAME, MODEL_GUID);
+        functions->freeMemory(c->name);
+        functions->freeMemory(c);
+        return NULL;
+    }
+    sz_arg = sz_res = sz_iw = sz_w = 0;
+    model_work(&sz_arg, &sz_res, &sz_iw, &sz_w);
+    c->iw = (casadi_int *)functions->allocateMemory((size_t)(sz_iw > 0 ? sz_iw : 1),
+                                                    sizeof(casadi_int));
+    c->w = (casadi_real *)functions->allocateMemory((size_t)(sz_w > 0 ? sz_w : 1),
+                                                    sizeof(casadi_real));
+    c->arg = (const casadi_real **)functions->allocateMemory((size_t)sz_arg,
+                                                            sizeof(casadi_real *));
+    c->res = (casadi_real **)functions->allocateMemory((size_t)sz_res, sizeof(casadi_real *));
+    if (!c->iw || !c->w || !c->arg || !c->res) {
+        LOG_ERROR(c, "fmi2Instantiate: out of memory");
+        if (c->iw) functions->freeMemory(c->iw);
+        if (c->w) functions->freeMemory(c->w);
+        if (c->arg) functions->freeMemory((void *)c->arg);
+        if (c->res) functions->freeMemory(c->res);
+        functions->freeMemory(c->name);
+        functions->freeMemory(c);
+        return NULL;
+    }
+    set_defaults(c);
+    return c;
+}
+
+void fmi2FreeInstance(fmi2Component comp) {
+    Instance *c = (Instance *)comp;
+    if (c == NULL) return;
+    c->cb.freeMemory(c->iw);
+    c->cb.freeMemory(c->w);
+    c->cb.freeMemory((void *)c->arg);
+    c->cb.freeMemory(c->res);
+    c->cb.freeMemory(c->name);
+    c->cb.freeMemory(c);
+}
+
+fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean toleranceDefined,
+                               fmi2Real tolerance, fmi2Real startTime,
+                               fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+    Instance *c = (Instance *)comp;
+    (void)toleranceDefined, (void)tolerance, (void)stopTimeDefined, (void)stopTime;
+    if (!allowed(c, "fmi2SetupExperiment", S_INSTANTIATED)) return fmi2Error;
+    c->b.time = startTime;
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterInitializationMode(fmi2Component comp) {
+    Instance *c = (Instance *)comp;
+    if (!allowed(c, "fmi2EnterInitializationMode", S_INSTANTIATED)) return fmi2Error;
+    c->b.mode = S_INITIALIZATION;
+    return fmi2OK;
+}
+
+fmi2Status fmi2ExitInitializationMode(fmi2Component comp) {
+    Instance *c = (Instance *)comp;
+    if (!allowed(c, "fmi2ExitInitializationMode", S_INITIALIZATION)) return fmi2Error;
+    c->b.mode = S_STEP_COMPLETE;
+    if (!any_invalid(c, 0)) model_initialize(c);
+    c->b.dirty = 1;
+    return fmi2OK;
+}
+
+fmi2Status fmi2Terminate(fmi2Component comp) {
+    Instance *c = (Instance *)comp;
+    if (!allowed(c, "fmi2Terminate", S_STEP_COMPLETE | S_ERROR)) return fmi2Error;
+    c->b.mode = S_TERMINATED;
+    return fmi2OK;
+}
+
+fmi2Status fmi2Reset(fmi2Component comp) {
+    Instance *c = (Instance *)comp;
+    if (c == NULL) return fmi2Error;
+    set_defaults(c);
+    return fmi2OK;
+}
+
+/* ---- get and set ------------------------------------------------------------------------ */
+
+#define GETTABLE (S_INITIALIZATION | S_STEP_COMPLETE | S_TERMINATED | S_ERROR)
+#define SETTABLE (S_INSTANTIATED | S_INITIALIZATION | S_STEP_COMPLETE)
+
+static int check_vr(Instance *c, const char *function, fmi2ValueReference vr, VarType type) {
+    if (vr >= N_VARS || VARS[vr].type != type) {
+        LOG_ERROR(c, "%s: no variable of this type with value reference %u", function, vr);
+        return 0;
+    }
+    return 1;
+}
+
+static fmi2Status get_values(Instance *c, const char *function, const fmi2ValueReference vr[],
+                             size_t n, VarType type, double *out) {
+    if (!allowed(c, function, GETTABLE)) return fmi2Error;
+    refresh(c);
+    for (size_t i = 0; i < n; i++) {
+        if (!check_vr(c, function, vr[i], type)) return fmi2Error;
+        out[i] = c->b.v[vr[i]];
+    }
+    return fmi2OK;
+}
+
+static fmi2Status set_value(Instance *c, const char *function, fmi2ValueReference vr,
+                            VarType type, double value) {
+    if (!check_vr(c, function, vr, type)) return fmi2Error;
+    if (VARS[vr].causality == C_OUTPUT) {
+        LOG_ERROR(c, "%s: %s is an output and cannot be set", function, VARS[vr].name);
+        return fmi2Error;
+    }
+    c->b.v[vr] = value;
+    c->b.dirty = 1;
+    c->b.invalid[vr] = !check_value(c, vr, value);
+    return c->b.invalid[vr] ? fmi2Error : fmi2OK;
+}
+
+fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
+                       fmi2Real value[]) {
+    return get_values((Instance *)comp, "fmi2GetReal", vr, n, T_REAL, value);
+}
+
+fmi2Status fmi2GetInteger(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
+                          fmi2Integer value[]) {
+    Instance *c = (Instance *)comp;
+    if (!allowed(c, "fmi2GetInteger", GETTABLE)) return fmi2Error;
+    for (size_t i = 0; i < n; i++) {
+        if (!check_vr(c, "fmi2GetInteger", vr[i], T_INTEGER)) return fmi2Error;
+        value[i] = (fmi2Integer)c->b.v[vr[i]];
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetBoolean(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
+                          fmi2Boolean value[]) {
+    Instance *c = (Instance *)comp;
+    if (!allowed(c, "fmi2GetBoolean", GETTABLE)) return fmi2Error;
+    for (size_t i = 0; i < n; i++) {
+        if (!check_vr(c, "fmi2GetBoolean", vr[i], T_BOOLEAN)) return fmi2Error;
+        value[i] = c->b.v[vr[i]] != 0.0;
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetString(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
+                         fmi2String value[]) {
+    Instance *c = (Instance *)comp;
+    (void)vr, (void)value;
+    if (n == 0) return fmi2OK;
+    LOG_ERROR(c, "fmi2GetString: %s has no String variables", MODEL_NAME);
+    return fmi2Error;
+}
+
+fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
+                       const fmi2Real value[]) {
+    Instance *c = (Instance *)comp;
+    fmi2Status status = fmi2OK;
+    if (!allowed(c, "fmi2SetReal", SETTABLE)) return fmi2Error;
+    for (size_t i = 0; i < n; i++)
+        if (set_value(c, "fmi2SetReal", vr[i], T_REAL, value[i]) != fmi2OK) status = fmi2Error;
+    return status;
+}
+
+fmi2Status fmi2SetInteger(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
+                          const fmi2Integer value[]) {
+    Instance *c = (Instance *)comp;
+    fmi2Status status = fmi2OK;
+    if (!allowed(c, "fmi2SetInteger", SETTABLE)) return fmi2Error;
+    for (size_t i = 0; i < n; i++)
+        if (set_value(c, "fmi2SetInteger", vr[i], T_INTEGER, (double)value[i]) != fmi2OK)
+            status = fmi2Error;
+    return status;
+}
+
+fmi2Status fmi2SetBoolean(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
+                          const fmi2Boolean value[]) {
+    Instance *c = (Instance *)comp;
+    fmi2Status status = fmi2OK;
+    if (!allowed(c, "fmi2SetBoolean", SETTABLE)) return fmi2Error;
+    for (size_t i = 0; i < n; i++)
+        if (set_value(c, "fmi2SetBoolean", vr[i], T_BOOLEAN, value[i] ? 1.0 : 0.0) != fmi2OK)
+            status = fmi2Error;
+    return status;
+}
+
+fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
+                         const fmi2String value[]) {
+    Instance *c = (Instance *)comp;
+    (void)vr, (void)value;
+    if (n == 0) return fmi2OK;
+    LOG_ERROR(c, "fmi2SetString: %s has no String variables", MODEL_NAME);
+    return fmi2Error;
+}
+
+/* ---- FMU state ------------------------------------------------------------------------------ */
+
+fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate *state) {
+    Instance *c = (Instance *)comp;
+    Block *copy;
+    if (!allowed(c, "fmi2GetFMUstate", SETTABLE | S_TERMINATED | S_ERROR)) return fmi2Error;
+    copy = (Block *)(*state ? *state : c->cb.allocateMemory(1, sizeof(Block)));
+    if (copy == NULL) {
+        LOG_ERROR(c, "fmi2GetFMUstate: out of memory");
+        return fmi2Error;
+    }
+    *copy = c->b;
+    *state = copy;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate state) {
+    Instance *c = (Instance *)comp;
+    const Block *copy = (const Block *)state;
+    if (!allowed(c, "fmi2SetFMUstate", SETTABLE | S_TERMINATED | S_ERROR)) return fmi2Error;
+    if (copy == NULL || copy->magic != BLOCK_MAGIC) {
+        LOG_ERROR(c, "fmi2SetFMUstate: not a state of %s", MODEL_NAME);
+        return fmi2Error;
+    }
+    c->b = *copy;
+    return fmi2OK;
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component comp, fmi2FMUstate *state) {
+    Instance *c = (Instance *)comp;
+    if (c == NULL || state == NULL) return fmi2Error;
+    if (*state) c->cb.freeMemory(*state);
+    *state = NULL;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component comp, fmi2FMUstate state, size_t *size) {
+    (void)comp, (void)state;
+    *size = sizeof(Block);
+    return fmi2OK;
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component comp, fmi2FMUstate state, fmi2Byte bytes[],
+                                 size_t size) {
+    Instance *c = (Instance *)comp;
+    if (state == NULL || size < sizeof(Block)) {
+        LOG_ERROR(c, "fmi2SerializeFMUstate: buffer of %zu bytes, %zu needed", size,
+                  sizeof(Block));
+        return fmi2Error;
+    }
+    memcpy(bytes, state, sizeof(Block));
+    return fmi2OK;
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte bytes[], size_t size,
+                                   fmi2FMUstate *state) {
+    Instance *c = (Instance *)comp;
+    Block *copy;
+    if (size != sizeof(Block) || ((const Block *)bytes)->magic != BLOCK_MAGIC) {
+        LOG_ERROR(c, "fmi2DeSerializeFMUstate: not a serialized state of %s", MODEL_NAME);
+        return fmi2Error;
+    }
+    copy = (Block *)c->cb.allocateMemory(1, sizeof(Block));
+    if (copy == NULL) return fmi2Error;
+    memcpy(copy, bytes, sizeof(Block));
+    *state = copy;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp, const fmi2ValueReference u[],
+                                        size_t nu, const fmi2ValueReference z[], size_t nz,
+                                        const fmi2Real dv[], fmi2Real dz[]) {
+    (void)u, (void)nu, (void)z, (void)nz, (void)dv, (void)dz;
+    LOG_ERROR((Instance *)comp, "fmi2GetDirectionalDerivative: not provided by %s (use the "
+              "CasADi Jacobian Functions of wheelterrain)", MODEL_NAME);
+    return fmi2Error;
+}
+
+/* ---- co-simulation ---------------------------------------------------------------------- */
+
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component comp, const fmi2ValueReference vr[],
+                                       size_t n, const fmi2Integer order[],
+                                       const fmi2Real value[]) {
+    (void)vr, (void)n, (void)order, (void)value;
+    LOG_ERROR((Instance *)comp, "fmi2SetRealInputDerivatives: %s does not interpolate inputs",
+              MODEL_NAME);
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component comp, const fmi2ValueReference vr[],
+                                        size_t n, const fmi2Integer order[],
+                                        fmi2Real value[]) {
+    (void)vr, (void)n, (void)order, (void)value;
+    LOG_ERROR((Instance *)comp, "fmi2GetRealOutputDerivatives: not provided by %s", MODEL_NAME);
+    return fmi2Error;
+}
+
+fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean noSetPrior) {
+    Instance *c = (Instance *)comp;
+    (void)noSetPrior;
+    if (!allowed(c, "fmi2DoStep", S_STEP_COMPLETE)) return fmi2Error;
+    if (!(h > 0.0) || !isfinite(h) || !isfinite(t)) {
+        LOG_ERROR(c, "fmi2DoStep: communication step %g at t = %g must be finite and > 0", h, t);
+        return fmi2Error;
+    }
+    refresh(c);
+    if (any_invalid(c, 1)) return fmi2Discard;
+    if (c->b.operating_error) {
+        LOG_DISCARD(c, "%s: step refused: %s", MODEL_NAME, c->b.operating_message);
+        return fmi2Discard;
+    }
+    model_step(c, t, h);
+    c->b.time = t + h;
+    c->b.dirty = 1;
+    return fmi2OK;
+}
+
+fmi2Status fmi2CancelStep(fmi2Component comp) {
+    LOG_ERROR((Instance *)comp, "fmi2CancelStep: %s steps synchronously", MODEL_NAME);
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Status *value) {
+    (void)comp, (void)s;
+    *value = fmi2OK;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetRealStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Real *value) {
+    Instance *c = (Instance *)comp;
+    if (s == fmi2LastSuccessfulTime) {
+        *value = c->b.time;
+        return fmi2OK;
+    }
+    return fmi2Discard;
+}
+
+fmi2Status fmi2GetIntegerStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Integer *v) {
+    (void)comp, (void)s, (void)v;
+    return fmi2Discard;
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Boolean *v) {
+    (void)comp;
+    if (s == fmi2Terminated) {
+        *v = fmi2False;
+        return fmi2OK;
+    }
+    return fmi2Discard;
+}
+
+fmi2Status fmi2GetStringStatus(fmi2Component comp, const fmi2StatusKind s, fmi2String *v) {
+    (void)comp, (void)s, (void)v;
+    return fmi2Discard;
+}

@@ -1,0 +1,304 @@
+"""The native flavour (wheelterrain build --flavor native): no Python at run time, the same
+model as the pythonfmu flavour. Gates of shared/spec/fmi-notes.md plus flavour agreement, an
+independent master (ecos) and a plain C host."""
+
+from __future__ import annotations
+
+import csv
+import math
+import shutil
+import subprocess
+import zipfile
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave
+from fmpy.validation import validate_fmu
+
+from fmu_support import Instance
+from wheelterrain import cosim, fmubuild, native, nativebuild, presets, ssp
+
+pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
+NAMES = ("WheelTerrain", "SingleWheelRig")
+
+
+@pytest.fixture(scope="module")
+def flavours(tmp_path_factory):
+    root = tmp_path_factory.mktemp("flavours")
+    fmubuild.build(root / "pythonfmu")
+    nativebuild.build(root / "native")
+    unzip = {(f, n): extract(str(root / f / f"{n}.fmu")) for f in ("pythonfmu", "native")
+             for n in NAMES}
+    yield {"root": root, "unzip": unzip}
+    for d in unzip.values():
+        shutil.rmtree(d, ignore_errors=True)
+
+
+def instance(flavours, flavour, name, label="i", values=None):
+    path = flavours["root"] / flavour / f"{name}.fmu"
+    return Instance(path, flavours["unzip"][(flavour, name)], label).start(values or {})
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_validate_reports_no_problems(flavours, name):
+    assert validate_fmu(str(flavours["root"] / "native" / f"{name}.fmu")) == []
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_same_model_description_as_the_pythonfmu_flavour(flavours, name):
+    a = read_model_description(str(flavours["root"] / "pythonfmu" / f"{name}.fmu"))
+    b = read_model_description(str(flavours["root"] / "native" / f"{name}.fmu"))
+    rows = [[(v.name, v.valueReference, v.causality, v.unit, v.declaredType.name, v.min, v.max)
+             for v in md.modelVariables] for md in (a, b)]
+    assert rows[0] == rows[1]
+    assert [o.variable.name for o in a.outputs] == [o.variable.name for o in b.outputs]
+    assert b.coSimulation.needsExecutionTool is False
+    with zipfile.ZipFile(flavours["root"] / "native" / f"{name}.fmu") as z:
+        assert "sources/fmi2_native.c" in z.namelist()
+        assert not any(n.endswith(".py") for n in z.namelist())  # no Python inside
+
+
+def _random_terrain_values(rng):
+    return {"soil.phi": rng.uniform(0.3, 0.6), "soil.n1": rng.uniform(0, 1.5),
+            "soil.k_phi": rng.uniform(40, 400), "wheel.width": rng.uniform(0.05, 0.2),
+            "ripple.phase": rng.uniform(-3, 3), "model.shear_model": int(rng.integers(0, 2)),
+            "model.exit_ratio": rng.uniform(0, 0.9), "grouser.height": rng.uniform(0, 0.02),
+            "model.slip_radius_factor": rng.uniform(0, 1),
+            "sinkage": rng.uniform(0.0, 0.04), "sinkage_rate": rng.uniform(-0.05, 0.05),
+            "wheel_speed": rng.uniform(0.2, 1.0), "carriage_speed": rng.uniform(0.0, 0.03),
+            "load": rng.uniform(5, 60)}
+
+
+TERRAIN_OUT = ("normal_force", "drawbar_pull", "torque", "contact_sinkage", "slip", "slip_paper",
+               "entry_angle", "exit_angle", "contact_length", "wheel_angle")
+
+
+@pytest.mark.parametrize("quasi_static", [False, True])
+def test_flavours_agree_on_wheelterrain(flavours, quasi_static):
+    rng = np.random.default_rng(3)
+    checked = 0
+    for k in range(25):
+        values = {**_random_terrain_values(rng), "quasi_static": quasi_static}
+        out = []
+        for flavour in ("pythonfmu", "native"):
+            t = instance(flavours, flavour, "WheelTerrain", f"{flavour}{k}")
+            try:
+                t.set(values)
+                trace = []
+                for step in range(3):
+                    trace.append(t.get(*TERRAIN_OUT))
+                    t.fmu.doStep(step * 1e-3, 1e-3)
+                out.append(np.array(trace))
+            except FMICallException:
+                out.append(None)  # refused (e.g. load beyond capacity): both must refuse
+            finally:
+                t.close()
+        assert (out[0] is None) == (out[1] is None), values
+        if out[0] is not None:
+            np.testing.assert_allclose(out[1], out[0], rtol=1e-9, atol=1e-12)
+            checked += 1
+    assert checked >= 15
+
+
+def test_flavours_agree_on_the_rig(flavours):
+    rng = np.random.default_rng(5)
+    for k in range(10):
+        params = {"rig.load": rng.uniform(10, 100), "rig.slip_paper": rng.uniform(0, 1),
+                  "rig.speed_bandwidth": rng.uniform(10, 400), "rig.mass": rng.uniform(1, 10)}
+        traces = []
+        for flavour in ("pythonfmu", "native"):
+            r = instance(flavours, flavour, "SingleWheelRig", f"{flavour}{k}", params)
+            trace = []
+            for step in range(30):
+                r.set({"normal_force": 50 + step, "drawbar_pull": -step, "torque": 0.5})
+                r.fmu.doStep(step * 1e-3, 1e-3)
+                trace.append(r.get("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed",
+                                   "motor_torque", "sensor.slip_paper"))
+            r.close()
+            traces.append(np.array(trace))
+        np.testing.assert_allclose(traces[1], traces[0], rtol=1e-9, atol=1e-15)
+
+
+def test_flavours_give_the_same_c1_c4_means(flavours):
+    ps = presets.load("paper-table2")
+    for case, slip in (("C1", 0.0), ("C2", 0.25), ("C3", 0.5), ("C4", 0.75)):
+        means = []
+        for flavour in ("pythonfmu", "native"):
+            unz = {n: flavours["unzip"][(flavour, n)] for n in NAMES}
+            r = cosim.run_case(flavours["root"] / flavour, ps, slip, 62.0, 0.03, case,
+                               stop=11.0, step=2e-3, unzipped=unz, settle=5.0)
+            means.append(r.means)
+        for key in ("drawbar_pull", "normal_force", "sinkage"):
+            assert means[1][key] == pytest.approx(means[0][key], rel=1e-9), (case, key)
+
+
+def test_wrong_guid_and_wrong_call_sequence_are_rejected(flavours):
+    root = flavours["root"] / "native"
+    unzip = flavours["unzip"][("native", "WheelTerrain")]
+    md = read_model_description(str(root / "WheelTerrain.fmu"))
+    fmu = FMU2Slave(guid="{not-the-guid}", unzipDirectory=unzip,
+                    modelIdentifier="WheelTerrain", instanceName="x")
+    with pytest.raises(Exception, match="Failed to instantiate"):
+        fmu.instantiate()
+    fmu.freeLibrary()
+    t = Instance(root / "WheelTerrain.fmu", unzip, "seq")
+    try:
+        with pytest.raises(FMICallException):
+            t.fmu.doStep(0.0, 1e-3)  # before initialization
+        assert any("illegal call sequence" in m for m in t.errors())
+    finally:
+        t.fmu.freeInstance()
+    assert md.guid
+
+
+@pytest.mark.parametrize(("name", "value"), [("soil.phi", float("nan")),
+                                             ("wheel.width", -0.075),
+                                             ("soil.phi", math.pi / 2)])
+def test_bad_parameter_gives_fmi2error_with_the_reason_even_without_logging(flavours, name,
+                                                                            value):
+    t = instance(flavours, "native", "WheelTerrain")
+    t.fmu.setDebugLogging(False, [])
+    try:
+        with pytest.raises(FMICallException) as info:
+            t.set({name: value})
+        assert info.value.status == 3  # fmi2Error
+        assert any(name in m and "valid range" in m for m in t.errors()), t.log
+        with pytest.raises(FMICallException) as info:
+            t.fmu.doStep(0.0, 1e-3)
+        assert info.value.status == 2  # fmi2Discard
+        t.set({name: presets.load("paper-table2")[name]})
+        t.fmu.doStep(0.0, 1e-3)  # recovered
+    finally:
+        t.close()
+
+
+def test_state_round_trip_and_serialization(flavours):
+    t = instance(flavours, "native", "WheelTerrain", "s",
+                 {"sinkage": 0.03, "wheel_speed": 0.6, "carriage_speed": 0.024})
+    try:
+        for k in range(10):
+            t.fmu.doStep(k * 1e-3, 1e-3)
+        state = t.fmu.getFMUstate()
+        blob = t.fmu.serializeFMUstate(state)
+        t.fmu.freeFMUstate(state)
+        first = []
+        for k in range(10, 20):
+            t.fmu.doStep(k * 1e-3, 1e-3)
+            first.append(t.get("drawbar_pull", "wheel_angle"))
+        t.fmu.setFMUstate(t.fmu.deSerializeFMUstate(blob))
+        again = []
+        for k in range(10, 20):
+            t.fmu.doStep(k * 1e-3, 1e-3)
+            again.append(t.get("drawbar_pull", "wheel_angle"))
+        assert again == first
+    finally:
+        t.close()
+
+
+def test_ecos_runs_the_ssp_and_gives_the_fmpy_means(flavours, tmp_path):
+    pytest.importorskip("ecospy")
+    ps = presets.load("paper-table2")
+    stop, step = 11.0, 1e-3
+    root = flavours["root"] / "native"
+    path = ssp.write(tmp_path / "C3.ssp", root, "C3", ps, 0.5, 62.0, 0.03, stop, step)
+    out = tmp_path / "ecos.csv"
+    keys = ("drawbar_pull", "normal_force", "sinkage")
+    ssp.simulate_with_ecos(path, "C3", stop, step, out, tuple(f"rig::sensor.{k}" for k in keys))
+    with out.open() as f:
+        rows = list(csv.reader(f))
+    header = [h.strip() for h in rows[0]]
+    data = np.array([[float(x) for x in r] for r in rows[1:]])
+    unz = {n: flavours["unzip"][("native", n)] for n in NAMES}
+    ours = cosim.run_case(root, ps, 0.5, 62.0, 0.03, "C3", stop=stop, step=step, unzipped=unz,
+                          settle=5.0)
+    start, end = ours.window
+    t = data[:, header.index("time")]
+    mask = (t >= start - step / 2) & (t < end - step / 2)
+    for key in keys:
+        col = header.index(f"rig::sensor.{key}[REAL]")
+        theirs = float(np.mean(data[mask, col]))
+        # ecos couples by Jacobi (forces lag the rig by one step): O(step) apart
+        assert theirs == pytest.approx(ours.means[key], rel=1e-3), key
+
+
+C_HOST = r"""
+#include <dlfcn.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include "fmi2Functions.h"
+
+static void logger(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2String c,
+                   fmi2String m, ...) {
+    (void)e; (void)c; fprintf(stderr, "[%%s %%d] %%s\n", n, s, m);
+}
+
+int main(int argc, char **argv) {
+    void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+    if (!lib) { fprintf(stderr, "%s\n", dlerror()); return 1; }
+    fmi2InstantiateTYPE *inst = (fmi2InstantiateTYPE *)dlsym(lib, "fmi2Instantiate");
+    fmi2SetupExperimentTYPE *setup = (fmi2SetupExperimentTYPE *)dlsym(lib, "fmi2SetupExperiment");
+    fmi2EnterInitializationModeTYPE *enter =
+        (fmi2EnterInitializationModeTYPE *)dlsym(lib, "fmi2EnterInitializationMode");
+    fmi2ExitInitializationModeTYPE *leave =
+        (fmi2ExitInitializationModeTYPE *)dlsym(lib, "fmi2ExitInitializationMode");
+    fmi2SetRealTYPE *set = (fmi2SetRealTYPE *)dlsym(lib, "fmi2SetReal");
+    fmi2GetRealTYPE *get = (fmi2GetRealTYPE *)dlsym(lib, "fmi2GetReal");
+    fmi2DoStepTYPE *step = (fmi2DoStepTYPE *)dlsym(lib, "fmi2DoStep");
+    fmi2FreeInstanceTYPE *freei = (fmi2FreeInstanceTYPE *)dlsym(lib, "fmi2FreeInstance");
+    fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+    fmi2Component a = inst("a", fmi2CoSimulation, argv[2], "", &cb, 0, 0);
+    fmi2Component b = inst("b", fmi2CoSimulation, argv[2], "", &cb, 0, 0);
+    if (!a || !b) return 2;
+    fmi2ValueReference in[3] = {%(sinkage)d, %(wheel_speed)d, %(carriage_speed)d};
+    fmi2ValueReference phi = %(phi)d, out[2] = {%(drawbar_pull)d, %(wheel_angle)d};
+    double va[3] = {0.03, 0.6, 0.024}, vb[3] = {0.02, 0.6, 0.018}, pb = 0.5, ra[2], rb[2];
+    setup(a, 0, 0, 0, 0, 0); setup(b, 0, 0, 0, 0, 0);
+    enter(a); enter(b);
+    set(b, &phi, 1, &pb);
+    leave(a); leave(b);
+    set(a, in, 3, va); set(b, in, 3, vb);
+    for (int k = 0; k < 100; k++) {
+        if (step(a, k * 1e-3, 1e-3, fmi2True) != fmi2OK ||
+            step(b, k * 1e-3, 1e-3, fmi2True) != fmi2OK) return 3;
+    }
+    get(a, out, 2, ra); get(b, out, 2, rb);
+    printf("%%.17g %%.17g %%.17g %%.17g\n", ra[0], ra[1], rb[0], rb[1]);
+    freei(a); freei(b);
+    return 0;
+}
+"""
+
+
+def test_a_c_host_loads_the_native_binary_without_python(flavours, tmp_path):
+    root = flavours["root"] / "native"
+    unzip = flavours["unzip"][("native", "WheelTerrain")]
+    md = read_model_description(str(root / "WheelTerrain.fmu"))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    source = tmp_path / "host.c"
+    source.write_text(C_HOST % {"sinkage": vr["sinkage"], "wheel_speed": vr["wheel_speed"],
+                                "carriage_speed": vr["carriage_speed"], "phi": vr["soil.phi"],
+                                "drawbar_pull": vr["drawbar_pull"],
+                                "wheel_angle": vr["wheel_angle"]})
+    exe = tmp_path / "host"
+    subprocess.run([native.compiler(), "-O1", "-I", str(nativebuild.fmi_headers()), str(source),
+                    "-o", str(exe), "-ldl"], check=True)
+    library = f"{unzip}/binaries/linux64/WheelTerrain.so"
+    run = subprocess.run([str(exe), library, md.guid], capture_output=True, text=True,
+                         check=False, env={"PATH": "/usr/bin:/bin"})
+    assert run.returncode == 0, run.stderr
+    dp_a, angle_a, dp_b, angle_b = (float(x) for x in run.stdout.split())
+    assert angle_a == pytest.approx(0.06)  # 100 steps at 0.6 rad/s
+    assert angle_b == pytest.approx(0.06)
+    # the same numbers through fmpy
+    for label, values, dp in (("a", {"sinkage": 0.03, "wheel_speed": 0.6,
+                                     "carriage_speed": 0.024}, dp_a),
+                              ("b", {"sinkage": 0.02, "wheel_speed": 0.6,
+                                     "carriage_speed": 0.018, "soil.phi": 0.5}, dp_b)):
+        t = instance(flavours, "native", "WheelTerrain", label, values)
+        for k in range(100):
+            t.fmu.doStep(k * 1e-3, 1e-3)
+        assert t.get("drawbar_pull") == pytest.approx(dp, rel=1e-14)
+        t.close()
+    assert dp_a != dp_b
