@@ -13,7 +13,13 @@ import sys
 import click
 
 from . import __version__, model, presets
-from .errors import InputError, LoadTooLargeError, ParameterError, WheelTerrainError
+from .errors import (
+    CalibrationError,
+    InputError,
+    LoadTooLargeError,
+    ParameterError,
+    WheelTerrainError,
+)
 from .parameters import DEG, TABLE, parse_assignments
 
 EXIT_USAGE, EXIT_INFEASIBLE, EXIT_NUMERICAL = 2, 3, 4
@@ -27,7 +33,7 @@ def _fail(err: WheelTerrainError) -> None:
     code = EXIT_USAGE
     if isinstance(err, LoadTooLargeError):
         code = EXIT_INFEASIBLE
-    elif not isinstance(err, ParameterError | InputError):
+    elif not isinstance(err, ParameterError | InputError | CalibrationError):
         code = EXIT_NUMERICAL
     click.echo(f"error: {err}", err=True)
     sys.exit(code)
@@ -242,6 +248,86 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_file
                    "mean_absolute_error": mae,
                    "wall_time_s": sum(r.wall_time for r in results)}
         cosim.write_atomic(Path(json_file), json.dumps(payload, indent=2) + "\n")
+
+
+@main.command(epilog=EPILOG)
+@preset_option
+@set_option
+@click.option("--params", "free", required=True, metavar="NAME[,NAME...]",
+              help="Parameters to fit, by table name (see the list below).")
+@click.option("--cases", default="C1,C2,C3,C4", show_default=True, metavar="C1[,C2...]",
+              help="Cases of the paper's Table III to fit to.")
+@click.option("--starts", default=8, show_default=True, type=click.IntRange(1, 200),
+              help="Starting points (the base preset, then random over the plausible box).")
+@click.option("--seed", default=0, show_default=True, type=int, help="Seed of the starts.")
+@click.option("--out", "out_file", type=click.Path(dir_okay=False),
+              help="Write the fitted preset (values and provenance) to this .json file.")
+@click.option("--name", default="fitted", show_default=True, help="Name of the written preset.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, starts: int,
+              seed: int, out_file: str | None, name: str, as_json: bool) -> None:
+    """Fit parameters to the rig's C1-C4 drawbar pull and sinkage by least squares.
+
+    \b
+    Exact CasADi Jacobians, bounds = physically plausible ranges (printed with their
+    sources), several starts. Reports the fitted values beside their ranges, standard
+    errors and correlations (when there are more residuals than parameters), the
+    residual per case, and the held-out errors on the cases not fitted. Example, the
+    paper's protocol (fit on C2, predict C1, C3, C4):
+      wheelterrain calibrate --params soil.phi,soil.k_phi --cases C2
+    """
+    from pathlib import Path
+
+    from . import calibration
+    from .cosim import write_atomic
+
+    base = _load(preset, assignments)
+    names = [n.strip() for n in free.split(",") if n.strip()]
+    case_names = [c.strip() for c in cases.split(",") if c.strip()]
+    try:
+        result = calibration.fit(base, names, case_names, starts=starts, seed=seed)
+        fitted = base.with_values(result.values)
+        held_out = [c for c in ("C1", "C2", "C3", "C4") if c not in case_names]
+        held = calibration.errors_on(fitted, held_out) if held_out else {}
+    except WheelTerrainError as err:
+        _fail(err)
+    payload = {
+        "preset": preset, "fitted_on": case_names, "values": result.values,
+        "plausible_ranges": result.bounds, "at_bound": result.at_bound,
+        "standard_errors": result.standard_errors,
+        "correlation": None if result.correlation is None else result.correlation.tolist(),
+        "residuals": result.residuals, "held_out_errors": held,
+        "starts": result.starts, "spread_of_best_starts": result.spread,
+    }
+    if as_json:
+        click.echo(json.dumps(payload, indent=2))
+    else:
+        click.echo(f"fit of {', '.join(names)} to {', '.join(case_names)} "
+                   f"({result.starts} starts, base preset {preset})")
+        for n in names:
+            lo, hi = result.bounds[n]
+            unit = "deg" if n == "soil.phi" else ""
+            scale = 1 / DEG if n == "soil.phi" else 1.0
+            se = (result.standard_errors or {}).get(n)
+            flag = "  AT BOUND" if n in result.at_bound else ""
+            se_text = f" +- {se * scale:.3g}" if se is not None else ""
+            click.echo(f"  {n:30} {result.values[n] * scale:12.5g}{se_text} {unit}  plausible "
+                       f"[{lo * scale:g}, {hi * scale:g}]{flag}")
+            click.echo(f"  {'':30} range: {calibration.PLAUSIBLE[n][2]}")
+        if result.correlation is not None and len(names) > 1:
+            click.echo("  correlation:")
+            for k, n in enumerate(names):
+                row = " ".join(f"{v:+.2f}" for v in result.correlation[k])
+                click.echo(f"    {n:30} {row}")
+        for title, rows in (("fitted", result.residuals), ("held out", held)):
+            for case, r in rows.items():
+                click.echo(f"  {title:8} {case}: drawbar pull error {r['drawbar_pull']:+.2f} N, "
+                           f"sinkage error {1e3 * r['sinkage']:+.2f} mm")
+    if out_file:
+        doc = calibration.preset_document(name, preset, base, result,
+                                          f"least squares on {', '.join(case_names)}")
+        write_atomic(Path(out_file), json.dumps(doc, indent=2) + "\n")
+        click.echo(f"wrote {out_file}", err=True)
 
 
 if __name__ == "__main__":  # pragma: no cover

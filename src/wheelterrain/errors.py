@@ -41,3 +41,7 @@ class LoadTooLargeError(WheelTerrainError):
 
 class SolveError(WheelTerrainError):
     """The quasi-static sinkage solve did not converge (never returned as a number)."""
+
+
+class CalibrationError(WheelTerrainError):
+    """A calibration request that cannot be carried out (unknown case or parameter, ...)."""

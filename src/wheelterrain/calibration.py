@@ -1,0 +1,224 @@
+"""Least-squares calibration of table parameters against the rig's C1-C4 means.
+
+The model side of each case is the quasi-static steady state at the case's slip and load. The
+co-simulation's window means equal it to < 1e-3 relative (tests/test_cosim.py), and one
+evaluation costs ~1 ms instead of ~2 s. Residuals are drawbar pull in N and sinkage in mm: both
+are measured to about that resolution. The normal force is the rig's load in every case, so it
+carries no information about the soil.
+
+The fit uses scipy's trust-region reflective least squares with the exact Jacobian
+(:func:`wheelterrain.model.steady_jacobian`, implicit function theorem) inside bounds. Several
+starts are drawn over the box. The bounds are the *physically plausible* ranges of
+:data:`PLAUSIBLE`, each with its source; they are narrower than the table's validity ranges.
+Standard errors come from the Gauss-Newton covariance s^2 (J^T J)^-1, where s^2 = RSS/(m - p)
+and m > p. With m <= p there is no residual variance and none are reported. Correlations come
+from the same matrix. A parameter at a bound is flagged: the data want it outside the plausible
+range.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import math
+import subprocess
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from . import __version__, model
+from .errors import CalibrationError, WheelTerrainError
+from .parameters import DEG, INDEX, ParameterSet
+from .slip import traction_from_paper
+
+TABLE3 = Path(__file__).resolve().parents[2] / "validation" / "paper_table3.json"
+SCALES = {"drawbar_pull": 1.0, "sinkage": 1e-3}  # N, m: one unit of residual each
+OUTPUT_ROW = {"sinkage": 0, "drawbar_pull": 2}  # rows of steady_jacobian's d_params
+
+_LUNAR = ("Lunar regolith and its simulants (Carrier, Olhoeft & Mendell, Lunar Sourcebook "
+          "1991, ch. 9)")
+PLAUSIBLE: dict[str, tuple[float, float, str]] = {
+    "soil.phi": (25 * DEG, 50 * DEG, f"{_LUNAR}: friction angle 30-50 deg; Table I 28 deg"),
+    "soil.cohesion": (0.0, 3000.0, f"{_LUNAR}: 0.1-3 kPa"),
+    "soil.k_phi": (10.0, 2000.0, "Reece k_phi' of sands and simulants (Wong, Theory of Ground "
+                   "Vehicles: dry sand 1528; Table I/II 80)"),
+    "soil.k_c": (0.0, 100.0, "Reece k_c' (Wong: dry sand 0.99, sandy loam 2-4)"),
+    "soil.n0": (0.5, 1.5, "Reece sinkage exponent of sands, 0.5-1.3 (Wong); Table II 1.1"),
+    "soil.n1": (0.0, 2.0, "Slip-sinkage coefficient (Ding et al. 2011 report n1 ~ 0.3-1 for "
+                "lunar simulant; paper's eta 1.15)"),
+    "soil.shear_modulus": (0.002, 0.04, "Janosi K of sands, 2-40 mm (Wong; Table II 36 mm)"),
+    "model.a0": (0.32, 0.45, "Wong & Reece / Ishigami: a0 0.3-0.45 (shared/spec/model-notes.md)"),
+    "model.a1": (0.0, 0.35, "Wong & Reece / Ishigami: a1 up to 0.35"),
+    "model.exit_ratio": (0.0, 0.9, "Ishigami et al. 2007: lambda ~ 0.9; Wong-Reece 0"),
+    "model.contact_radius_factor": (0.0, 1.0, "Definition: rim (0) to grouser tips (1)"),
+    "model.shear_radius_factor": (0.0, 1.0, "Definition: rim (0) to grouser tips (1)"),
+    "model.slip_radius_factor": (0.0, 1.0, "Definition: rim (0) to grouser tips (1)"),
+}
+
+
+@dataclass
+class Fit:
+    names: list[str]
+    cases: list[str]
+    values: dict[str, float]
+    bounds: dict[str, tuple[float, float]]
+    at_bound: list[str]
+    standard_errors: dict[str, float] | None
+    correlation: np.ndarray | None
+    residuals: dict[str, dict[str, float]]  # case -> {"drawbar_pull": N, "sinkage": m}
+    cost: float
+    starts: int
+    converged_starts: int
+    spread: dict[str, float] = field(default_factory=dict)  # of near-optimal starts
+
+
+def paper_cases() -> list[dict]:
+    return json.loads(TABLE3.read_text())["cases"]
+
+
+def _case_rows(case_names: list[str], data: list[dict] | None = None) -> list[dict]:
+    rows = {c["case"]: c for c in (data if data is not None else paper_cases())}
+    unknown = [c for c in case_names if c not in rows]
+    if unknown:
+        raise CalibrationError(f"unknown case(s) {unknown}; valid: {sorted(rows)}")
+    return [rows[c] for c in case_names]
+
+
+def check_free(names: list[str]) -> None:
+    unknown = [n for n in names if n not in PLAUSIBLE]
+    if unknown:
+        raise CalibrationError(f"parameter {unknown[0]} cannot be calibrated; calibratable "
+                               f"parameters: {', '.join(PLAUSIBLE)}")
+    if not names:
+        raise CalibrationError("no parameter to fit; give --params NAME[,NAME...]")
+    if len(set(names)) != len(names):
+        raise CalibrationError(f"a parameter is listed twice: {names}")
+
+
+def predictions(ps: ParameterSet, cases: list[dict], load: float = 62.0
+                ) -> list[dict[str, float]]:
+    return [model.steady_state(ps, load, traction_from_paper(c["slip_paper"])) for c in cases]
+
+
+def _residuals_and_jacobian(x, names, base, cases, load, want_jac=True):
+    ps = base.with_values(dict(zip(names, x, strict=True)))
+    r, rows = [], []
+    for c in cases:
+        slip = traction_from_paper(c["slip_paper"])
+        out = model.steady_state(ps, load, slip)
+        if want_jac:
+            jac = model.steady_jacobian(ps, load, slip)["d_params"]
+        for key in ("drawbar_pull", "sinkage"):
+            r.append((out[key] - c["experiment"][key]) / SCALES[key])
+            if want_jac:
+                rows.append([jac[OUTPUT_ROW[key], INDEX[n]] / SCALES[key] for n in names])
+    return np.array(r), (np.array(rows) if want_jac else None)
+
+
+def fit(base: ParameterSet, names: list[str], case_names: list[str], starts: int = 8,
+        seed: int = 0, load: float = 62.0, data: list[dict] | None = None) -> Fit:
+    """Fit ``names`` to the drawbar pull and sinkage of ``case_names`` (see module docstring).
+
+    ``data``: cases in the form of validation/paper_table3.json (default: that file)."""
+    check_free(names)
+    cases = _case_rows(case_names, data)
+    lo = np.array([PLAUSIBLE[n][0] for n in names])
+    hi = np.array([PLAUSIBLE[n][1] for n in names])
+    rng = np.random.default_rng(seed)
+    first = np.clip(np.array([base[n] for n in names]), lo, hi)
+    candidates = [first] + [lo + rng.uniform(0.05, 0.95, len(names)) * (hi - lo)
+                            for _ in range(max(starts, 1) - 1)]
+    cache: dict[bytes, tuple] = {}
+
+    def both(x):
+        key = np.asarray(x).tobytes()
+        if key not in cache:
+            try:
+                cache[key] = _residuals_and_jacobian(x, names, base, cases, load)
+            except WheelTerrainError:  # e.g. the load is beyond capacity at this trial point
+                cache[key] = (np.full(2 * len(cases), 1e3), np.zeros((2 * len(cases),
+                                                                      len(names))))
+        return cache[key]
+
+    results = []
+    for x0 in candidates:
+        sol = least_squares(lambda x: both(x)[0], x0, jac=lambda x: both(x)[1],
+                            bounds=(lo, hi), x_scale="jac", max_nfev=200)
+        results.append(sol)
+    best = min(results, key=lambda s: s.cost)
+    near = [s for s in results if s.cost <= best.cost * (1 + 1e-3) + 1e-12]
+    spread = {n: float(np.ptp([s.x[k] for s in near])) for k, n in enumerate(names)}
+    r, J = _residuals_and_jacobian(best.x, names, base, cases, load)
+    m, p = len(r), len(names)
+    errors, corr = None, None
+    if m > p:
+        s2 = float(r @ r) / (m - p)
+        try:
+            inverse = np.linalg.inv(J.T @ J)
+            errors = {n: float(math.sqrt(max(s2 * inverse[k, k], 0.0)))
+                      for k, n in enumerate(names)}
+            d = np.sqrt(np.clip(np.diag(inverse), 1e-300, None))
+            corr = inverse / np.outer(d, d)  # independent of s2
+        except np.linalg.LinAlgError:
+            errors = None
+    tol = 1e-6 * (hi - lo)
+    at_bound = [n for k, n in enumerate(names)
+                if best.x[k] <= lo[k] + tol[k] or best.x[k] >= hi[k] - tol[k]]
+    residuals = {c["case"]: {"drawbar_pull": float(r[2 * k] * SCALES["drawbar_pull"]),
+                             "sinkage": float(r[2 * k + 1] * SCALES["sinkage"])}
+                 for k, c in enumerate(cases)}
+    return Fit(list(names), list(case_names), dict(zip(names, map(float, best.x), strict=True)),
+               {n: (float(lo[k]), float(hi[k])) for k, n in enumerate(names)}, at_bound,
+               errors, corr, residuals, float(best.cost), len(candidates),
+               sum(s.success for s in results), spread)
+
+
+def errors_on(ps: ParameterSet, case_names: list[str], load: float = 62.0
+              ) -> dict[str, dict[str, float]]:
+    """Model minus experiment (drawbar pull N, sinkage m) on ``case_names``."""
+    cases = _case_rows(case_names)
+    out = predictions(ps, cases, load)
+    return {c["case"]: {k: o[k] - c["experiment"][k] for k in ("drawbar_pull", "sinkage")}
+            for c, o in zip(cases, out, strict=True)}
+
+
+def code_version() -> str:
+    try:
+        rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
+                             text=True, check=False, cwd=Path(__file__).parent).stdout.strip()
+    except OSError:
+        rev = ""
+    return f"wheelterrain {__version__}" + (f" (git {rev})" if rev else "")
+
+
+def preset_document(name: str, base_name: str, base: ParameterSet, result: Fit,
+                    protocol: str) -> dict:
+    """A preset file: the base preset's values with the fitted ones, and the provenance."""
+    from . import presets
+
+    base_doc = presets.read(base_name)
+    values = dict(base_doc["values"])
+    values.update(result.values)
+    return {
+        "name": name,
+        "description": f"{base_name} with {', '.join(result.names)} fitted to the rig's "
+                       f"{', '.join(result.cases)} ({protocol}).",
+        "provenance": {
+            "base_preset": base_name,
+            "data": "validation/paper_table3.json (the paper's Table III experimental means)",
+            "protocol": protocol,
+            "fitted_on": result.cases,
+            "fitted": {n: {"value": result.values[n], "plausible_range": list(result.bounds[n]),
+                           "range_source": PLAUSIBLE[n][2],
+                           "standard_error": (result.standard_errors or {}).get(n),
+                           "at_bound": n in result.at_bound} for n in result.names},
+            "residuals": result.residuals,
+            "date_of_fit": datetime.date.today().isoformat(),
+            "code_version": code_version(),
+            "method": "scipy least_squares (trf) with the exact CasADi Jacobian, "
+                      f"{result.starts} starts; residuals drawbar pull [N] and sinkage [mm]",
+        },
+        "values": values,
+    }

@@ -1,0 +1,98 @@
+"""Calibration (wheelterrain calibrate): exact Jacobians, recovery of known parameters, bounds,
+the preset file it writes."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from wheelterrain import calibration, model, presets
+from wheelterrain.cli import main
+from wheelterrain.parameters import DEG
+from wheelterrain.slip import traction_from_paper
+
+SLIPS = {"C1": 0.0, "C2": 0.25, "C3": 0.5, "C4": 0.75}
+
+
+def synthetic(ps):
+    """Cases in the Table III format whose 'experiment' is the model itself at ``ps``."""
+    rows = []
+    for case, s in SLIPS.items():
+        out = model.steady_state(ps, 62.0, traction_from_paper(s))
+        rows.append({"case": case, "slip_paper": s,
+                     "experiment": {"drawbar_pull": out["drawbar_pull"],
+                                    "sinkage": out["sinkage"], "normal_force": 62.0}})
+    return rows
+
+
+def test_the_jacobian_is_the_derivative_of_the_residuals():
+    base = presets.load("paper-table2")
+    names = ["soil.phi", "soil.k_phi", "soil.n1", "model.shear_radius_factor"]
+    cases = calibration.paper_cases()
+    x = np.array([30 * DEG, 400.0, 0.8, 0.5])
+    _, J = calibration._residuals_and_jacobian(x, names, base, cases, 62.0)
+    for k in range(len(names)):
+        h = 1e-6 * max(abs(x[k]), 1.0)
+        up, down = x.copy(), x.copy()
+        up[k] += h
+        down[k] -= h
+        r_up, _ = calibration._residuals_and_jacobian(up, names, base, cases, 62.0, False)
+        r_dn, _ = calibration._residuals_and_jacobian(down, names, base, cases, 62.0, False)
+        np.testing.assert_allclose(J[:, k], (r_up - r_dn) / (2 * h), rtol=1e-6,
+                                   atol=1e-6 * np.abs(J).max())
+
+
+def test_fit_recovers_known_parameters_from_model_data():
+    truth = presets.load("paper-table2").with_values({"soil.phi": 35 * DEG, "soil.k_phi": 600.0})
+    data = synthetic(truth)
+    result = calibration.fit(presets.load("paper-table2"), ["soil.phi", "soil.k_phi"],
+                             list(SLIPS), starts=3, data=data)
+    assert result.values["soil.phi"] == pytest.approx(35 * DEG, rel=1e-6)
+    assert result.values["soil.k_phi"] == pytest.approx(600.0, rel=1e-6)
+    assert result.cost < 1e-12
+    assert result.at_bound == []
+    assert result.correlation is not None
+    np.testing.assert_allclose(np.diag(result.correlation), 1.0)
+
+
+def test_fit_to_the_paper_stays_in_the_plausible_ranges_and_flags_bounds():
+    result = calibration.fit(presets.load("paper-table2"), ["soil.phi", "soil.k_phi"], ["C2"],
+                             starts=3)
+    for name, value in result.values.items():
+        lo, hi, _ = calibration.PLAUSIBLE[name]
+        assert lo <= value <= hi
+    # m = 2 residuals, p = 2 parameters: no residual variance, no standard errors
+    assert result.standard_errors is None
+    for name in result.at_bound:
+        lo, hi, _ = calibration.PLAUSIBLE[name]
+        assert math.isclose(result.values[name], lo) or math.isclose(result.values[name], hi)
+
+
+def test_cli_writes_a_preset_with_provenance(tmp_path):
+    out = tmp_path / "fit.json"
+    run = CliRunner().invoke(main, ["calibrate", "--params", "soil.phi,soil.k_phi", "--cases",
+                                    "C2", "--starts", "2", "--out", str(out), "--name", "c2"])
+    assert run.exit_code == 0, run.output
+    assert "held out C1" in run.output
+    doc = json.loads(out.read_text())
+    prov = doc["provenance"]
+    assert prov["fitted_on"] == ["C2"]
+    assert {"data", "protocol", "date_of_fit", "code_version"} <= set(prov)
+    for name in ("soil.phi", "soil.k_phi"):
+        assert "plausible_range" in prov["fitted"][name]
+    ps = presets.load(str(out))
+    assert ps["soil.phi"] == pytest.approx(prov["fitted"]["soil.phi"]["value"])
+
+
+@pytest.mark.parametrize(("args", "needle"), [
+    (["--params", "soil.gamma"], "cannot be calibrated"),
+    (["--params", "soil.phi", "--cases", "C9"], "unknown case"),
+])
+def test_cli_refuses_bad_requests(args, needle):
+    run = CliRunner().invoke(main, ["calibrate", *args])
+    assert run.exit_code == 2
+    assert needle in run.output
