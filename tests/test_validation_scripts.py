@@ -31,3 +31,24 @@ def test_quasistatic_c1_c4_prints_and_writes_the_library_values(tmp_path):
     paper = result["mean_absolute_error"]["paper_simulation"]
     assert paper["drawbar_pull"] == pytest.approx(0.4775, abs=1e-9)
     assert paper["sinkage"] == pytest.approx(0.00085, abs=1e-12)
+
+
+def test_calibration_protocols_report_held_out_errors_of_the_fitted_values(tmp_path):
+    from wheelterrain import calibration
+
+    out_file = tmp_path / "protocols.json"
+    subprocess.run([sys.executable, str(ROOT / "validation" / "calibration_protocols.py"),
+                    "--params", "soil.phi,soil.k_phi", "--starts", "1", "--json",
+                    str(out_file)], capture_output=True, text=True, check=True)
+    report = json.loads(out_file.read_text())["protocols"]
+    assert report[0]["protocol"] == "paper protocol (fit C2)"
+    assert len(report) == 6  # C2-only, four leave-one-out fits, all cases
+    base = presets.load("paper-table2")
+    for p in report:
+        for name, value in p["values"].items():
+            lo, hi, _ = calibration.PLAUSIBLE[name]
+            assert lo <= value <= hi
+        # the held-out errors are those of the fitted values, recomputed here
+        held = calibration.errors_on(base.with_values(p["values"]), list(p["held_out_errors"]))
+        for case, err in p["held_out_errors"].items():
+            assert err["drawbar_pull"] == pytest.approx(held[case]["drawbar_pull"], rel=1e-12)
