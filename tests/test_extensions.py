@@ -69,3 +69,46 @@ def test_slip_sinkage_exponent_deepens_with_slip(table2):
     z_n1 = [model.steady_state(table2, 62, i)["sinkage"] for i in (0.0, 0.4)]
     assert z_n1[0] == pytest.approx(z_flat[0], rel=1e-12)  # n1 has no effect at zero slip
     assert z_n1[1] - z_n1[0] > z_flat[1] - z_flat[0]
+
+
+@pytest.mark.parametrize(("slip", "cohesion"), [(0.1, 0.0), (0.5, 800.0), (-0.3, 0.0)])
+def test_grouser_thrust_is_the_documented_passive_force_integral(table2, slip, cohesion):
+    """Independent check with scipy quad of the grouser-thrust formula in contact.py
+    (rim contact: every grouser on the arc is buried over its full height)."""
+    from scipy.integrate import quad
+
+    ps = table2.with_values({"soil.cohesion": cohesion, "model.exit_ratio": 0.0,
+                             "soil.n1": 0.0, "ripple.k_g": 0.0, "ripple.k_0": 0.0})
+    z = 0.03
+    on = model.contact_forces(ps.with_values({"model.grouser_thrust": 1}), z, slip)
+    off = model.contact_forces(ps, z, slip)
+    R, h, b = ps["wheel.radius"], ps["grouser.height"], ps["wheel.width"]
+    K, gamma, c = ps["soil.shear_modulus"], ps["soil.gamma"], cohesion
+    kp = math.tan(math.pi / 4 + ps["soil.phi"] / 2) ** 2
+    tf = math.acos(1 - z / R)
+
+    def integrand(t, part):
+        top = R * math.cos(t) - R * math.cos(tf)
+        height = (R + h) * math.cos(t) - R * math.cos(tf) - top
+        force = (0.5 * gamma * height**2 * kp + 2 * c * height * math.sqrt(kp)
+                 + gamma * top * height * kp)
+        j = R * ((tf - t) - (1 - slip) * (math.sin(tf) - math.sin(t)))
+        g = math.copysign(1 - math.exp(-abs(j) / K), j)
+        return force * g * {"x": math.cos(t), "z": math.sin(t), "t": R + h / 2}[part]
+
+    density = b * ps["grouser.count"] / (2 * math.pi)
+    breaks = [tf * 0.5]
+    want = {k: density * quad(integrand, 0.0, tf, args=(k,), points=breaks, epsabs=1e-13,
+                              epsrel=1e-12, limit=200)[0] for k in ("x", "z", "t")}
+    assert on["drawbar_pull"] - off["drawbar_pull"] == pytest.approx(want["x"], rel=1e-6)
+    assert on["normal_force"] - off["normal_force"] == pytest.approx(want["z"], rel=1e-6)
+    assert on["torque"] - off["torque"] == pytest.approx(want["t"], rel=1e-6)
+    if slip > 0:
+        assert want["x"] > 0  # a driven wheel's grousers push: positive thrust
+
+
+def test_grouser_thrust_vanishes_without_grousers(table2):
+    ps = table2.with_values({"grouser.height": 0.0})
+    on = model.contact_forces(ps.with_values({"model.grouser_thrust": 1}), 0.03, 0.3)
+    off = model.contact_forces(ps, 0.03, 0.3)
+    assert on["drawbar_pull"] == off["drawbar_pull"]

@@ -234,12 +234,15 @@ def _arc(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tuple[in
         total = integrals(ca.fmax(sigma0 + amplitude * ca.sin(phase), 0))
     else:
         total = static
-    thrust = b * Rs * total["tau_cos"]
+    g_x, g_z, g_t = _grouser_thrust(theta_f, front, rear, w_front, w_rear, g_front, g_rear, P,
+                                    Rc)
+    normal_static = normal_static + g_z
+    thrust = b * Rs * total["tau_cos"] + g_x
     compaction = b * Rc * total["sig_sin"]
     return {
-        "normal_force": b * (Rc * total["sig_cos"] + Rs * total["tau_sin"]),
+        "normal_force": b * (Rc * total["sig_cos"] + Rs * total["tau_sin"]) + g_z,
         "drawbar_pull": thrust - compaction,
-        "torque": b * Rs**2 * total["tau"],
+        "torque": b * Rs**2 * total["tau"] + g_t,
         "gross_thrust": thrust,
         "compaction_resistance": compaction,
         "entry_angle": theta_f,
@@ -251,6 +254,43 @@ def _arc(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tuple[in
         "ripple_amplitude": amplitude if ripple else ca.SX(0),
         "normal_force_static": normal_static,
     }
+
+
+def _grouser_thrust(theta_f, front, rear, w_front, w_rear, g_front, g_rear, P: _P, Rc):
+    """Grouser thrust by passive earth pressure (``model.grouser_thrust`` = 1), as the
+    grouser-period mean: (horizontal, vertical, torque about the axle).
+
+    A grouser at angle theta spans radii R .. R + h_g; its root lies R*cos(theta) - R_c*cos(theta_f)
+    below the undisturbed surface (negative: above), its tip (R + h_g)*cos(theta) - ... . The
+    buried vertical height h and the depth of its top d give the Rankine passive force per unit
+    width F = gamma*h**2*K_p/2 + 2*c*h*sqrt(K_p) + gamma*d*h*K_p, K_p = tan(pi/4 + phi/2)**2
+    (Bekker 1960; Wong, ch. 2). It is mobilised like the shear stress, F*g(j(theta)), acts along
+    the rim's tangent (cos, sin) at moment arm R + h_g/2, and is spread over the grouser spacing:
+    density n_g/(2*pi) per radian, integrated over the contact arc with the arc's quadrature.
+    Choices: only grousers on the contact arc [theta_r, theta_f] count; the wall is taken as
+    vertical (its tilt by theta is neglected in K_p).
+    """
+    on = P["model.grouser_thrust"]
+    R, h_g, b = P["wheel.radius"], P["grouser.height"], P["wheel.width"]
+    c, gamma = P["soil.cohesion"], P["soil.gamma"]
+    k_p = ca.tan(math.pi / 4 + P["soil.phi"] / 2) ** 2
+    surface = Rc * ca.cos(theta_f)
+
+    def force(cos_t):
+        top = ca.fmax(R * cos_t - surface, 0)
+        height = ca.fmax((R + h_g) * cos_t - surface - top, 0)
+        return (0.5 * gamma * height**2 * k_p + 2 * c * height * ca.sqrt(k_p)
+                + gamma * top * height * k_p)
+
+    f_front = force(front["cos"]) * g_front
+    f_rear = force(rear["cos"]) * g_rear
+    scale = on * b * P["grouser.count"] / (2 * math.pi)
+    horizontal = scale * (ca.dot(w_front, f_front * front["cos"])
+                          + ca.dot(w_rear, f_rear * rear["cos"]))
+    vertical = scale * (ca.dot(w_front, f_front * front["sin"])
+                        + ca.dot(w_rear, f_rear * rear["sin"]))
+    torque = scale * (R + h_g / 2) * (ca.dot(w_front, f_front) + ca.dot(w_rear, f_rear))
+    return horizontal, vertical, torque
 
 
 def _contact(z, z_rate, slip, wheel_angle, P: _P, nodes: tuple[int, int], ripple: bool) -> dict:

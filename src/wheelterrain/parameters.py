@@ -203,6 +203,13 @@ TABLE: tuple[Parameter, ...] = (
        "Radius R_ref = R + factor*h_g to which the slip input is referenced: carriage speed "
        "V = (1 - i)*omega*R_ref. 0 = rim radius, as the rig defines slip from omega_r*R.",
        f"{_PAPER}, eq. 4 (slip from omega_r*R)"),
+    _P("model.grouser_thrust", "1", 0, 0, 1,
+       "Grouser thrust by passive earth pressure: 0 = off; 1 = the Rankine passive force on the "
+       "buried part of each grouser face (depth below the surface as surcharge), mobilised "
+       "like the shear stress, g(j), and spread over the grouser spacing 2*pi/n_g.",
+       "Bekker 1960, Off-the-road locomotion (grouser thrust); Rankine passive earth pressure "
+       "(Wong, Theory of Ground Vehicles, ch. 2)", kind="enum",
+       choices=MappingProxyType({0: "off", 1: "passive-earth-pressure"})),
 )
 
 INDEX: Mapping[str, int] = MappingProxyType({p.name: k for k, p in enumerate(TABLE)})
