@@ -11,6 +11,7 @@ import math
 import sys
 
 import click
+import numpy as np
 
 from . import __version__, model, presets
 from .errors import (
@@ -328,6 +329,80 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
                                           f"least squares on {', '.join(case_names)}")
         write_atomic(Path(out_file), json.dumps(doc, indent=2) + "\n")
         click.echo(f"wrote {out_file}", err=True)
+
+
+@main.command(epilog=EPILOG)
+@preset_option
+@set_option
+@click.option("--fmu", default="build/WheelTerrain.fmu", show_default=True,
+              type=click.Path(dir_okay=False), help="The WheelTerrain.fmu to sweep (either "
+              "flavour).")
+@click.option("--slip", default="0:0.75:7", show_default=True, metavar="GRID",
+              help="Slip grid: a:b:n, a,b,c or a value.")
+@click.option("--slip-definition", type=click.Choice(["paper", "traction"]), default="paper",
+              show_default=True, help="Which slip the grid is in.")
+@click.option("--load", "load_grid", default="62", show_default=True, metavar="GRID",
+              help="Vertical load grid [N].")
+@click.option("--grid", "extra", multiple=True, metavar="NAME=GRID",
+              help="A further axis over a table parameter, e.g. soil.phi=25deg:45deg:5. "
+              "Repeatable.")
+@click.option("--workers", default=0, show_default=True, type=click.IntRange(0, 512),
+              help="Worker processes (0: one per core, 1: none).")
+@click.option("--dask", "dask_address", metavar="ADDRESS|local",
+              help="Run on a dask.distributed scheduler instead (or 'local' for a "
+              "LocalCluster); workers need wheelterrain installed.")
+@click.option("--out", default="validation/output/sweep.csv", show_default=True,
+              type=click.Path(dir_okay=False), help="CSV to write (a PNG of the curves goes "
+              "next to it).")
+def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_definition: str,
+          load_grid: str, extra: tuple[str, ...], workers: int, dask_address: str | None,
+          out: str) -> None:
+    """Sweep WheelTerrain.fmu (quasi-static mode, through fmpy) over slip, load and any table
+    parameter, in parallel.
+
+    \b
+    Examples:
+      wheelterrain sweep --slip 0:0.75:16 --load 30,62,90
+      wheelterrain sweep --slip 0.25 --grid soil.phi=25deg:45deg:9 --grid soil.k_phi=80,800
+      wheelterrain sweep --dask tcp://scheduler:8786 --slip 0:0.9:50 --load 10:100:50
+    Writes one CSV row per point (the axes, the outputs, status ok|infeasible) and a plot of
+    drawbar pull and sinkage against slip (or the first axis), one line per other point.
+    """
+    from pathlib import Path
+
+    from . import plots
+    from . import sweep as sweeper
+
+    ps = _load(preset, assignments)
+    try:
+        axes = {"slip": sweeper.parse_axis("slip", slip),
+                "load": sweeper.parse_axis("load", load_grid)}
+        for item in extra:
+            name, sep, spec = item.partition("=")
+            if not sep:
+                raise ParameterError(item, "", "must be NAME=GRID")
+            axes[name.strip()] = sweeper.parse_axis(name.strip(), spec)
+        sweeper.check_axes(axes, slip_definition)
+    except WheelTerrainError as err:
+        _fail(err)
+    total = int(np.prod([len(v) for v in axes.values()]))
+    try:
+        with click.progressbar(length=total, label=f"sweeping {total} points",
+                               file=sys.stderr) as bar:
+            rows = sweeper.run(Path(fmu), sweeper.base_values(ps), axes, slip_definition,
+                               workers=workers, dask_address=dask_address,
+                               progress=bar.update)
+    except FileNotFoundError as err:
+        click.echo(f"error: {err}", err=True)
+        sys.exit(EXIT_USAGE)
+    sweeper.write_csv(Path(out), rows)
+    bad = sum(r["status"] != "ok" for r in rows)
+    x = "slip" if len(axes["slip"]) > 1 else max(axes, key=lambda k: len(axes[k]))
+    group = [k for k in axes if k != x and len(axes[k]) > 1]
+    png = Path(out).with_suffix(".png")
+    plots.sweep_curves(rows, x, group, png, f"WheelTerrain.fmu sweep, preset {preset} "
+                       f"(slip: {slip_definition} definition)")
+    click.echo(f"wrote {out} ({total} points, {bad} infeasible) and {png}")
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -67,3 +67,27 @@ def means_bar_chart(rows: list[dict], path: Path, preset: str) -> None:
     fig.suptitle("C1-C4 means against Table III")
     fig.tight_layout()
     _save(fig, path)
+
+
+def sweep_curves(rows: list[dict], x: str, group: list[str], path: Path, title: str) -> None:
+    """Drawbar pull and sinkage against ``x``, one line per combination of the ``group`` axes
+    (infeasible points are gaps)."""
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    keys = sorted({tuple(r[g] for g in group) for r in rows})
+    for key in keys:
+        sel = [r for r in rows if tuple(r[g] for g in group) == key]
+        sel.sort(key=lambda r: r[x])
+        xs = [r[x] for r in sel]
+        label = ", ".join(f"{g} = {v:.4g}" for g, v in zip(group, key, strict=True)) or None
+        axes[0].plot(xs, [r["drawbar_pull"] for r in sel], marker="o", ms=3, label=label)
+        axes[1].plot(xs, [1e3 * r["contact_sinkage"] for r in sel], marker="o", ms=3,
+                     label=label)
+    for ax, label in zip(axes, ("drawbar pull [N]", "sinkage [mm]"), strict=True):
+        ax.set_xlabel(x)
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    if group:
+        axes[0].legend(fontsize=7)
+    fig.suptitle(title)
+    fig.tight_layout()
+    _save(fig, path)

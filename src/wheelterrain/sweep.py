@@ -1,0 +1,239 @@
+"""fmpy validation sweeps: WheelTerrain.fmu in quasi-static mode over grids of slip, load and any
+table parameter, in parallel worker processes or on a Dask cluster.
+
+Each worker extracts the FMU once and instantiates it once. Every grid point then sets the
+tunable parameters and inputs, takes one tiny communication step (so the FMU checks the
+operating point and refuses an infeasible one with fmi2Discard), and reads the outputs. A
+refused point is recorded with ``status`` "infeasible" and NaN outputs, never with stale
+numbers. The FMU's traction slip output is the column ``slip_traction``; ``slip`` is the grid's.
+
+Grid syntax (``parse_axis``): ``a:b:n`` (n points from a to b inclusive), ``a,b,c`` (a list),
+or a single value; angles accept ``deg`` (``soil.phi=25deg:45deg:5``).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import os
+import shutil
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ParameterError
+from .parameters import BY_NAME, DEG, TABLE
+from .slip import traction_from_paper
+
+OUTPUTS = ("contact_sinkage", "normal_force", "drawbar_pull", "torque", "slip", "slip_paper",
+           "entry_angle", "contact_length")
+COLUMNS = {"slip": "slip_traction"}  # the FMU's output 'slip' next to the grid's 'slip' axis
+WHEEL_SPEED = 0.6  # rad/s; only the ratio of the speeds matters in quasi-static mode
+
+
+def _number(text: str, name: str) -> float:
+    text = text.strip()
+    scale = 1.0
+    if text.endswith("deg"):
+        text, scale = text[:-3], DEG
+    try:
+        return float(text) * scale
+    except ValueError:
+        raise ParameterError(name, text, "is not a number (grid: a:b:n, a,b,c or a value)") \
+            from None
+
+
+def parse_axis(name: str, spec: str) -> list[float]:
+    """Grid values of one axis from ``a:b:n``, ``a,b,c`` or ``a``."""
+    if ":" in spec:
+        parts = spec.split(":")
+        if len(parts) != 3:
+            raise ParameterError(name, spec, "grid must be a:b:n, a,b,c or a single value")
+        a, b = _number(parts[0], name), _number(parts[1], name)
+        try:
+            n = int(parts[2])
+        except ValueError:
+            raise ParameterError(name, spec, "the point count n of a:b:n must be an integer") \
+                from None
+        if n < 1:
+            raise ParameterError(name, spec, "the point count n of a:b:n must be >= 1")
+        return list(np.linspace(a, b, n))
+    return [_number(x, name) for x in spec.split(",") if x.strip()]
+
+
+def grid(axes: dict[str, list[float]]) -> Iterator[dict[str, float]]:
+    names = list(axes)
+    for values in itertools.product(*(axes[n] for n in names)):
+        yield dict(zip(names, values, strict=True))
+
+
+def check_axes(axes: dict[str, list[float]], slip_definition: str) -> None:
+    for name, values in axes.items():
+        if name == "slip":
+            for v in values:
+                i = traction_from_paper(v) if slip_definition == "paper" else v
+                if not -1.0 <= i <= 1.0 or not math.isfinite(i):
+                    raise ParameterError("slip", v, "is out of range; valid range: traction "
+                                         "[-1, 1], paper [-0.5, inf)")
+        elif name == "load":
+            for v in values:
+                if not v >= 0 or not math.isfinite(v):
+                    raise ParameterError("load", v, "must be finite and >= 0 N")
+        elif name in BY_NAME:
+            for v in values:
+                BY_NAME[name].check(v)
+        else:
+            raise ParameterError(name, "", "is not a sweep axis; use slip, load or a table "
+                                 "parameter (wheelterrain params)")
+
+
+# --- worker side (module-level so that process pools and Dask can pickle it) ---------------
+
+_WORKER: dict = {}
+
+
+def _worker_instance(fmu: str):
+    """The worker's FMU instance: extracted and instantiated once per process."""
+    if _WORKER.get("fmu") != fmu:
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Slave
+
+        md = read_model_description(fmu)
+        unzip = extract(fmu)
+        inst = FMU2Slave(guid=md.guid, unzipDirectory=unzip,
+                         modelIdentifier=md.coSimulation.modelIdentifier,
+                         instanceName=f"sweep{os.getpid()}")
+        inst.instantiate()
+        inst.setupExperiment(startTime=0.0)
+        inst.enterInitializationMode()
+        vr = {v.name: v.valueReference for v in md.modelVariables}
+        inst.setBoolean([vr["quasi_static"]], [True])
+        inst.exitInitializationMode()
+        _WORKER.update(fmu=fmu, inst=inst, vr=vr, unzip=unzip, time=0.0,
+                       types={v.name: v.type for v in md.modelVariables})
+    return _WORKER
+
+
+def _set(w, name: str, value: float) -> None:
+    if w["types"][name] == "Integer":
+        w["inst"].setInteger([w["vr"][name]], [round(value)])
+    else:
+        w["inst"].setReal([w["vr"][name]], [float(value)])
+
+
+def run_points(fmu: str, base: dict[str, float], points: list[dict[str, float]],
+               slip_definition: str) -> list[dict]:
+    """Evaluate ``points`` (each: slip, load and parameter values) in this process."""
+    from fmpy.fmi1 import FMICallException
+
+    w = _worker_instance(fmu)
+    rows = []
+    for point in points:
+        values = {**base, **{k: v for k, v in point.items() if k not in ("slip", "load")}}
+        try:
+            for name, value in values.items():
+                _set(w, name, value)
+            slip = point.get("slip", 0.0)
+            i = traction_from_paper(slip) if slip_definition == "paper" else slip
+            r_ref = values["wheel.radius"] + values["model.slip_radius_factor"] * values[
+                "grouser.height"]
+            _set(w, "wheel_speed", WHEEL_SPEED)
+            _set(w, "carriage_speed", WHEEL_SPEED * r_ref * (1 - i))
+            _set(w, "load", point.get("load", 62.0))
+            w["inst"].doStep(w["time"], 1e-6)  # refuses (fmi2Discard) an infeasible point
+            w["time"] += 1e-6
+            out = w["inst"].getReal([w["vr"][k] for k in OUTPUTS])
+            named = {COLUMNS.get(k, k): v for k, v in zip(OUTPUTS, out, strict=True)}
+            rows.append({**point, **named, "status": "ok"})
+        except FMICallException:
+            rows.append({**point, **{COLUMNS.get(k, k): math.nan for k in OUTPUTS},
+                         "status": "infeasible"})
+    return rows
+
+
+def _close_worker() -> None:
+    if "inst" in _WORKER:
+        _WORKER["inst"].terminate()
+        _WORKER["inst"].freeInstance()
+        shutil.rmtree(_WORKER["unzip"], ignore_errors=True)
+        _WORKER.clear()
+
+
+# --- master side ----------------------------------------------------------------------------
+
+def run(fmu: Path, base: dict[str, float], axes: dict[str, list[float]],
+        slip_definition: str = "paper", workers: int = 0, dask_address: str | None = None,
+        chunk: int = 16, progress: Callable[[int], None] | None = None) -> list[dict]:
+    """The whole sweep, in grid order. ``workers`` = 0: one per core; 1: in this process.
+    ``dask_address``: a dask.distributed scheduler ("tcp://host:8786") or "local" for a
+    LocalCluster on this machine; the workers there need wheelterrain and the FMU's runtime."""
+    check_axes(axes, slip_definition)
+    fmu = str(Path(fmu).resolve())
+    if not Path(fmu).is_file():
+        raise FileNotFoundError(f"{fmu} not found: run `wheelterrain build`")
+    points = list(grid(axes))
+    chunks = [points[k:k + chunk] for k in range(0, len(points), chunk)]
+    results: list[list[dict] | None] = [None] * len(chunks)
+    if dask_address:
+        _run_dask(fmu, base, chunks, slip_definition, dask_address, results, progress)
+    elif workers == 1 or len(chunks) == 1:
+        try:
+            for k, c in enumerate(chunks):
+                results[k] = run_points(fmu, base, c, slip_definition)
+                if progress:
+                    progress(len(c))
+        finally:
+            _close_worker()
+    else:
+        from concurrent.futures import ProcessPoolExecutor, as_completed
+
+        count = workers or os.cpu_count() or 1
+        with ProcessPoolExecutor(max_workers=count) as pool:
+            futures = {pool.submit(run_points, fmu, base, c, slip_definition): k
+                       for k, c in enumerate(chunks)}
+            for future in as_completed(futures):
+                k = futures[future]
+                results[k] = future.result()
+                if progress:
+                    progress(len(chunks[k]))
+    return [row for chunk_rows in results for row in chunk_rows]
+
+
+def _run_dask(fmu, base, chunks, slip_definition, address, results, progress) -> None:
+    try:
+        from dask.distributed import Client, LocalCluster, as_completed
+    except ImportError as err:
+        raise RuntimeError("--dask needs dask.distributed: pip install 'dask[distributed]'") \
+            from err
+    cluster = LocalCluster(n_workers=os.cpu_count() or 1, threads_per_worker=1,
+                           processes=True, dashboard_address=None) if address == "local" \
+        else None
+    with Client(cluster if cluster is not None else address) as client:
+        futures = [client.submit(run_points, fmu, base, c, slip_definition, pure=False)
+                   for c in chunks]
+        index = {f.key: k for k, f in enumerate(futures)}
+        for future in as_completed(futures):
+            k = index[future.key]
+            results[k] = future.result()
+            if progress:
+                progress(len(chunks[k]))
+    if cluster is not None:
+        cluster.close()
+
+
+def write_csv(path: Path, rows: list[dict]) -> None:
+    from .cosim import write_atomic
+
+    if not rows:
+        raise ValueError("no rows to write")
+    keys = list(rows[0])
+    lines = [",".join(keys)]
+    for row in rows:
+        lines.append(",".join(row[k] if isinstance(row[k], str) else f"{row[k]:.12g}"
+                              for k in keys))
+    write_atomic(Path(path), "\n".join(lines) + "\n")
+
+
+def base_values(ps) -> dict[str, float]:
+    return {p.name: float(ps[p.name]) for p in TABLE}

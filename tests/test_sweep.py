@@ -1,0 +1,85 @@
+"""`wheelterrain sweep`: fmpy sweeps of WheelTerrain.fmu agree with the core model, in every
+execution mode; infeasible points are flagged, never filled with stale numbers."""
+
+from __future__ import annotations
+
+import csv
+import math
+
+import pytest
+from click.testing import CliRunner
+
+from wheelterrain import fmubuild, model, presets
+from wheelterrain import sweep as sweeper
+from wheelterrain.cli import main
+from wheelterrain.errors import ParameterError
+from wheelterrain.parameters import DEG
+from wheelterrain.slip import traction_from_paper
+
+
+@pytest.fixture(scope="module")
+def fmu(tmp_path_factory):
+    out = tmp_path_factory.mktemp("sweep_fmus")
+    fmubuild.build(out, ("WheelTerrain",))
+    return out / "WheelTerrain.fmu"
+
+
+def test_parse_axis():
+    assert sweeper.parse_axis("slip", "0:0.5:3") == pytest.approx([0, 0.25, 0.5])
+    assert sweeper.parse_axis("load", "10,20") == [10.0, 20.0]
+    assert sweeper.parse_axis("soil.phi", "30deg") == pytest.approx([30 * DEG])
+    for bad in ("0:1", "a:b:3", "0:1:0"):
+        with pytest.raises(ParameterError):
+            sweeper.parse_axis("slip", bad)
+    with pytest.raises(ParameterError, match="not a sweep axis"):
+        sweeper.check_axes({"soil.bogus": [1.0]}, "paper")
+    with pytest.raises(ParameterError, match="valid range"):
+        sweeper.check_axes({"soil.phi": [2.0]}, "paper")
+
+
+AXES = {"slip": [0.0, 0.5], "load": [30.0, 200.0], "soil.phi": [25 * DEG, 40 * DEG]}
+
+
+def _check(rows, ps):
+    assert len(rows) == 8
+    for row in rows:
+        q = ps.with_values({"soil.phi": row["soil.phi"]})
+        i = traction_from_paper(row["slip"])
+        if row["load"] > model.capacity(q, i):
+            assert row["status"] == "infeasible"
+            assert math.isnan(row["drawbar_pull"])
+            continue
+        want = model.steady_state(q, row["load"], i)
+        assert row["status"] == "ok"
+        assert row["drawbar_pull"] == pytest.approx(want["drawbar_pull"], rel=1e-9)
+        assert row["contact_sinkage"] == pytest.approx(want["sinkage"], rel=1e-9)
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_sweep_matches_the_core_model(fmu, workers):
+    ps = presets.load("paper-table2")
+    rows = sweeper.run(fmu, sweeper.base_values(ps), AXES, "paper", workers=workers, chunk=3)
+    assert any(r["status"] == "infeasible" for r in rows)  # 200 N is beyond capacity
+    _check(rows, ps)
+
+
+def test_sweep_on_a_local_dask_cluster(fmu):
+    pytest.importorskip("dask.distributed")
+    ps = presets.load("paper-table2")
+    rows = sweeper.run(fmu, sweeper.base_values(ps), AXES, "paper", dask_address="local",
+                       chunk=3)
+    _check(rows, ps)
+
+
+def test_cli_writes_csv_and_plot(fmu, tmp_path):
+    out = tmp_path / "s.csv"
+    run = CliRunner().invoke(main, ["sweep", "--fmu", str(fmu), "--slip", "0:0.5:3",
+                                    "--load", "62", "--workers", "1", "--out", str(out)])
+    assert run.exit_code == 0, run.output
+    with out.open() as f:
+        rows = list(csv.DictReader(f))
+    assert [float(r["slip"]) for r in rows] == pytest.approx([0, 0.25, 0.5])
+    assert out.with_suffix(".png").stat().st_size > 0
+    bad = CliRunner().invoke(main, ["sweep", "--fmu", str(fmu), "--grid", "soil.phi=2"])
+    assert bad.exit_code == 2
+    assert "valid range" in bad.output
