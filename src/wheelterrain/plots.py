@@ -91,3 +91,25 @@ def sweep_curves(rows: list[dict], x: str, group: list[str], path: Path, title: 
     fig.suptitle(title)
     fig.tight_layout()
     _save(fig, path)
+
+
+def sensitivity_bars(elasticity: dict, swing: dict, path: Path, title: str) -> None:
+    """Elasticities and swings over the plausible ranges, ranked by drawbar-pull elasticity."""
+    names = sorted(elasticity, key=lambda n: -abs(elasticity[n]["drawbar_pull"]))
+    y = np.arange(len(names))
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4))
+    axes[0].barh(y - 0.2, [abs(elasticity[n]["drawbar_pull"]) for n in names], 0.4,
+                 label="drawbar pull")
+    axes[0].barh(y + 0.2, [abs(elasticity[n]["sinkage"]) for n in names], 0.4, label="sinkage")
+    axes[0].set_xlabel("|elasticity| (dy/dp)(p/y) at the preset")
+    axes[1].barh(y - 0.2, [swing[n]["drawbar_pull"] for n in names], 0.4, label="drawbar pull [N]")
+    axes[1].barh(y + 0.2, [1e3 * swing[n]["sinkage"] for n in names], 0.4, label="sinkage [mm]")
+    axes[1].set_xlabel("swing over the plausible range (one at a time, FMU sweep)")
+    for ax in axes:
+        ax.set_yticks(y, names)
+        ax.invert_yaxis()
+        ax.grid(axis="x", alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(title)
+    fig.tight_layout()
+    _save(fig, path)
