@@ -51,3 +51,26 @@ def test_swings_through_the_fmu(tmp_path):
                             names=("soil.phi", "soil.k_c"))
     assert sw["soil.phi"]["drawbar_pull"] > 1.0
     assert sw["soil.k_c"]["drawbar_pull"] == 0.0  # no cohesion: k_c has no effect (the paper)
+
+
+def test_paper_trends_hold_with_the_calibrated_preset():
+    """With rashid-calibrated all three of the paper's trends hold, drawbar pull growing with
+    slip included (it does not untuned; see the test above)."""
+    ps = presets.load(presets.REPRODUCE_PRESET)
+    outs = [model.steady_state(ps, 62.0, traction_from_paper(s)) for s in (0, 0.25, 0.5, 0.75)]
+    pull = [o["drawbar_pull"] for o in outs]
+    sinkage = [o["sinkage"] for o in outs]
+    assert pull == sorted(pull)
+    assert sinkage == sorted(sinkage)
+    assert all(o["normal_force"] == pytest.approx(62.0, rel=1e-9) for o in outs)
+
+
+def test_calibrated_preset_values_lie_in_their_plausible_ranges():
+    from wheelterrain import calibration
+
+    doc = presets.read(presets.REPRODUCE_PRESET)
+    ps = presets.load(presets.REPRODUCE_PRESET)
+    for name, fitted in doc["provenance"]["fitted"].items():
+        lo, hi, _ = calibration.PLAUSIBLE[name]
+        assert lo <= ps[name] <= hi, name
+        assert fitted["plausible_range"] == [lo, hi]

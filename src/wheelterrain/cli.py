@@ -83,11 +83,15 @@ def params(preset: str, assignments: tuple[str, ...], as_json: bool) -> None:
     min, max, kind, description and source.
     """
     ps = _load(preset, assignments)
+    doc = presets.read(preset)
+    fitted = doc.get("provenance", {}).get("fitted", {})
     rows = [p.as_dict(ps[p.name]) for p in TABLE]
+    for row in rows:
+        if row["name"] in fitted:
+            row["fitted"] = fitted[row["name"]]  # value, plausible range and its source, ...
     if as_json:
         click.echo(json.dumps(rows, indent=2))
         return
-    doc = presets.read(preset)
     click.echo(f"preset {doc.get('name', preset)}: {doc.get('description', '')}\n")
     click.echo(f"{'name':30} {'value':>12} {'unit':6} {'range':>24}  description")
     for p in TABLE:
@@ -95,6 +99,16 @@ def params(preset: str, assignments: tuple[str, ...], as_json: bool) -> None:
         shown = f"{value:.6g}" + (f" ({value / DEG:.4g} deg)" if p.unit == "rad" else "")
         rng = f"[{p.min:g}, {p.max:g}]"
         click.echo(f"{p.name:30} {shown:>12} {p.unit:6} {rng:>24}  {p.description}")
+    if fitted:
+        prov = doc["provenance"]
+        click.echo(f"\nfitted on {', '.join(prov['fitted_on'])} ({prov['date_of_fit']}, "
+                   f"{prov['code_version']}); value beside its plausible range:")
+        for name, f in fitted.items():
+            lo, hi = f["plausible_range"]
+            scale, unit = (1 / DEG, " deg") if name == "soil.phi" else (1.0, "")
+            flag = "  AT BOUND" if f.get("at_bound") else ""
+            click.echo(f"  {name:30} {f['value'] * scale:10.5g}{unit}  [{lo * scale:g}, "
+                       f"{hi * scale:g}]{flag}  ({f['range_source']})")
     readings = doc.get("provenance", {}).get("readings", {})
     if readings:
         click.echo("\nreadings of the source's symbols:")
@@ -181,7 +195,10 @@ def build(out: str, flavor: str) -> None:
 
 
 @main.command(epilog=EPILOG)
-@preset_option
+@click.option("--preset", default=presets.REPRODUCE_PRESET, show_default=True,
+              metavar="NAME|FILE.json",
+              help="Parameter preset (the calibrated one by default; paper-table2 gives the "
+              "paper's tuned soil untuned here).")
 @set_option
 @click.option("--fmu-dir", default="build", show_default=True,
               type=click.Path(file_okay=False), help="Where `wheelterrain build` wrote the FMUs.")
@@ -264,9 +281,12 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_file
 @click.option("--out", "out_file", type=click.Path(dir_okay=False),
               help="Write the fitted preset (values and provenance) to this .json file.")
 @click.option("--name", default="fitted", show_default=True, help="Name of the written preset.")
+@click.option("--protocol", default=None, help="How the fit was chosen, for the preset's "
+              "provenance (default: 'least squares on <cases>').")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, starts: int,
-              seed: int, out_file: str | None, name: str, as_json: bool) -> None:
+              seed: int, out_file: str | None, name: str, protocol: str | None,
+              as_json: bool) -> None:
     """Fit parameters to the rig's C1-C4 drawbar pull and sinkage by least squares.
 
     \b
@@ -325,8 +345,9 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
                 click.echo(f"  {title:8} {case}: drawbar pull error {r['drawbar_pull']:+.2f} N, "
                            f"sinkage error {1e3 * r['sinkage']:+.2f} mm")
     if out_file:
-        doc = calibration.preset_document(name, preset, base, result,
-                                          f"least squares on {', '.join(case_names)}")
+        doc = calibration.preset_document(
+            name, preset, base, result,
+            protocol or f"least squares on {', '.join(case_names)}")
         write_atomic(Path(out_file), json.dumps(doc, indent=2) + "\n")
         click.echo(f"wrote {out_file}", err=True)
 

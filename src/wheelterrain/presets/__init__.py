@@ -16,6 +16,7 @@ from ..errors import ParameterError
 from ..parameters import ParameterSet, parse_assignments
 
 DEFAULT_PRESET = "paper-table2"
+REPRODUCE_PRESET = "rashid-calibrated"  # the default of `wheelterrain reproduce` (calibrated)
 
 
 def available() -> list[str]:
