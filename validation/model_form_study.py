@@ -53,25 +53,21 @@ def mae(errors) -> tuple[float, float]:
     return dp, 1e3 * float(np.mean([abs(e["sinkage"]) for e in errors]))
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--starts", type=int, default=4)
-    ap.add_argument("--json", type=Path)
-    args = ap.parse_args()
+def study(starts: int = 4, echo=print) -> list[dict]:
+    """Run every variant; returns one row per variant (see the module docstring)."""
     base = presets.load("paper-table2").with_values({**CLASSICAL, "ripple.k_g": 0.0,
                                                      "ripple.k_0": 0.0})
     rows = []
     nested: dict[str, dict] = {}  # the classical optima (all-case and each fold): first starts
-    print(f"{'variant':34} {'all-case MAE':>20} {'leave-one-out MAE':>22} {'at bound':>9} "
-          f"{'LOO RMS':>8}")
+    echo(f"{'variant':34} {'all-case MAE':>20} {'leave-one-out MAE':>22} {'at bound':>9} "
+         f"{'LOO RMS':>8}")
     for label, extra, switches in VARIANTS:
         names = SOIL + extra
         ps = base.with_values(switches)
-        full = calibration.fit(ps, names, CASES, starts=args.starts,
-                               initial=nested.get("all"))
+        full = calibration.fit(ps, names, CASES, starts=starts, initial=nested.get("all"))
         held = []
         for out in CASES:
-            r = calibration.fit(ps, names, [c for c in CASES if c != out], starts=args.starts,
+            r = calibration.fit(ps, names, [c for c in CASES if c != out], starts=starts,
                                 initial=nested.get(out))
             held.append(calibration.errors_on(ps.with_values(r.values), [out])[out])
             if not extra and not switches:
@@ -84,15 +80,24 @@ def main() -> None:
         # residuals) on the held-out cases, pooled over the four folds
         rms = float(np.sqrt(np.mean([e["drawbar_pull"] ** 2 + (1e3 * e["sinkage"]) ** 2
                                      for e in held])))
-        print(f"{label:34} {fit_dp:7.2f} N {fit_z:6.2f} mm {out_dp:10.2f} N {out_z:6.2f} mm "
-              f"{len(full.at_bound):>5}/{len(names)} {rms:8.2f}")
+        echo(f"{label:34} {fit_dp:7.2f} N {fit_z:6.2f} mm {out_dp:10.2f} N {out_z:6.2f} mm "
+             f"{len(full.at_bound):>5}/{len(names)} {rms:8.2f}")
         rows.append({"variant": label, "free": names, "switches": switches,
                      "all_case": {"values": full.values, "at_bound": full.at_bound,
                                   "mae_drawbar_pull": fit_dp, "mae_sinkage_mm": fit_z},
                      "leave_one_out": {"mae_drawbar_pull": out_dp, "mae_sinkage_mm": out_z,
                                        "rms_objective": rms}})
     best = min(rows, key=lambda r: r["leave_one_out"]["rms_objective"])
-    print(f"\nbest by leave-one-out RMS of the fit objective: {best['variant']}")
+    echo(f"\nbest by leave-one-out RMS of the fit objective: {best['variant']}")
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--starts", type=int, default=4)
+    ap.add_argument("--json", type=Path)
+    args = ap.parse_args()
+    rows = study(args.starts)
     if args.json:
         write_atomic(args.json, json.dumps(rows, indent=2) + "\n")
 

@@ -1,0 +1,225 @@
+"""Regenerate validation/REPORT.md and its figures (validation/report/*.png) in one command.
+
+    wheelterrain build && python3 validation/make_report.py [--starts 4] [--fmu-dir build]
+
+It runs, and reports:
+1. the Table III comparison of the FMU co-simulation (`wheelterrain reproduce`) with the
+   calibrated preset, and with the paper's soil untuned;
+2. the calibration protocols for the preset's free parameters (C2-only, leave-one-out, all);
+3. the model-form study (ablation);
+4. fmpy sweeps of WheelTerrain.fmu: drawbar pull and sinkage against slip at several loads
+   (the load dependence the paper names as future work);
+5. the sensitivity ranking (exact elasticities, FMU swings over the plausible ranges);
+6. what the data cannot pin down.
+Takes ~2-3 minutes on one core.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import itertools
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+import model_form_study  # noqa: E402
+
+from wheelterrain import calibration, cosim, plots, presets, sensitivity  # noqa: E402
+from wheelterrain import sweep as sweeper  # noqa: E402
+from wheelterrain.cosim import write_atomic  # noqa: E402
+from wheelterrain.parameters import DEG  # noqa: E402
+
+REPORT = HERE / "REPORT.md"
+FIGURES = HERE / "report"
+CASES = ["C1", "C2", "C3", "C4"]
+
+
+def _fmt_value(name: str, value: float) -> str:
+    return f"{value / DEG:.2f} deg" if name == "soil.phi" else f"{value:.4g}"
+
+
+def table3_section(fmu_dir: Path, preset: str, label: str, out: list[str]) -> None:
+    ps = presets.load(preset)
+    results = cosim.reproduce(fmu_dir, ps)
+    rows = cosim.comparison(results)
+    mae = cosim.mean_absolute_errors(rows)
+    out += [f"### {label} (`wheelterrain reproduce --preset {preset}`)", "",
+            "| case | s | DP sim [N] | DP exp [N] | DP paper [N] | Fz sim [N] | Fz exp [N] | "
+            "z sim [mm] | z exp [mm] | z paper [mm] |",
+            "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        out.append(f"| {r['case']} | {r['slip_paper']:.2f} | {r['drawbar_pull']:.2f} | "
+                   f"{r['drawbar_pull_experiment']:.2f} | "
+                   f"{r['drawbar_pull_paper_simulation']:.2f} | {r['normal_force']:.2f} | "
+                   f"{r['normal_force_experiment']:.2f} | {1e3 * r['sinkage']:.2f} | "
+                   f"{1e3 * r['sinkage_experiment']:.2f} | "
+                   f"{1e3 * r['sinkage_paper_simulation']:.2f} |")
+    out += ["", f"Mean absolute errors against the experiment: drawbar pull "
+            f"**{mae['drawbar_pull']:.2f} N** (paper's simulation "
+            f"{mae['drawbar_pull_paper_simulation']:.2f} N), normal force "
+            f"**{mae['normal_force']:.2f} N** ({mae['normal_force_paper_simulation']:.2f} N), "
+            f"sinkage **{1e3 * mae['sinkage']:.2f} mm** "
+            f"({1e3 * mae['sinkage_paper_simulation']:.2f} mm).", ""]
+    name = f"means_{preset}.png"
+    plots.means_bar_chart(rows, FIGURES / name, preset)
+    out += [f"![C1-C4 means, {preset}](report/{name})", ""]
+
+
+def protocols_section(names: list[str], starts: int, out: list[str]) -> None:
+    base = presets.load(presets.DEFAULT_PRESET)
+    out += ["| protocol | fitted on | held out | values (AT BOUND marked) | fitted MAE | "
+            "held-out MAE |", "|---|---|---|---|---|---|"]
+
+    def line(label, fit_on):
+        result = calibration.fit(base, names, fit_on, starts=starts)
+        held_out = [c for c in CASES if c not in fit_on]
+        held = calibration.errors_on(base.with_values(result.values), held_out)
+        values = ", ".join(f"{n} {_fmt_value(n, v)}" + (" (AT BOUND)" if n in result.at_bound
+                                                          else "")
+                           for n, v in result.values.items())
+        fit_dp, fit_z = model_form_study.mae(result.residuals.values())
+        text = "-"
+        if held:
+            dp, z = model_form_study.mae(held.values())
+            text = f"{dp:.2f} N, {z:.2f} mm"
+        out.append(f"| {label} | {', '.join(fit_on)} | {', '.join(held_out) or '-'} | "
+                   f"{values} | {fit_dp:.2f} N, {fit_z:.2f} mm | {text} |")
+        return held
+
+    line("paper's (C2 only)", ["C2"])
+    pooled = []
+    for c in CASES:
+        pooled.append(line(f"leave out {c}", [x for x in CASES if x != c])[c])
+    dp, z = model_form_study.mae(pooled)
+    line("all cases", CASES)
+    out += ["", f"Leave-one-out, pooled held-out MAE: **{dp:.2f} N, {z:.2f} mm**.", ""]
+
+
+def sweeps_section(fmu: Path, out: list[str]) -> None:
+    ps = presets.load(presets.REPRODUCE_PRESET)
+    axes = {"slip": list(sweeper.parse_axis("slip", "0:0.75:16")),
+            "load": [20.0, 40.0, 62.0, 80.0, 100.0]}
+    rows = sweeper.run(fmu, sweeper.base_values(ps), axes, "paper")
+    sweeper.write_csv(HERE / "output" / "report_sweep_slip_load.csv", rows)  # not committed
+    plots.sweep_curves(rows, "slip", ["load"], FIGURES / "sweep_slip_load.png",
+                       f"WheelTerrain.fmu, {presets.REPRODUCE_PRESET}: slip and load")
+    bad = sum(r["status"] != "ok" for r in rows)
+    ok = [r for r in rows if r["status"] == "ok"]
+
+    def trend(key: str, along: str, other: str) -> str:
+        """'grows', 'falls' or 'is not monotone' with ``along``, at every value of ``other``."""
+        signs = set()
+        for value in {r[other] for r in ok}:
+            line = sorted((r[along], r[key]) for r in ok if r[other] == value)
+            signs |= {(b[1] > a[1]) - (b[1] < a[1]) for a, b in itertools.pairwise(line)}
+        return {frozenset({1}): "grows", frozenset({-1}): "falls"}.get(
+            frozenset(signs), "is not monotone")
+
+    out += ["`wheelterrain sweep --preset rashid-calibrated --slip 0:0.75:16 --load "
+            "20,40,62,80,100` (quasi-static mode through fmpy):", "",
+            "![sweep](report/sweep_slip_load.png)", "",
+            f"{len(rows)} points, {bad} infeasible (load beyond what the wheel carries fully "
+            f"buried). Read from the sweep: drawbar pull {trend('drawbar_pull', 'slip', 'load')} "
+            f"with slip at every load and {trend('drawbar_pull', 'load', 'slip')} with load at "
+            f"every slip; sinkage {trend('contact_sinkage', 'slip', 'load')} with slip and "
+            f"{trend('contact_sinkage', 'load', 'slip')} with load. The load dependence is a "
+            "prediction: the rig data are all at 62 N.", ""]
+
+
+def sensitivity_section(fmu: Path, out: list[str]) -> None:
+    for preset in (presets.REPRODUCE_PRESET, presets.DEFAULT_PRESET):
+        ps = presets.load(preset)
+        el = sensitivity.elasticities(ps, 0.25)
+        sw = sensitivity.swings(fmu, ps, 0.25)
+        out += [f"At C2 with `{preset}`:", "",
+                "| rank | parameter | elasticity DP | elasticity z | swing DP [N] | "
+                "swing z [mm] |", "|---|---|---|---|---|---|"]
+        for k, n in enumerate(sensitivity.ranking(el, "drawbar_pull"), 1):
+            out.append(f"| {k} | {n} | {el[n]['drawbar_pull']:.3f} | {el[n]['sinkage']:.3f} | "
+                       f"{sw[n]['drawbar_pull']:.2f} | {1e3 * sw[n]['sinkage']:.2f} |")
+        name = f"sensitivity_{preset}.png"
+        plots.sensitivity_bars(el, sw, FIGURES / name, f"Sensitivity at C2, {preset}")
+        out += ["", f"![sensitivity {preset}](report/{name})", ""]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--starts", type=int, default=4)
+    ap.add_argument("--fmu-dir", type=Path, default=Path("build"))
+    args = ap.parse_args()
+    fmu = args.fmu_dir / "WheelTerrain.fmu"
+    if not fmu.is_file():
+        sys.exit(f"{fmu} not found: run `wheelterrain build` first")
+    doc = presets.read(presets.REPRODUCE_PRESET)
+    names = list(doc["provenance"]["fitted"])
+    out = ["# Validation report", "",
+           f"Generated by `python3 validation/make_report.py` on "
+           f"{datetime.date.today().isoformat()} ({calibration.code_version()}). Do not edit: "
+           "rerun it.", "",
+           "The rig data are the paper's Table III means (validation/paper_table3.json). "
+           "The paper's own simulation reached mean absolute errors of 0.48 N (drawbar pull), "
+           "2.9 N (normal force) and 0.85 mm (sinkage).", "",
+           "## 1. C1-C4 through the FMU co-simulation", ""]
+    table3_section(args.fmu_dir, presets.REPRODUCE_PRESET, "Calibrated preset", out)
+    table3_section(args.fmu_dir, presets.DEFAULT_PRESET, "The paper's soil, untuned", out)
+    out += ["## 2. Calibration protocols", "",
+            f"Free parameters (those of `{presets.REPRODUCE_PRESET}`): {', '.join(names)}; "
+            f"bounds are the plausible ranges, each with its source "
+            "(`wheelterrain params --preset rashid-calibrated`). The fitted model is the "
+            "quasi-static steady state (equal to the co-simulation means to < 3e-3).", ""]
+    protocols_section(names, args.starts, out)
+    out += ["## 3. Model-form study (ablation)", "",
+            "Classical soil parameters (phi, k_phi', n0, c, K) free in every variant; one "
+            "mechanism added at a time. Selection criterion fixed in advance: the leave-one-out "
+            "RMS of the fit objective (N and mm). The combination row was formed after seeing "
+            "the single mechanisms, so its held-out figures are optimistic.", "",
+            "| variant | all-case MAE | leave-one-out MAE | at bound | LOO RMS |",
+            "|---|---|---|---|---|"]
+    for row in model_form_study.study(args.starts, echo=lambda *a, **k: None):
+        a, lo = row["all_case"], row["leave_one_out"]
+        out.append(f"| {row['variant']} | {a['mae_drawbar_pull']:.2f} N, "
+                   f"{a['mae_sinkage_mm']:.2f} mm | {lo['mae_drawbar_pull']:.2f} N, "
+                   f"{lo['mae_sinkage_mm']:.2f} mm | {len(a['at_bound'])}/{len(row['free'])} | "
+                   f"{lo['rms_objective']:.2f} |")
+    out += ["", "## 4. Sweeps: slip and load", ""]
+    sweeps_section(fmu, out)
+    out += ["## 5. Sensitivity ranking", ""]
+    sensitivity_section(fmu, out)
+    fitted = doc["provenance"]["fitted"]
+    at_bound = [n for n, f in fitted.items() if f["at_bound"]]
+    refit = calibration.fit(presets.load(presets.DEFAULT_PRESET), names, CASES,
+                            starts=1, initial={n: f["value"] for n, f in fitted.items()})
+    strong = []
+    if refit.correlation is not None:
+        for a in range(len(names)):
+            for b in range(a + 1, len(names)):
+                if abs(refit.correlation[a, b]) > 0.9:
+                    strong.append(f"{names[a]}/{names[b]} ({refit.correlation[a, b]:+.2f})")
+    residual = doc["provenance"]["residuals"]
+    pattern = ", ".join("+" if residual[c]["drawbar_pull"] > 0 else "-" for c in CASES)
+    out += ["## 6. What the data cannot pin down", "",
+            f"- {2 * len(CASES)} numbers (drawbar pull and sinkage at four slips, one load) "
+            f"against {len(names)} free parameters in `{presets.REPRODUCE_PRESET}`. "
+            f"{len(at_bound)} end at their plausible bounds ({', '.join(at_bound) or 'none'})."
+            + (f" Correlations beyond 0.9 at the optimum: {'; '.join(strong)}." if strong
+               else " No correlation is computed: there are no more residuals than "
+               "parameters." if refit.correlation is None else "")
+            + " The preset is one point of a valley, not an identified soil.",
+            f"- The drawbar-pull residuals of the preset have the sign pattern ({pattern}) "
+            "over C1-C4: the measured pull rises about linearly with slip (5.2 to 24.1 N), "
+            "while the model's curves bend (section 4). The drawbar-pull bar of 0.48 N is not "
+            "reached inside plausible ranges.",
+            "- The load dependence (section 4) is untested: every rig case ran at 62 N. Tests "
+            "at other loads would separate the pressure-sinkage parameters (k_phi', n0) from "
+            "the shear parameters (phi, c, K).",
+            "- The grouser ripple's coefficients cannot be fitted from means: they do not "
+            "change the means beyond 3e-3. They need the time series.", ""]
+    write_atomic(REPORT, "\n".join(out) + "\n")
+    print(f"wrote {REPORT} and {FIGURES}/*.png")
+
+
+if __name__ == "__main__":
+    main()
