@@ -34,6 +34,19 @@ def test_phi_is_the_most_influential_on_drawbar_pull():
         "soil.n0", "soil.phi"]
 
 
+def test_phi_first_and_n_second_at_the_tuning_case():
+    """The paper: phi most influential, n next. paper-table2 at C2: phi, then n0. With
+    rashid-calibrated, phi stays first but n0 falls to fourth, behind K and k_phi': its fit put
+    c = 3 kPa and K = 40 mm, which make the shear terms dominate (validation/REPORT.md, 5)."""
+    ranking = sensitivity.ranking(sensitivity.elasticities(presets.load("paper-table2"), 0.25),
+                                  "drawbar_pull")
+    assert ranking[:2] == ["soil.phi", "soil.n0"]
+    calibrated = sensitivity.ranking(
+        sensitivity.elasticities(presets.load(presets.REPRODUCE_PRESET), 0.25), "drawbar_pull")
+    assert calibrated[0] == "soil.phi"
+    assert calibrated.index("soil.n0") == 3  # our model disagrees with "n next" here
+
+
 def test_paper_trends_hold():
     """Drawbar pull and sinkage against slip, normal force against slip (the paper's
     observations), with the model in its untuned paper-table2 form."""

@@ -137,9 +137,22 @@ def sensitivity_section(fmu: Path, out: list[str]) -> None:
         out += [f"At C2 with `{preset}`:", "",
                 "| rank | parameter | elasticity DP | elasticity z | swing DP [N] | "
                 "swing z [mm] |", "|---|---|---|---|---|---|"]
-        for k, n in enumerate(sensitivity.ranking(el, "drawbar_pull"), 1):
+        ranking = sensitivity.ranking(el, "drawbar_pull")
+        for k, n in enumerate(ranking, 1):
             out.append(f"| {k} | {n} | {el[n]['drawbar_pull']:.3f} | {el[n]['sinkage']:.3f} | "
                        f"{sw[n]['drawbar_pull']:.2f} | {1e3 * sw[n]['sinkage']:.2f} |")
+        rank_n = ranking.index("soil.n0") + 1
+        fitted = presets.read(preset).get("provenance", {}).get("fitted", {})
+        shear_at_bound = [n for n in ("soil.cohesion", "soil.shear_modulus")
+                          if fitted.get(n, {}).get("at_bound")]
+        verdict = ("as the paper found (phi most influential, n next)"
+                   if ranking[:2] == ["soil.phi", "soil.n0"] else
+                   "unlike the paper's 'n next'"
+                   + (f"; the fit put the shear parameters {', '.join(shear_at_bound)} at "
+                      "their bounds, and the shear terms outweigh the sinkage exponent in the "
+                      "pull" if shear_at_bound else ""))
+        out += ["", f"Drawbar-pull elasticity ranks {ranking[0]} first and n0 {rank_n}: "
+                f"{verdict}."]
         name = f"sensitivity_{preset}.png"
         plots.sensitivity_bars(el, sw, FIGURES / name, f"Sensitivity at C2, {preset}")
         out += ["", f"![sensitivity {preset}](report/{name})", ""]
@@ -165,6 +178,17 @@ def main() -> None:
            "## 1. C1-C4 through the FMU co-simulation", ""]
     table3_section(args.fmu_dir, presets.REPRODUCE_PRESET, "Calibrated preset", out)
     table3_section(args.fmu_dir, presets.DEFAULT_PRESET, "The paper's soil, untuned", out)
+    out += ["### The calibrated values beside their plausible ranges", "",
+            "| parameter | value | plausible range | at bound | source of the range |",
+            "|---|---|---|---|---|"]
+    for n, f in doc["provenance"]["fitted"].items():
+        lo, hi = f["plausible_range"]
+        inside = lo <= f["value"] <= hi
+        out.append(f"| {n} | {_fmt_value(n, f['value'])} | [{_fmt_value(n, lo)}, "
+                   f"{_fmt_value(n, hi)}]{'' if inside else ' OUTSIDE'} | "
+                   f"{'yes' if f['at_bound'] else 'no'} | {f['range_source']} |")
+    out += ["", f"Provenance: {doc['provenance']['protocol']}; fitted "
+            f"{doc['provenance']['date_of_fit']} with {doc['provenance']['code_version']}.", ""]
     out += ["## 2. Calibration protocols", "",
             f"Free parameters (those of `{presets.REPRODUCE_PRESET}`): {', '.join(names)}; "
             f"bounds are the plausible ranges, each with its source "
