@@ -96,3 +96,18 @@ def test_cli_refuses_bad_requests(args, needle):
     run = CliRunner().invoke(main, ["calibrate", *args])
     assert run.exit_code == 2
     assert needle in run.output
+
+
+def test_profile_finds_the_true_value_and_brackets_it():
+    truth = presets.load("paper-table2").with_values({"soil.phi": 35 * DEG, "soil.k_phi": 600.0})
+    data = synthetic(truth)
+    names = ["soil.phi", "soil.k_phi"]
+    best = {"soil.phi": 35 * DEG, "soil.k_phi": 600.0}
+    points = calibration.profile(presets.load("paper-table2"), names, list(SLIPS), best,
+                                 "soil.phi", points=6, data=data)  # 25, 30, ..., 50 deg
+    values = [v for v, _ in points]
+    ssr = [s for _, s in points]
+    assert values[int(np.argmin(ssr))] == pytest.approx(35 * DEG)
+    assert min(ssr) < 1e-10
+    lo, hi = calibration.profile_interval(points, 0.0)
+    assert lo <= 35 * DEG <= hi

@@ -179,14 +179,22 @@ def main() -> None:
     table3_section(args.fmu_dir, presets.REPRODUCE_PRESET, "Calibrated preset", out)
     table3_section(args.fmu_dir, presets.DEFAULT_PRESET, "The paper's soil, untuned", out)
     out += ["### The calibrated values beside their plausible ranges", "",
-            "| parameter | value | plausible range | at bound | source of the range |",
-            "|---|---|---|---|---|"]
+            "| parameter | value | plausible range | at bound | profile interval | source of "
+            "the range |", "|---|---|---|---|---|---|"]
     for n, f in doc["provenance"]["fitted"].items():
         lo, hi = f["plausible_range"]
         inside = lo <= f["value"] <= hi
+        prof = f.get("profile_interval")
+        prof_text = (f"[{_fmt_value(n, prof[0])}, {_fmt_value(n, prof[1])}]" if prof
+                     else "-")
         out.append(f"| {n} | {_fmt_value(n, f['value'])} | [{_fmt_value(n, lo)}, "
                    f"{_fmt_value(n, hi)}]{'' if inside else ' OUTSIDE'} | "
-                   f"{'yes' if f['at_bound'] else 'no'} | {f['range_source']} |")
+                   f"{'yes' if f['at_bound'] else 'no'} | {prof_text} | {f['range_source']} |")
+    out += ["", "Profile interval: the values of a 9-point grid over the plausible range (plus "
+            "the optimum) at which, with the other parameters refitted, the sum of squared "
+            "residuals (N, mm) stays within 1 of the best fit (`wheelterrain calibrate "
+            "--profile 9`). There are no more residuals than parameters, so standard errors "
+            "do not exist; the profiles show what the data pin down, to grid resolution."]
     out += ["", f"Provenance: {doc['provenance']['protocol']}; fitted "
             f"{doc['provenance']['date_of_fit']} with {doc['provenance']['code_version']}.", ""]
     out += ["## 2. Calibration protocols", "",

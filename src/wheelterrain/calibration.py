@@ -225,3 +225,42 @@ def preset_document(name: str, base_name: str, base: ParameterSet, result: Fit,
         },
         "values": values,
     }
+
+
+def profile(base: ParameterSet, names: list[str], case_names: list[str], best: dict[str, float],
+            name: str, points: int = 7, load: float = 62.0, data: list[dict] | None = None
+            ) -> list[tuple[float, float]]:
+    """Profile of ``name``: (value, sum of squared residuals) with ``name`` fixed at ``points``
+    values across its plausible range, plus its best value, and the other parameters refitted
+    from ``best``. The interval's resolution is the grid step.
+
+    Identifiability where standard errors do not exist (m <= p): a flat profile means the data
+    cannot pin the parameter down."""
+    lo, hi, _ = PLAUSIBLE[name]
+    others = [n for n in names if n != name]
+    out = []
+    grid = sorted({*np.linspace(lo, hi, points).tolist(), float(best[name])})
+    for value in grid:  # the optimum itself is a grid point: the profile's minimum
+        fixed = base.with_values({name: float(value)})
+        try:
+            if others:
+                r = fit(fixed, others, case_names, starts=1, load=load, data=data,
+                        initial={n: best[n] for n in others})
+                ssr = 2 * r.cost
+            else:
+                res, _ = _residuals_and_jacobian(np.array([]), [], fixed,
+                                                 _case_rows(case_names, data), load,
+                                                 want_jac=False)
+                ssr = float(res @ res)
+        except WheelTerrainError:  # no feasible fit with this value (load beyond capacity)
+            ssr = math.inf
+        out.append((float(value), ssr))
+    return out
+
+
+def profile_interval(points: list[tuple[float, float]], best_ssr: float,
+                     delta: float = 1.0) -> tuple[float, float]:
+    """The span of profiled values whose sum of squares is within ``delta`` (one residual unit
+    squared: 1 N or 1 mm) of the best fit."""
+    inside = [v for v, ssr in points if ssr <= best_ssr + delta]
+    return (min(inside), max(inside)) if inside else (math.nan, math.nan)

@@ -283,10 +283,14 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_file
 @click.option("--name", default="fitted", show_default=True, help="Name of the written preset.")
 @click.option("--protocol", default=None, help="How the fit was chosen, for the preset's "
               "provenance (default: 'least squares on <cases>').")
+@click.option("--profile", "profile_points", default=0, show_default=True,
+              type=click.IntRange(0, 101), help="Profile each parameter at this many values "
+              "across its plausible range (the others refitted): the identifiability measure "
+              "where standard errors do not exist (no more residuals than parameters).")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, starts: int,
               seed: int, out_file: str | None, name: str, protocol: str | None,
-              as_json: bool) -> None:
+              profile_points: int, as_json: bool) -> None:
     """Fit parameters to the rig's C1-C4 drawbar pull and sinkage by least squares.
 
     \b
@@ -310,6 +314,12 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
         fitted = base.with_values(result.values)
         held_out = [c for c in ("C1", "C2", "C3", "C4") if c not in case_names]
         held = calibration.errors_on(fitted, held_out) if held_out else {}
+        profiles = {}
+        for n in names if profile_points >= 2 else []:
+            points = calibration.profile(base, names, case_names, result.values, n,
+                                         profile_points)
+            profiles[n] = {"points": points, "interval": calibration.profile_interval(
+                points, 2 * result.cost)}
     except WheelTerrainError as err:
         _fail(err)
     payload = {
@@ -319,6 +329,7 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
         "correlation": None if result.correlation is None else result.correlation.tolist(),
         "residuals": result.residuals, "held_out_errors": held,
         "starts": result.starts, "spread_of_best_starts": result.spread,
+        "profiles": profiles,
     }
     if as_json:
         click.echo(json.dumps(payload, indent=2))
@@ -335,6 +346,10 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
             click.echo(f"  {n:30} {result.values[n] * scale:12.5g}{se_text} {unit}  plausible "
                        f"[{lo * scale:g}, {hi * scale:g}]{flag}")
             click.echo(f"  {'':30} range: {calibration.PLAUSIBLE[n][2]}")
+            if n in profiles:
+                a, b = profiles[n]["interval"]
+                click.echo(f"  {'':30} profile: within one unit of the best fit for "
+                           f"[{a * scale:.4g}, {b * scale:.4g}] {unit}")
         if result.correlation is not None and len(names) > 1:
             click.echo("  correlation:")
             for k, n in enumerate(names):
@@ -348,6 +363,8 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
         doc = calibration.preset_document(
             name, preset, base, result,
             protocol or f"least squares on {', '.join(case_names)}")
+        for n, prof in profiles.items():
+            doc["provenance"]["fitted"][n]["profile_interval"] = list(prof["interval"])
         write_atomic(Path(out_file), json.dumps(doc, indent=2) + "\n")
         click.echo(f"wrote {out_file}", err=True)
 
