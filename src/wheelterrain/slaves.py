@@ -26,7 +26,7 @@ import numpy as np
 
 from . import fmu_model, native, presets, rig
 from .errors import ParameterError
-from .parameters import TABLE, Parameter
+from .parameters import BY_NAME, TABLE, Parameter
 
 
 def compiled_or_vm(fn, resources: str | None = None):
@@ -230,11 +230,16 @@ class _Core:
             self.log_error(message)
 
     def problem(self, name: str, value) -> str | None:
+        """What is wrong with ``value``, or None. Table parameters (terrain and rig) are checked
+        by their Parameter row; inputs by the range their Var declares."""
         v = self.vars[name]
         if v.type == "Boolean":
             return None
         try:
-            self.check_value(name, float(value))
+            if name in _PARAMETERS:
+                _PARAMETERS[name].check(value)
+            else:
+                self.check_value(name, float(value))
         except ParameterError as exc:
             return str(exc)
         return None
@@ -295,30 +300,19 @@ class TerrainCore(_Core):
         from pythonfmu.enums import Fmi2Status
         slave.log(f"WheelTerrain: contact model evaluated by {self.evaluator}", Fmi2Status.ok)
         self.angle = 0.0
-        self.time = 0.0
-        self.outputs_valid = False
 
     def internal_state(self) -> dict:
-        return {"angle": self.angle, "time": self.time}
+        return {"angle": self.angle}
 
     def set_internal_state(self, state: dict) -> None:
-        self.angle, self.time = float(state["angle"]), float(state["time"])
-
-    def problem(self, name: str, value) -> str | None:
-        if name in self.vars and self.vars[name].causality == "parameter" and name in _TABLE_BY:
-            try:
-                _TABLE_BY[name].check(value)
-            except ParameterError as exc:
-                return str(exc)
-            return None
-        return super().problem(name, value)
+        self.angle = float(state["angle"])
 
     def refresh(self) -> None:
         """Recompute the outputs from the current inputs, parameters and wheel angle."""
         if not self.dirty:
             return
         self.dirty = False
-        if any(name not in _OWN_ERRORS for name in self.errors):
+        if any(name != OPERATING_POINT for name in self.errors):
             return  # keep the last valid outputs; the next doStep refuses with the reason
         v = self.values
         u = [float(v[name]) for name in fmu_model.TERRAIN_INPUTS]
@@ -327,11 +321,10 @@ class TerrainCore(_Core):
             y, status, info = self.quasi_static(u, p)
         else:
             y, status, info = self.dynamic(u, self.angle, p)
-        for name in _OWN_ERRORS:
-            self.errors.pop(name, None)
+        self.errors.pop(OPERATING_POINT, None)
         if status != fmu_model.STATUS_OK:
-            self.errors[_OWN_ERRORS[0]] = terrain_problem(int(status), info, u)
-            self.log_error(self.errors[_OWN_ERRORS[0]])
+            self.errors[OPERATING_POINT] = terrain_problem(int(status), info, u)
+            self.log_error(self.errors[OPERATING_POINT])
             return
         v.update(zip(fmu_model.TERRAIN_OUTPUTS, y, strict=True))
         v["wheel_angle"] = self.angle
@@ -348,15 +341,12 @@ class TerrainCore(_Core):
         if not self.refuse_if_invalid():
             return False
         self.angle += float(self.values["wheel_speed"]) * h
-        self.time = t + h
         self.dirty = True
         return True
 
 
-_TABLE_BY = {p.name: p for p in TABLE}
-
-
-_OWN_ERRORS = ("operating point",)
+_PARAMETERS = {**BY_NAME, **{p.name: p for p in rig.RIG_TABLE}}
+OPERATING_POINT = "operating point"  # the key of the error the model's status reports
 
 
 def terrain_problem(status: int, info: float, u: list[float]) -> str:
@@ -380,24 +370,20 @@ class RigCore(_Core):
         super().__init__(slave, rig_variables())
         self.state = rig.initial_state(self.params())
         self.motor_torque = 0.0
-        self.started = False
 
     def params(self) -> dict[str, float]:
         return {name: float(self.values[name]) for name in rig.RIG_NAMES}
 
     def internal_state(self) -> dict:
-        return {"state": list(self.state), "motor_torque": self.motor_torque,
-                "started": self.started}
+        return {"state": list(self.state), "motor_torque": self.motor_torque}
 
     def set_internal_state(self, state: dict) -> None:
         self.state = tuple(float(x) for x in state["state"])
         self.motor_torque = float(state["motor_torque"])
-        self.started = bool(state["started"])
 
     def initialize(self) -> None:
         if not self.errors:
             self.state = rig.initial_state(self.params())
-        self.started = True
         self.dirty = True
         self.refresh()
 
@@ -407,17 +393,16 @@ class RigCore(_Core):
         self.dirty = False
         if self.errors:
             return
-        v = self.values
-        u = tuple(float(v[name]) for name in rig.FORCE_INPUTS)
-        y = fmu_model.rig_outputs(self.state, u, self.params(), self.motor_torque)
-        v.update(zip(fmu_model.RIG_OUTPUTS, y, strict=True))
+        y = fmu_model.rig_outputs(self.state, self.forces(), self.params(), self.motor_torque)
+        self.values.update(zip(fmu_model.RIG_OUTPUTS, y, strict=True))
+
+    def forces(self) -> tuple[float, ...]:
+        return tuple(float(self.values[name]) for name in rig.FORCE_INPUTS)
 
     def do_step(self, t: float, h: float) -> bool:
         if not self.refuse_if_invalid():
             return False
-        u = (float(self.values["normal_force"]), float(self.values["drawbar_pull"]),
-             float(self.values["torque"]))
-        self.state, self.motor_torque = rig.step(self.state, u, self.params(), h)
+        self.state, self.motor_torque = rig.step(self.state, self.forces(), self.params(), h)
         self.dirty = True
         self.refresh()
         return True
