@@ -12,6 +12,8 @@ from fmpy.fmi2 import (
     fmi2StepFinishedTYPE,
 )
 
+from wheelterrain.cosim import set_values
+
 
 class Instance:
     """An instantiated FMU with a name -> value-reference map and a captured log."""
@@ -48,14 +50,7 @@ class Instance:
         return self
 
     def set(self, values):
-        for name, value in values.items():
-            kind = self.types[name]
-            if kind == "Real":
-                self.fmu.setReal([self.vr[name]], [float(value)])
-            elif kind == "Integer":
-                self.fmu.setInteger([self.vr[name]], [int(value)])
-            else:
-                self.fmu.setBoolean([self.vr[name]], [bool(value)])
+        set_values(self.fmu, self.vr, self.types, values)
 
     def get(self, *names):
         values = self.fmu.getReal([self.vr[n] for n in names])

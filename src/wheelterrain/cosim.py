@@ -76,6 +76,19 @@ def averaging_window(ps: ParameterSet, rim_speed: float, stop: float,
     return (stop - periods * period, stop) if periods >= 1 else (settle, stop)
 
 
+def set_values(fmu, vr: dict[str, int], types: dict[str, str], values: dict) -> None:
+    """Set ``values`` (by variable name) on an fmpy FMU2Slave with the setter of each
+    variable's type (Integer values rounded: table integers are whole numbers)."""
+    for name, value in values.items():
+        kind = types[name]
+        if kind == "Real":
+            fmu.setReal([vr[name]], [float(value)])
+        elif kind == "Integer":
+            fmu.setInteger([vr[name]], [round(value)])
+        else:
+            fmu.setBoolean([vr[name]], [bool(value)])
+
+
 class _Instance:
     """One FMU instance through fmpy's FMU2Slave with name -> value reference maps."""
 
@@ -91,14 +104,7 @@ class _Instance:
         self.fmu.instantiate(loggingOn=log is not None)
 
     def set(self, values: dict[str, float]) -> None:
-        for name, value in values.items():
-            kind = self.types[name]
-            if kind == "Real":
-                self.fmu.setReal([self.vr[name]], [float(value)])
-            elif kind == "Integer":
-                self.fmu.setInteger([self.vr[name]], [int(value)])
-            else:
-                self.fmu.setBoolean([self.vr[name]], [bool(value)])
+        set_values(self.fmu, self.vr, self.types, values)
 
     def refs(self, names) -> list[int]:
         return [self.vr[n] for n in names]

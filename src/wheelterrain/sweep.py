@@ -115,32 +115,26 @@ def _worker_instance(fmu: str):
     return _WORKER
 
 
-def _set(w, name: str, value: float) -> None:
-    if w["types"][name] == "Integer":
-        w["inst"].setInteger([w["vr"][name]], [round(value)])
-    else:
-        w["inst"].setReal([w["vr"][name]], [float(value)])
-
-
 def run_points(fmu: str, base: dict[str, float], points: list[dict[str, float]],
                slip_definition: str) -> list[dict]:
     """Evaluate ``points`` (each: slip, load and parameter values) in this process."""
     from fmpy.fmi1 import FMICallException
+
+    from .cosim import set_values
 
     w = _worker_instance(fmu)
     rows = []
     for point in points:
         values = {**base, **{k: v for k, v in point.items() if k not in ("slip", "load")}}
         try:
-            for name, value in values.items():
-                _set(w, name, value)
             slip = point.get("slip", 0.0)
             i = traction_from_paper(slip) if slip_definition == "paper" else slip
             r_ref = values["wheel.radius"] + values["model.slip_radius_factor"] * values[
                 "grouser.height"]
-            _set(w, "wheel_speed", WHEEL_SPEED)
-            _set(w, "carriage_speed", WHEEL_SPEED * r_ref * (1 - i))
-            _set(w, "load", point.get("load", 62.0))
+            set_values(w["inst"], w["vr"], w["types"],
+                       {**values, "wheel_speed": WHEEL_SPEED,
+                        "carriage_speed": WHEEL_SPEED * r_ref * (1 - i),
+                        "load": point.get("load", 62.0)})
             w["inst"].doStep(w["time"], 1e-6)  # refuses (fmi2Discard) an infeasible point
             w["time"] += 1e-6
             out = w["inst"].getReal([w["vr"][k] for k in OUTPUTS])
