@@ -19,7 +19,6 @@ range.
 from __future__ import annotations
 
 import datetime
-import json
 import math
 import subprocess
 from dataclasses import dataclass, field
@@ -33,7 +32,6 @@ from .errors import CalibrationError, WheelTerrainError
 from .parameters import DEG, INDEX, ParameterSet
 from .slip import traction_from_paper
 
-TABLE3 = Path(__file__).resolve().parents[2] / "validation" / "paper_table3.json"
 SCALES = {"drawbar_pull": 1.0, "sinkage": 1e-3}  # N, m: one unit of residual each
 OUTPUT_ROW = {"sinkage": 0, "drawbar_pull": 2}  # rows of steady_jacobian's d_params
 
@@ -75,7 +73,9 @@ class Fit:
 
 
 def paper_cases() -> list[dict]:
-    return json.loads(TABLE3.read_text())["cases"]
+    from .cosim import table3
+
+    return table3()["cases"]
 
 
 def _case_rows(case_names: list[str], data: list[dict] | None = None) -> list[dict]:

@@ -233,8 +233,7 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_file
         with click.progressbar(length=len(paper["cases"]), label="co-simulating C1-C4",
                                file=sys.stderr) as bar:
             results = cosim.reproduce(Path(fmu_dir), ps, step=step, stop=stop,
-                                      progress=lambda case: bar.update(0 if case == "C1" else 1))
-            bar.update(1)
+                                      progress=lambda case: bar.update(1))
     except FileNotFoundError as err:
         click.echo(f"error: {err}", err=True)
         sys.exit(EXIT_USAGE)

@@ -120,11 +120,7 @@ def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, ri
     """Co-simulate one rig case; returns means over the averaging window and the series."""
     from fmpy import extract
 
-    fmu_dir = Path(fmu_dir)
-    paths = {name: fmu_dir / f"{name}.fmu" for name in ("WheelTerrain", "SingleWheelRig")}
-    for path in paths.values():
-        if not path.is_file():
-            raise FileNotFoundError(f"{path} not found: run `wheelterrain build --out {fmu_dir}`")
+    paths = fmu_paths(fmu_dir)
     own = unzipped is None
     unzipped = unzipped or {name: extract(str(p)) for name, p in paths.items()}
     started = time.perf_counter()
@@ -177,29 +173,35 @@ def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, ri
     return CaseResult(case, slip_paper, means, (start, end), series, wall)
 
 
+def fmu_paths(fmu_dir: Path) -> dict[str, Path]:
+    """The two FMUs in ``fmu_dir``; FileNotFoundError saying how to build them if missing."""
+    paths = {name: Path(fmu_dir) / f"{name}.fmu" for name in ("WheelTerrain", "SingleWheelRig")}
+    for path in paths.values():
+        if not path.is_file():
+            raise FileNotFoundError(f"{path} not found: run `wheelterrain build --out {fmu_dir}`")
+    return paths
+
+
 def table3() -> dict:
     return json.loads(TABLE3.read_text())
 
 
 def reproduce(fmu_dir: Path, ps: ParameterSet, step: float = STEP, stop: float = STOP_TIME,
               progress: Callable[[str], None] | None = None) -> list[CaseResult]:
-    """C1-C4 as co-simulations (one extraction of each FMU reused for all cases)."""
+    """C1-C4 as co-simulations (one extraction of each FMU reused for all cases).
+    ``progress(case)`` is called as each case finishes."""
     from fmpy import extract
 
     paper = table3()
-    paths = {name: Path(fmu_dir) / f"{name}.fmu" for name in ("WheelTerrain", "SingleWheelRig")}
-    for path in paths.values():
-        if not path.is_file():
-            raise FileNotFoundError(f"{path} not found: run `wheelterrain build --out {fmu_dir}`")
-    unzipped = {name: extract(str(p)) for name, p in paths.items()}
+    unzipped = {name: extract(str(p)) for name, p in fmu_paths(fmu_dir).items()}
     try:
         results = []
         for row in paper["cases"]:
-            if progress:
-                progress(row["case"])
             results.append(run_case(fmu_dir, ps, row["slip_paper"], paper["load_N"],
                                     paper["wheel_speed_m_per_s"], row["case"], stop, step,
                                     unzipped))
+            if progress:
+                progress(row["case"])  # this case is done
         return results
     finally:
         for d in unzipped.values():
