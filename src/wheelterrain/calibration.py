@@ -109,7 +109,7 @@ def _residuals_and_jacobian(x, names, base, cases, load, want_jac=True):
         slip = traction_from_paper(c["slip_paper"])
         out = model.steady_state(ps, load, slip)
         if want_jac:
-            jac = model.steady_jacobian(ps, load, slip)["d_params"]
+            jac = model.steady_jacobian(ps, load, slip, state=out)["d_params"]
         for key in ("drawbar_pull", "sinkage"):
             r.append((out[key] - c["experiment"][key]) / SCALES[key])
             if want_jac:

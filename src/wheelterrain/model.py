@@ -106,14 +106,16 @@ def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: 
     return out
 
 
-def steady_jacobian(params: Mapping[str, float] | ParameterSet, load: float, slip: float
-                    ) -> dict[str, np.ndarray]:
+def steady_jacobian(params: Mapping[str, float] | ParameterSet, load: float, slip: float,
+                    state: dict[str, float] | None = None) -> dict[str, np.ndarray]:
     """Exact derivatives of (sinkage, normal_force, drawbar_pull, torque) at the steady state.
 
     ``d_inputs`` is 4x2 (by load [N], traction slip), ``d_params`` 4 x len(TABLE) in table order.
+    ``state``: the :func:`steady_state` result at the same point, if the caller has it (saves
+    solving again).
     """
     ps = _params(params)
-    state = steady_state(ps, load, slip)
+    state = state if state is not None else steady_state(ps, load, slip)
     jac = _contact.build().steady_jacobian(state["load"], state["slip"], ps.vector(),
                                            state["sinkage"])
     return {"d_inputs": np.array(jac[0]), "d_params": np.array(jac[1])}

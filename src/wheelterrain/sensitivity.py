@@ -27,7 +27,7 @@ def elasticities(ps: ParameterSet, slip_paper: float, load: float = 62.0,
                  names=SOIL) -> dict[str, dict[str, float]]:
     i = traction_from_paper(slip_paper)
     out = model.steady_state(ps, load, i)
-    jac = model.steady_jacobian(ps, load, i)["d_params"]
+    jac = model.steady_jacobian(ps, load, i, state=out)["d_params"]
     rows = {"sinkage": 0, "drawbar_pull": 2}
     return {n: {k: float(jac[r, INDEX[n]] * ps[n] / out[k]) for k, r in rows.items()}
             for n in names}
