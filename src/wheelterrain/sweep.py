@@ -54,10 +54,11 @@ def parse_axis(name: str, spec: str) -> list[float]:
         try:
             n = int(parts[2])
         except ValueError:
-            raise ParameterError(name, spec, "the point count n of a:b:n must be an integer") \
-                from None
+            raise ParameterError(name, spec, "is not a grid: the point count n of a:b:n must "
+                                 "be an integer") from None
         if n < 1:
-            raise ParameterError(name, spec, "the point count n of a:b:n must be >= 1")
+            raise ParameterError(name, spec, "is not a grid: the point count n of a:b:n must "
+                                 "be >= 1")
         return list(np.linspace(a, b, n))
     return [_number(x, name) for x in spec.split(",") if x.strip()]
 
