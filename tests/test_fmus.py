@@ -236,3 +236,24 @@ def test_wheelterrain_ships_and_uses_the_compiled_model(fmus):
         assert any("evaluated by compiled C" in m for _, m in t.log), t.log
     finally:
         t.close()
+
+
+@pytest.mark.parametrize(("drive", "carriage"), [(1, 0), (2, 1)])
+def test_rig_command_inputs_and_free_carriage_follow_rig_step(fmus, drive, carriage):
+    """The controller's test bench: rig.drive / rig.carriage switch the FMU to the command inputs
+    and the free carriage, step for step as wheelterrain.rig.step."""
+    from wheelterrain import rig as rig_model
+
+    values = {"rig.drive": drive, "rig.carriage": carriage, "rig.towing_force": 2.0}
+    r = rig(fmus, f"modes{drive}{carriage}", **values)
+    p = {**rig_model.defaults(), **values}
+    x = rig_model.initial_state(p)
+    for k in range(50):
+        u = (55.0 + k, 3.0 - 0.1 * k, 0.4, 0.8 - 0.002 * k, 0.45)
+        r.set(dict(zip(rig_model.INPUTS, u, strict=True)))
+        r.fmu.doStep(k * 1e-3, 1e-3)
+        x, torque = rig_model.step(x, u, p, 1e-3)
+        got = r.get("sinkage", "sinkage_rate", "wheel_speed", "speed_error_integral",
+                    "carriage_speed", "motor_torque")
+        assert got == pytest.approx([*x, torque], rel=1e-12, abs=1e-15)
+    r.close()

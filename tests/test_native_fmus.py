@@ -105,17 +105,23 @@ def test_flavours_agree_on_wheelterrain(flavours, quasi_static):
 def test_flavours_agree_on_the_rig(flavours):
     rng = np.random.default_rng(5)
     for k in range(10):
+        # every drive and carriage mode: the switches are traced into the same Functions
         params = {"rig.load": rng.uniform(10, 100), "rig.slip_paper": rng.uniform(0, 1),
-                  "rig.speed_bandwidth": rng.uniform(10, 400), "rig.mass": rng.uniform(1, 10)}
+                  "rig.speed_bandwidth": rng.uniform(10, 400), "rig.mass": rng.uniform(1, 10),
+                  "rig.drive": k % 3, "rig.carriage": k % 2,
+                  "rig.towing_force": rng.uniform(-5, 5), "rig.slope": rng.uniform(-0.3, 0.3)}
         traces = []
         for flavour in ("pythonfmu", "native"):
             r = instance(flavours, flavour, "SingleWheelRig", f"{flavour}{k}", params)
             trace = []
             for step in range(30):
-                r.set({"normal_force": 50 + step, "drawbar_pull": -step, "torque": 0.5})
+                r.set({"normal_force": 50 + step, "drawbar_pull": -step, "torque": 0.5,
+                       "wheel_speed_command": 0.5 + 0.01 * step,
+                       "motor_torque_command": 0.6 - 0.01 * step})
                 r.fmu.doStep(step * 1e-3, 1e-3)
                 trace.append(r.get("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed",
-                                   "motor_torque", "sensor.slip_paper"))
+                                   "motor_torque", "speed_error_integral",
+                                   "sensor.slip_paper"))
             r.close()
             traces.append(np.array(trace))
         np.testing.assert_allclose(traces[1], traces[0], rtol=1e-9, atol=1e-15)

@@ -35,8 +35,8 @@ TERRAIN_OUTPUTS = ("normal_force", "drawbar_pull", "torque", "gross_thrust",
                    "entry_angle", "exit_angle", "max_stress_angle", "contact_length",
                    "mean_pressure", "ripple_amplitude")
 RIG_OUTPUTS = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "motor_torque",
-               "sensor.drawbar_pull", "sensor.normal_force", "sensor.sinkage",
-               "sensor.slip_paper")
+               "speed_error_integral", "sensor.drawbar_pull", "sensor.normal_force",
+               "sensor.sinkage", "sensor.slip_paper")
 STATUS_OK, STATUS_SLIP, STATUS_LOAD, STATUS_UNCONVERGED = 0, 1, 2, 3
 
 
@@ -58,6 +58,17 @@ def slips(wheel_speed, carriage_speed, slip_radius):
         still, ca.if_else(difference >= 0, 1 / SPEED_FLOOR, -1 / SPEED_FLOOR),
         difference / ca.fmax(ca.fabs(carriage_speed), SPEED_FLOOR)))
     return traction, paper
+
+
+def paper_slip(wheel_speed, carriage_speed, slip_radius):
+    """The paper's slip of :func:`slips` in plain arithmetic (floats or CasADi symbols)."""
+    difference = wheel_speed * slip_radius - carriage_speed
+    at_rest = rig.pick(abs(wheel_speed * slip_radius) < SPEED_FLOOR,
+                       abs(carriage_speed) < SPEED_FLOOR, False)
+    still = abs(carriage_speed) < SPEED_FLOOR
+    return rig.pick(at_rest, 0.0, rig.pick(
+        still, rig.pick(difference >= 0, 1 / SPEED_FLOOR, -1 / SPEED_FLOOR),
+        difference / rig.pick(still, 1.0, carriage_speed)))
 
 
 def _slip_radius(p):
@@ -101,21 +112,21 @@ def terrain_functions() -> tuple[ca.Function, ca.Function]:
 def rig_outputs(x, u, p, motor_torque):
     """RIG_OUTPUTS from the rig state x, the soil forces u, the rig parameters ``p[name]`` and
     the motor torque; plain arithmetic on floats or CasADi symbols."""
-    z, z_rate, omega, _ = x
-    normal_force, drawbar_pull, _ = u
-    _, carriage = rig.references(p)
-    slip_paper = (omega * p["rig.slip_radius"] - carriage) / carriage
-    return (z, z_rate, omega, carriage, motor_torque, drawbar_pull, normal_force, z, slip_paper)
+    z, z_rate, omega, e_int, carriage = x
+    normal_force, drawbar_pull = u[0], u[1]
+    slip_paper = paper_slip(omega, carriage, p["rig.slip_radius"])
+    return (z, z_rate, omega, carriage, motor_torque, e_int, drawbar_pull, normal_force, z,
+            slip_paper)
 
 
 @lru_cache(maxsize=1)
 def rig_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
     """(rig_step, rig_outputs, rig_initial(p) -> x0)."""
-    x, u = ca.SX.sym("x", len(rig.STATES)), ca.SX.sym("u", len(rig.FORCE_INPUTS))
+    x, u = ca.SX.sym("x", len(rig.STATES)), ca.SX.sym("u", len(rig.INPUTS))
     p, torque = ca.SX.sym("p", len(rig.RIG_NAMES)), ca.SX.sym("motor_torque")
     named = {name: p[k] for k, name in enumerate(rig.RIG_NAMES)}
     y = rig_outputs(tuple(x[k] for k in range(len(rig.STATES))),
-                    tuple(u[k] for k in range(len(rig.FORCE_INPUTS))), named, torque)
+                    tuple(u[k] for k in range(len(rig.INPUTS))), named, torque)
     outputs = ca.Function("rig_outputs", [x, u, p, torque], [ca.vertcat(*y)],
                           ["x", "u", "p", "motor_torque"], ["y"])
     initial = ca.Function("rig_initial", [p], [ca.vertcat(*rig.initial_state(named))], ["p"],

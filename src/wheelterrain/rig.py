@@ -17,17 +17,30 @@ The rig (shared/spec/paper-digest.md, "Test rig and experiments"):
   down under the rig's normal load W and the soil's normal force Fz (which includes the contact
   damper C_f*dz/dt of the terrain model): M*d2z/dt2 = W - Fz, z the sinkage, positive down.
 
+Two switches turn the rig into a controller's test bench (both default to the paper's rig):
+
+- ``rig.drive`` = 1: the speed loop tracks the input ``wheel_speed_command`` instead of
+  rim_speed/R_ref; = 2: the input ``motor_torque_command`` drives the wheel directly (no loop).
+- ``rig.carriage`` = 1: the carriage is free, a rover wheel's share of the vehicle. Its speed V
+  is a state: M*dV/dt = DP - M*g*sin(slope) - F_tow (``rig.slope``, ``rig.towing_force``), M
+  the same ``rig.mass`` that moves vertically. ``rig.load`` stays as set (for a slope, set it to
+  M*g*cos(slope)).
+
 Integration over one communication step h, with the terrain's forces held (co-simulation):
 semi-implicit Euler for the vertical motion, implicit Euler for the speed loop (solved in closed
-form; unconditionally stable for the stiff controller). Both are first order: halving h is how the
-co-simulation's convergence is checked.
+form; unconditionally stable for the stiff controller), explicit Euler for a torque-driven wheel
+and a free carriage (their right-hand sides are constant over the step: forces held). All are
+first order: halving h is how the co-simulation's convergence is checked.
 """
 
 from __future__ import annotations
 
+import math
+from types import MappingProxyType
+
 import casadi as ca
 
-from .parameters import Parameter
+from .parameters import DEG, Parameter
 
 STANDARD_GRAVITY = 9.80665  # m/s2
 
@@ -61,13 +74,45 @@ RIG_TABLE: tuple[Parameter, ...] = (
               "exponent the soil softens as slip grows, so the soil torque falls with wheel "
               "speed (dT/domega ~ -0.4 N.m.s at C2); a 20 rad/s loop (Kp = 0.4 N.m.s) then "
               "limit-cycles, as measured", quantity="AngularVelocity"),
+    Parameter("rig.drive", "1", 0, 0, 2,
+              "Wheel drive: 0 = speed loop to rig.rim_speed/rig.slip_radius (the paper's rig); "
+              "1 = speed loop to the input wheel_speed_command; 2 = the input "
+              "motor_torque_command applied directly (no speed loop).",
+              "Design: 0 reproduces the paper; 1 and 2 are for external controllers "
+              "(wheelterrain.mpc)", kind="enum",
+              choices=MappingProxyType({0: "paper-speed-loop", 1: "speed-command",
+                                        2: "torque-command"})),
+    Parameter("rig.carriage", "1", 0, 0, 1,
+              "Carriage: 0 = kinematic at rim_speed/(1 + slip_paper) (the paper's rig); 1 = free, "
+              "its speed a state driven by the drawbar pull against rig.slope and "
+              "rig.towing_force, with mass rig.mass.",
+              "Design: 1 is a rover wheel carrying its share of the vehicle", kind="enum",
+              choices=MappingProxyType({0: "kinematic", 1: "free"})),
+    Parameter("rig.towing_force", "N", 0.0, -1.0e4, 1.0e4,
+              "Force resisting the free carriage's forward motion (a towed load, the rest of the "
+              "rover); negative pushes.", "Scenario input; 0 on the level with nothing in tow",
+              quantity="Force"),
+    Parameter("rig.slope", "rad", 0.0, -45 * DEG, 45 * DEG,
+              "Slope the free carriage climbs: adds rig.mass*g*sin(slope) against its motion.",
+              "Scenario input; lunar rovers are specified for ~15-25 deg slopes",
+              quantity="Angle", display_unit="deg"),
 )
 RIG_NAMES = tuple(p.name for p in RIG_TABLE)
 RIG_INDEX = {name: k for k, name in enumerate(RIG_NAMES)}
 
-STATES = ("sinkage", "sinkage_rate", "wheel_speed", "speed_error_integral")
-STATE_START = (0.0, 0.0, None, 0.0)  # wheel_speed starts at omega_ref (None: from parameters)
+STATES = ("sinkage", "sinkage_rate", "wheel_speed", "speed_error_integral", "carriage_speed")
 FORCE_INPUTS = ("normal_force", "drawbar_pull", "torque")
+COMMANDS = ("wheel_speed_command", "motor_torque_command")
+INPUTS = (*FORCE_INPUTS, *COMMANDS)
+DRIVE_PAPER, DRIVE_SPEED, DRIVE_TORQUE = 0, 1, 2
+CARRIAGE_KINEMATIC, CARRIAGE_FREE = 0, 1
+
+
+def pick(condition, if_true, if_false):
+    """``if_true if condition else if_false`` on floats, ca.if_else on CasADi symbols."""
+    if isinstance(condition, (bool, int, float)):
+        return if_true if condition else if_false
+    return ca.if_else(condition, if_true, if_false)
 
 
 def references(p) -> tuple:
@@ -77,46 +122,96 @@ def references(p) -> tuple:
     return omega_ref, carriage_speed
 
 
+def gains(p) -> tuple:
+    """(Kp, Ki) of the speed loop: both closed-loop poles at -rig.speed_bandwidth on J."""
+    w, J = p["rig.speed_bandwidth"], p["rig.wheel_inertia"]
+    return 2 * w * J, w * w * J
+
+
+def speed_reference(u, p):
+    """The speed loop's reference: the paper's omega_ref, or the input command (rig.drive 1)."""
+    return pick(p["rig.drive"] == DRIVE_SPEED, u[INPUTS.index("wheel_speed_command")],
+                 references(p)[0])
+
+
+def motor_torque(x, u, p):
+    """Torque the wheel motor applies in state ``x`` with inputs ``u`` (INPUTS)."""
+    kp, ki = gains(p)
+    loop = kp * (speed_reference(u, p) - x[2]) + ki * x[3]
+    return pick(p["rig.drive"] == DRIVE_TORQUE, u[INPUTS.index("motor_torque_command")], loop)
+
+
+def carriage_acceleration(u, p):
+    """dV/dt of the free carriage: (DP - M*g*sin(slope) - F_tow)/M; 0 when kinematic."""
+    mass = p["rig.mass"]
+    free = (u[1] - mass * STANDARD_GRAVITY * _sin(p["rig.slope"]) - p["rig.towing_force"]) / mass
+    return pick(p["rig.carriage"] == CARRIAGE_FREE, free, 0.0)
+
+
+def _sin(angle):
+    return math.sin(angle) if isinstance(angle, (int, float)) else ca.sin(angle)
+
+
+def rates(x, u, p) -> tuple:
+    """dx/dt of the rig (STATES) in state ``x`` with inputs ``u`` (INPUTS): the continuous
+    equations that :func:`step` integrates, for controllers' prediction models."""
+    z_rate, omega = x[1], x[2]
+    loop = p["rig.drive"] != DRIVE_TORQUE
+    return (z_rate,
+            (p["rig.load"] - u[0]) / p["rig.mass"],
+            (motor_torque(x, u, p) - u[2]) / p["rig.wheel_inertia"],
+            pick(loop, speed_reference(u, p) - omega, 0.0),
+            carriage_acceleration(u, p))
+
+
 def step(x, u, p, h):
-    """Advance the rig state ``x`` (STATES) over ``h`` with the soil forces ``u`` (FORCE_INPUTS)
-    held. ``p`` maps rig parameter names to values. Works on floats and on CasADi symbols.
+    """Advance the rig state ``x`` (STATES) over ``h`` with the inputs ``u`` (INPUTS: soil forces
+    and commands) held. ``p`` maps rig parameter names to values. Works on floats and on CasADi
+    symbols.
 
     Returns (next state tuple, motor torque at the end of the step).
     """
-    z, z_rate, omega, e_int = x
-    normal_force, _, soil_torque = u
-    load, mass, J = p["rig.load"], p["rig.mass"], p["rig.wheel_inertia"]
-    w = p["rig.speed_bandwidth"]
-    kp, ki = 2 * w * J, w * w * J
-    omega_ref, _ = references(p)
+    z, z_rate, omega, e_int, speed = x
+    soil_torque = u[2]
+    J = p["rig.wheel_inertia"]
+    kp, ki = gains(p)
+    omega_ref = speed_reference(u, p)
 
-    z_rate_next = z_rate + h * (load - normal_force) / mass
+    z_rate_next = z_rate + h * (p["rig.load"] - u[0]) / p["rig.mass"]
     z_next = z + h * z_rate_next
     # implicit Euler of J*omega' = kp*(ref - omega) + ki*e - T_soil, e' = ref - omega
-    omega_next = ((J / h) * omega + kp * omega_ref + ki * (e_int + h * omega_ref) - soil_torque) / (
-        J / h + kp + ki * h)
-    e_next = e_int + h * (omega_ref - omega_next)
-    motor_torque = kp * (omega_ref - omega_next) + ki * e_next
-    return (z_next, z_rate_next, omega_next, e_next), motor_torque
+    omega_loop = ((J / h) * omega + kp * omega_ref + ki * (e_int + h * omega_ref)
+                  - soil_torque) / (J / h + kp + ki * h)
+    e_loop = e_int + h * (omega_ref - omega_loop)
+    torque_loop = kp * (omega_ref - omega_loop) + ki * e_loop
+    # torque-driven: the applied torque and the soil's are both held over the step
+    applied = u[INPUTS.index("motor_torque_command")]
+    omega_direct = omega + h * (applied - soil_torque) / J
+    direct = p["rig.drive"] == DRIVE_TORQUE
+    omega_next = pick(direct, omega_direct, omega_loop)
+    e_next = pick(direct, e_int, e_loop)
+    torque = pick(direct, applied, torque_loop)
+    speed_next = speed + h * carriage_acceleration(u, p)
+    return (z_next, z_rate_next, omega_next, e_next, speed_next), torque
 
 
-def initial_state(p) -> tuple[float, float, float, float]:
-    """Wheel resting on the surface, not moving vertically, already turning at omega_ref."""
-    omega_ref, _ = references(p)
-    return (0.0, 0.0, omega_ref, 0.0)
+def initial_state(p) -> tuple:
+    """Wheel resting on the surface, not moving vertically, already turning at omega_ref, the
+    carriage at rim_speed/(1 + slip_paper)."""
+    omega_ref, carriage = references(p)
+    return (0.0, 0.0, omega_ref, 0.0, carriage)
 
 
 def build() -> ca.Function:
-    """``rig_step(x, u, p, h) -> (x_next, motor_torque, carriage_speed)`` as a CasADi Function,
-    traced from :func:`step` (for generated C)."""
-    x, u = ca.SX.sym("x", len(STATES)), ca.SX.sym("u", len(FORCE_INPUTS))
+    """``rig_step(x, u, p, h) -> (x_next, motor_torque)`` as a CasADi Function, traced from
+    :func:`step` (for generated C)."""
+    x, u = ca.SX.sym("x", len(STATES)), ca.SX.sym("u", len(INPUTS))
     p, h = ca.SX.sym("p", len(RIG_NAMES)), ca.SX.sym("h")
     named = {name: p[k] for k, name in enumerate(RIG_NAMES)}
     nxt, torque = step(tuple(x[k] for k in range(len(STATES))),
-                       tuple(u[k] for k in range(len(FORCE_INPUTS))), named, h)
-    _, carriage = references(named)
-    return ca.Function("rig_step", [x, u, p, h], [ca.vertcat(*nxt), torque, carriage],
-                       ["x", "u", "p", "h"], ["x_next", "motor_torque", "carriage_speed"])
+                       tuple(u[k] for k in range(len(INPUTS))), named, h)
+    return ca.Function("rig_step", [x, u, p, h], [ca.vertcat(*nxt), torque],
+                       ["x", "u", "p", "h"], ["x_next", "motor_torque"])
 
 
 def defaults() -> dict[str, float]:

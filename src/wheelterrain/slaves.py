@@ -136,8 +136,7 @@ def terrain_variables() -> list[Var]:
 
 
 def rig_variables() -> list[Var]:
-    variables = [Var(p.name, "parameter", f"{p.description} [{p.source}]", p.unit, p.quantity,
-                     p.display_unit, "Real", p.default, p.min, p.max) for p in rig.RIG_TABLE]
+    variables = [_parameter_var(p, p.default) for p in rig.RIG_TABLE]
     variables += [
         Var("normal_force", "input", "Normal force of the soil on the wheel (from WheelTerrain)",
             "N", "Force", start=0.0, min=-1.0e6, max=1.0e6),
@@ -145,16 +144,24 @@ def rig_variables() -> list[Var]:
             "N", "Force", start=0.0, min=-1.0e6, max=1.0e6),
         Var("torque", "input", "Resistive soil torque about the axle (from WheelTerrain)", "N.m",
             "Torque", start=0.0, min=-1.0e6, max=1.0e6),
+        Var("wheel_speed_command", "input", "Speed the wheel's speed loop tracks when rig.drive "
+            "= 1 (speed-command)", "rad/s", "AngularVelocity", start=0.0, min=-1.0e3,
+            max=1.0e3),
+        Var("motor_torque_command", "input", "Torque the wheel motor applies when rig.drive = 2 "
+            "(torque-command)", "N.m", "Torque", start=0.0, min=-1.0e4, max=1.0e4),
         Var("sinkage", "output", "Wheel sinkage (state of the vertical motion), positive down",
             "m", "Length", "mm", depends_on=()),
         Var("sinkage_rate", "output", "Sinkage rate, positive down", "m/s", "Velocity",
             depends_on=()),
         Var("wheel_speed", "output", "Wheel angular velocity (state of the speed loop)", "rad/s",
             "AngularVelocity", depends_on=()),
-        Var("carriage_speed", "output", "Carriage speed set by the rig, rim_speed/(1 + s)",
-            "m/s", "Velocity", depends_on=()),
-        Var("motor_torque", "output", "Torque the wheel motor's speed controller applies",
-            "N.m", "Torque", depends_on=()),
+        Var("carriage_speed", "output", "Carriage speed: rim_speed/(1 + s) when kinematic, "
+            "the state of the free carriage's motion otherwise", "m/s", "Velocity",
+            depends_on=()),
+        Var("motor_torque", "output", "Torque the wheel motor applied over the last step (the "
+            "speed loop's, or the torque command)", "N.m", "Torque", depends_on=()),
+        Var("speed_error_integral", "output", "Integral of the speed loop's error (state of "
+            "its PI controller)", "rad", "Angle", depends_on=()),
         Var("sensor.drawbar_pull", "output", "Drawbar pull the rig's force sensor reads", "N",
             "Force", depends_on=("drawbar_pull",)),
         Var("sensor.normal_force", "output", "Normal force the rig's force sensor reads", "N",
@@ -362,7 +369,7 @@ def terrain_problem(status: int, info: float, u: list[float]) -> str:
 
 
 class RigCore(_Core):
-    """SingleWheelRig: carriage, speed-controlled wheel motor, vertical motion (rig.step)."""
+    """SingleWheelRig: carriage, wheel drive, vertical motion (rig.step)."""
 
     model_name = "SingleWheelRig"
 
@@ -397,7 +404,7 @@ class RigCore(_Core):
         self.values.update(zip(fmu_model.RIG_OUTPUTS, y, strict=True))
 
     def forces(self) -> tuple[float, ...]:
-        return tuple(float(self.values[name]) for name in rig.FORCE_INPUTS)
+        return tuple(float(self.values[name]) for name in rig.INPUTS)
 
     def do_step(self, t: float, h: float) -> bool:
         if not self.refuse_if_invalid():

@@ -15,6 +15,7 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
+from . import rig
 from .cosim import rig_parameters
 from .parameters import TABLE, ParameterSet
 
@@ -61,11 +62,9 @@ def system_description(case: str, ps: ParameterSet, slip_paper: float, load: flo
                            description=f"Rashid wheel on the single-wheel rig, case {case}: "
                            f"slip s = {slip_paper:g} (paper's definition), load {load:g} N")
     elements = ET.SubElement(system, _q("ssd", "Elements"))
-    kinds = {p.name: ("Integer" if p.kind in ("integer", "enum") else "Real") for p in TABLE}
-    terrain_params = {p.name: (kinds[p.name], int(ps[p.name]) if kinds[p.name] == "Integer"
-                               else float(ps[p.name])) for p in TABLE}
-    rig_params = {k: ("Real", float(v))
-                  for k, v in rig_parameters(ps, slip_paper, load, rim_speed).items()}
+    terrain_params = {p.name: _binding(p, ps[p.name]) for p in TABLE}
+    rig_params = {p.name: _binding(p, rig_parameters(ps, slip_paper, load, rim_speed)[p.name])
+                  for p in rig.RIG_TABLE}
     _component(elements, "rig", "resources/SingleWheelRig.fmu", FORCES, RIG_OUTPUTS, rig_params,
                case)
     _component(elements, "terrain", "resources/WheelTerrain.fmu", STATES, TERRAIN_OUTPUTS,
@@ -80,6 +79,13 @@ def system_description(case: str, ps: ParameterSet, slip_paper: float, load: flo
     ET.SubElement(root, _q("ssd", "DefaultExperiment"), startTime="0.0", stopTime=repr(stop))
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def _binding(p, value) -> tuple[str, int | float]:
+    """(SSV type, value) of a parameter binding: switches and counts are Integer."""
+    if p.kind in ("integer", "enum"):
+        return "Integer", round(value)
+    return "Real", float(value)
 
 
 def write(path: Path, fmu_dir: Path, case: str, ps: ParameterSet, slip_paper: float,
