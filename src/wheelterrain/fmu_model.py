@@ -71,7 +71,8 @@ def paper_slip(wheel_speed, carriage_speed, slip_radius):
         difference / rig.pick(still, 1.0, carriage_speed)))
 
 
-def _slip_radius(p):
+def slip_radius(p):
+    """Radius R_ref the slip is referenced to, from the table parameter vector ``p``."""
     return (p[INDEX["wheel.radius"]]
             + p[INDEX["model.slip_radius_factor"]] * p[INDEX["grouser.height"]])
 
@@ -82,7 +83,7 @@ def terrain_functions() -> tuple[ca.Function, ca.Function]:
     u, angle, p = ca.MX.sym("u", len(TERRAIN_INPUTS)), ca.MX.sym("angle"), ca.MX.sym(
         "p", len(NAMES))
     sinkage, rate, omega, speed, load = (u[k] for k in range(len(TERRAIN_INPUTS)))
-    traction, paper = slips(omega, speed, _slip_radius(p))
+    traction, paper = slips(omega, speed, slip_radius(p))
     slip_bad = ca.logic_or(traction < -1, traction > 1)
     safe_slip = ca.fmin(ca.fmax(traction, -1), 1)  # only used when the status is OK
 

@@ -33,8 +33,10 @@ def compiler() -> str | None:
     return os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
 
 
-def compile_function(fn: ca.Function, out_dir: Path) -> Path:
-    """Generate C for ``fn`` and compile it to ``out_dir/<name>.so``; returns the library."""
+def compile_function(fn: ca.Function, out_dir: Path, jacobian: bool = False) -> Path:
+    """Generate C for ``fn`` and compile it to ``out_dir/<name>.so``; returns the library.
+    With ``jacobian``, the library also holds ``jac_<name>``, which ``ca.external`` then uses
+    for first derivatives."""
     cc = compiler()
     if cc is None:
         raise CompileError("no C compiler (cc/gcc, or $CC) on PATH")
@@ -42,7 +44,7 @@ def compile_function(fn: ca.Function, out_dir: Path) -> Path:
     out_dir.mkdir(parents=True, exist_ok=True)
     library = out_dir / f"{fn.name()}.so"
     with tempfile.TemporaryDirectory(prefix="wheelterrain_cg_") as tmp:
-        source = _generate(fn, Path(tmp))
+        source = _generate(fn, Path(tmp), jacobian)
         partial = Path(tmp) / library.name
         try:
             run = subprocess.run([cc, *CFLAGS, str(source), "-o", str(partial), "-lm"],
@@ -57,10 +59,12 @@ def compile_function(fn: ca.Function, out_dir: Path) -> Path:
     return library
 
 
-def _generate(fn: ca.Function, directory: Path) -> Path:
+def _generate(fn: ca.Function, directory: Path, jacobian: bool = False) -> Path:
     source = directory / f"{fn.name()}.c"
     cg = ca.CodeGenerator(source.name, {"with_header": False})
     cg.add(fn)
+    if jacobian:
+        cg.add(fn.jacobian())
     cg.generate(str(directory) + os.sep)
     return source
 

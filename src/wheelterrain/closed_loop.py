@@ -1,0 +1,420 @@
+"""The NMPC in closed loop with a plant: the two FMUs through fmpy, or the same Functions in
+process; scenarios, online soil estimation and the figures issue 5 asks for.
+
+Plants
+    :class:`FMUPlant` co-simulates SingleWheelRig.fmu (rig.drive = 1: the speed loop tracks the
+    MPC's command) and WheelTerrain.fmu through fmpy with the master of
+    :mod:`wheelterrain.cosim` (Gauss-Seidel, 1 ms). :class:`CasadiPlant` runs the very same
+    Functions (``terrain_dynamic``, :func:`wheelterrain.rig.step`) in process with the same
+    coupling. When the models agree the two trajectories agree to rounding; when they do not,
+    the harness is wrong (shared/spec/mpc-notes.md: a forgotten input update hid that way).
+
+Estimator
+    :class:`SoilEstimator`, an extended Kalman filter on (soil.phi, soil.k_phi) as random walks.
+    Its measurement model is the terrain Function itself: the normal force and drawbar pull the
+    rig's force sensor reads, predicted at the measured sinkage, sinkage rate, speeds and wheel
+    angle, with exact CasADi Jacobians with respect to the two parameters.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from . import cosim, fmu_model, model, mpc, rig
+from .parameters import INDEX, NAMES, TABLE, ParameterSet
+
+PLANT_STEP = cosim.STEP  # s, the co-simulation's communication step
+RECORD = ("time", "slip", "slip_reference", "command", "wheel_speed", "motor_torque",
+          "sinkage", "drawbar_pull", "normal_force", "soil_torque", "phi_estimate",
+          "k_phi_estimate", "phi_true", "k_phi_true")
+ESTIMATED = ("soil.phi", "soil.k_phi")
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A closed-loop run: slip reference steps, the soil change, the scoring windows."""
+
+    name: str
+    description: str
+    duration: float  # s
+    reference: tuple[tuple[float, float], ...]  # (from time s, traction slip reference)
+    slip_paper: float = 0.25  # the rig's carriage: V = rim_speed/(1 + slip_paper)
+    soil_change_time: float | None = None  # s
+    soil_change: tuple[tuple[str, float], ...] = ()  # (parameter, factor)
+    estimate: bool = False
+    score_after: float = 1.0  # s after each reference step or soil change: the transient
+    objective: str = "track"
+    carriage: int = rig.CARRIAGE_KINEMATIC
+    towing_force: float | None = 0.0  # N; None: balanced, the steady drawbar pull at the
+    # first reference (the vehicle neither speeds up nor slows down there)
+    soil: tuple[tuple[str, float], ...] = ()  # table parameters set for this scenario
+    settle: float = 1.0  # s before t = 0: the wheel sinks in at the first reference's speed
+
+    def reference_at(self, t: float) -> float:
+        value = self.reference[0][1]
+        for start, slip in self.reference:
+            if t >= start - 1e-12:
+                value = slip
+        return value
+
+    def scored(self, t: np.ndarray) -> np.ndarray:
+        """Samples outside every transient window (a reference step, the soil change)."""
+        events = [start for start, _ in self.reference]
+        if self.soil_change_time is not None:
+            events.append(self.soil_change_time)
+        mask = np.ones_like(t, dtype=bool)
+        for event in events:
+            mask &= ~((t >= event - 1e-12) & (t < event + self.score_after))
+        return mask
+
+
+SCENARIOS = {s.name: s for s in (
+    Scenario("nominal", "slip reference 0.2 then 0.35 at 3 s on the calibrated soil",
+             6.0, ((0.0, 0.2), (3.0, 0.35))),
+    Scenario("terrain-change", "reference 0.2; at 2 s the soil under the wheel loses 15 % of "
+             "its friction angle and gains 20 % of k_phi; an EKF re-estimates both online",
+             8.0, ((0.0, 0.2),), soil_change_time=2.0,
+             soil_change=(("soil.phi", 0.85), ("soil.k_phi", 1.2)), estimate=True,
+             score_after=3.0),
+    Scenario("free-carriage", "a rover wheel: the carriage is free and tows the drawbar pull "
+             "the quasi-static model gives at slip 0.2; reference 0.2. Grouser ripple off (a "
+             "rover's wheels are out of phase; one wheel's ripple, +-1 N on 6.3 kg, surges the "
+             "3 cm/s carriage by more than its speed)", 6.0, ((0.0, 0.2),),
+             carriage=rig.CARRIAGE_FREE, towing_force=None, soil=(("ripple.k_g", 0.0),)),
+    Scenario("efficiency", "maximise drawbar pull per unit motor power (tractive efficiency) "
+             "instead of tracking", 4.0, ((0.0, 0.2),), objective="efficiency"),
+)}
+
+
+def rig_parameters(ps: ParameterSet, scenario: Scenario, load: float = 62.0,
+                   rim_speed: float = 0.03) -> dict[str, float]:
+    """The rig of C1-C4 with the wheel speed commanded (rig.drive 1) and the scenario's
+    carriage."""
+    values = cosim.rig_parameters(ps, scenario.slip_paper, load, rim_speed)
+    towing = scenario.towing_force
+    if towing is None:
+        towing = model.steady_state(ps, load=load, slip=scenario.reference_at(0.0))[
+            "drawbar_pull"]
+    values.update({"rig.drive": rig.DRIVE_SPEED, "rig.carriage": scenario.carriage,
+                   "rig.towing_force": towing})
+    for name, value in values.items():
+        rig.check(name, value)
+    return values
+
+
+# ------------------------------------------------------------------------------------------------
+# Plants
+
+
+class CasadiPlant:
+    """SingleWheelRig + WheelTerrain as their Functions in process, coupled as cosim couples the
+    FMUs."""
+
+    def __init__(self, ps: ParameterSet, p_rig: dict[str, float]) -> None:
+        self.terrain, _ = fmu_model.terrain_functions()
+        self.p = np.array([ps[name] for name in NAMES])
+        self.p_rig = dict(p_rig)
+        self.x = rig.initial_state(self.p_rig)
+        self.angle = 0.0
+        self.motor_torque = 0.0
+
+    def set_soil(self, values: dict[str, float]) -> None:
+        for name, value in values.items():
+            self.p[INDEX[name]] = value
+
+    def set_rig(self, values: dict[str, float]) -> None:
+        self.p_rig.update(values)
+
+    def _forces(self) -> np.ndarray:
+        z, z_rate, omega, _, speed = self.x
+        u = [z, z_rate, omega, speed, self.p_rig["rig.load"]]
+        y, status, info = self.terrain(u, self.angle, self.p)
+        if int(status) != fmu_model.STATUS_OK:
+            raise mpc.MPCError(f"plant left the model's domain (status {int(status)}, {info})")
+        return np.array(y).ravel()
+
+    def state(self) -> np.ndarray:
+        return np.array([*self.x, self.angle])
+
+    def advance(self, command: float, steps: int, record: Callable) -> None:
+        for _ in range(steps):
+            y = self._forces()
+            forces = (y[0], y[1], y[2], command, 0.0)
+            record(self.x, self.angle, y, self.motor_torque)
+            omega = self.x[2]  # WheelTerrain advances its angle with the speed it was given
+            self.x, self.motor_torque = rig.step(self.x, forces, self.p_rig, PLANT_STEP)
+            self.angle += omega * PLANT_STEP
+
+    def close(self) -> None:
+        pass
+
+
+class FMUPlant:
+    """SingleWheelRig.fmu + WheelTerrain.fmu through fmpy (one extraction, two instances)."""
+
+    def __init__(self, fmu_dir: Path, ps: ParameterSet, p_rig: dict[str, float]) -> None:
+        from fmpy import extract
+
+        paths = cosim.fmu_paths(fmu_dir)
+        self.unzipped = {name: extract(str(p)) for name, p in paths.items()}
+        self.terrain = cosim._Instance(paths["WheelTerrain"], self.unzipped["WheelTerrain"],
+                                       "terrain")
+        self.rig = cosim._Instance(paths["SingleWheelRig"], self.unzipped["SingleWheelRig"],
+                                   "rig")
+        for inst in (self.terrain, self.rig):
+            inst.fmu.setupExperiment(startTime=0.0)
+            inst.fmu.enterInitializationMode()
+        self.terrain.set({p.name: ps[p.name] for p in TABLE})
+        self.terrain.set({"quasi_static": False})
+        self.rig.set(p_rig)
+        for inst in (self.terrain, self.rig):
+            inst.fmu.exitInitializationMode()
+        states = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")
+        self.rig_out = self.rig.refs((*states, "speed_error_integral", "motor_torque"))
+        self.ter_in = self.terrain.refs(states)
+        self.ter_out = self.terrain.refs((*fmu_model.TERRAIN_OUTPUTS, "wheel_angle"))
+        self.rig_in = self.rig.refs((*rig.FORCE_INPUTS, "wheel_speed_command"))
+        self.t = 0.0
+
+    def set_soil(self, values: dict[str, float]) -> None:
+        self.terrain.set(values)
+
+    def set_rig(self, values: dict[str, float]) -> None:
+        self.rig.set(values)
+
+    def state(self) -> np.ndarray:
+        r = self.rig.fmu.getReal(self.rig_out)
+        angle = self.terrain.fmu.getReal([self.ter_out[-1]])[0]
+        return np.array([r[0], r[1], r[2], r[4], r[3], angle])
+
+    def advance(self, command: float, steps: int, record: Callable) -> None:
+        get_r, get_t = self.rig.fmu.getReal, self.terrain.fmu.getReal
+        for _ in range(steps):
+            r = get_r(self.rig_out)
+            self.terrain.fmu.setReal(self.ter_in, r[:4])
+            y = get_t(self.ter_out)
+            self.rig.fmu.setReal(self.rig_in, [*y[:3], command])
+            record((r[0], r[1], r[2], r[4], r[3]), y[-1], y[:-1], r[5])
+            try:
+                self.rig.fmu.doStep(self.t, PLANT_STEP)
+                self.terrain.fmu.doStep(self.t, PLANT_STEP)
+            except Exception as err:  # fmpy raises FMICallException on fmi2Discard/Error
+                raise mpc.MPCError(f"the FMU plant refused the step at t = {self.t:g} s: "
+                                   f"{err}") from err
+            self.t += PLANT_STEP
+
+    def close(self) -> None:
+        for inst in (self.terrain, self.rig):
+            inst.close()
+        for d in self.unzipped.values():
+            shutil.rmtree(d, ignore_errors=True)
+
+
+# ------------------------------------------------------------------------------------------------
+# Online soil estimation
+
+
+class SoilEstimator:
+    """EKF on (soil.phi, soil.k_phi) as random walks, relative to their nominal values.
+
+    Measurement: the normal force and drawbar pull of the terrain Function at the measured
+    wheel state; Jacobians by CasADi. An estimate that would leave a parameter's valid range is
+    projected back onto it and counted in ``projections`` (reported, never silent).
+    """
+
+    def __init__(self, p: np.ndarray, load: float, interval: float) -> None:
+        terrain, _ = fmu_model.terrain_functions()
+        theta = ca.MX.sym("theta", len(ESTIMATED))
+        x = ca.MX.sym("x", len(mpc.STATES))
+        pt = ca.MX.sym("p", len(NAMES))
+        nominal = np.array([p[INDEX[name]] for name in ESTIMATED])
+        scaled = ca.vertcat(*(pt[INDEX[n]] if n not in ESTIMATED
+                              else theta[ESTIMATED.index(n)] * nominal[ESTIMATED.index(n)]
+                              for n in NAMES))
+        u = ca.vertcat(x[0], x[1], x[2], x[4], load)
+        y = terrain(u, x[5], scaled)[0][:2]
+        self.measure = ca.Function("soil_measurement", [theta, x, pt], [y, ca.jacobian(y, theta)])
+        self.nominal, self.p = nominal, np.array(p, dtype=float)
+        self.theta = np.ones(len(ESTIMATED))
+        self.P = np.diag([0.1**2, 0.3**2])  # prior: +-10 % phi, +-30 % k_phi
+        # random walk per update: the soil may change along the track
+        self.Q = np.diag([0.002**2, 0.006**2]) * (interval / 0.02)
+        self.R = np.diag([0.2**2, 0.2**2])  # N^2: force sensor resolution
+        self.lower = np.array([TABLE[INDEX[n]].min for n in ESTIMATED]) / nominal
+        self.upper = np.array([TABLE[INDEX[n]].max for n in ESTIMATED]) / nominal
+        self.projections = 0
+
+    def update(self, x: np.ndarray, measured: np.ndarray) -> np.ndarray:
+        """One predict-update with the state ``x`` (mpc.STATES) and the forces measured
+        there; returns the table parameter vector with the estimates."""
+        self.P = self.P + self.Q
+        y, H = (np.array(v) for v in self.measure(self.theta, x, self.p))
+        S = H @ self.P @ H.T + self.R
+        K = self.P @ H.T @ np.linalg.inv(S)
+        theta = self.theta + K @ (np.asarray(measured) - y.ravel())
+        self.P = (np.eye(len(theta)) - K @ H) @ self.P
+        clipped = np.clip(theta, self.lower, self.upper)
+        self.projections += int(np.any(clipped != theta))
+        self.theta = clipped
+        return self.parameters()
+
+    def parameters(self) -> np.ndarray:
+        p = self.p.copy()
+        for k, name in enumerate(ESTIMATED):
+            p[INDEX[name]] = self.theta[k] * self.nominal[k]
+        return p
+
+
+# ------------------------------------------------------------------------------------------------
+# The loop
+
+
+@dataclass
+class Result:
+    scenario: str
+    plant: str
+    settings: mpc.Settings
+    series: dict[str, np.ndarray] = field(repr=False)
+    solve_times: np.ndarray = field(repr=False)
+    iterations: np.ndarray = field(repr=False)
+    failures: int = 0
+    projections: int = 0
+    wall_time: float = 0.0
+
+    def figures(self, scenario: Scenario) -> dict:
+        t = self.series["time"]
+        mask = scenario.scored(t)
+        error = self.series["slip"] - self.series["slip_reference"]
+        out = {"scenario": self.scenario, "plant": self.plant,
+               "solver": self.settings.solver, "compiled": self.settings.compiled,
+               "horizon": self.settings.horizon, "interval_s": self.settings.interval,
+               "solve_time_median_s": float(np.median(self.solve_times)),
+               "solve_time_p90_s": float(np.percentile(self.solve_times, 90)),
+               "solve_time_max_s": float(np.max(self.solve_times)),
+               "iterations_median": float(np.median(self.iterations)),
+               "failed_solves": self.failures, "mpc_steps": len(self.solve_times),
+               "wall_time_s": self.wall_time}
+        if scenario.objective == "track":
+            out["slip_rms_error"] = float(np.sqrt(np.mean(error[mask] ** 2)))
+            out["slip_max_error"] = float(np.max(np.abs(error[mask])))
+            out["scored_from_s"] = [float(e) for e in _events(scenario)]
+            out["transient_s"] = scenario.score_after
+        else:
+            late = t >= t[-1] - 1.0
+            power = self.series["motor_torque"] * self.series["wheel_speed"]
+            speed = self.series["carriage_speed"]
+            out["slip_final"] = float(np.mean(self.series["slip"][late]))
+            out["tractive_efficiency_final"] = float(
+                np.mean(self.series["drawbar_pull"][late] * speed[late]) / np.mean(power[late]))
+        if scenario.estimate:
+            out["estimator_projections"] = self.projections
+            for key in ("phi", "k_phi"):
+                est, true = self.series[f"{key}_estimate"][-1], self.series[f"{key}_true"][-1]
+                out[f"{key}_estimate_final"] = float(est)
+                out[f"{key}_true"] = float(true)
+                out[f"{key}_relative_error_final"] = float(abs(est - true) / abs(true))
+        return out
+
+
+def _events(scenario: Scenario) -> list[float]:
+    events = [start for start, _ in scenario.reference]
+    if scenario.soil_change_time is not None:
+        events.append(scenario.soil_change_time)
+    return sorted(events)
+
+
+def run(scenario: Scenario, ps: ParameterSet, plant: str = "fmu",
+        settings: mpc.Settings | None = None, fmu_dir: Path | None = None,
+        progress: Callable[[float], None] | None = None) -> Result:
+    """Run ``scenario`` with the NMPC against the ``plant`` ('fmu' or 'casadi')."""
+    settings = settings or mpc.Settings()
+    if scenario.soil:
+        ps = ps.with_values(dict(scenario.soil))
+    if scenario.objective != settings.objective:
+        settings = mpc.Settings(**{**settings.__dict__, "objective": scenario.objective})
+    steps = round(settings.interval / PLANT_STEP)
+    if not math.isclose(steps * PLANT_STEP, settings.interval, rel_tol=1e-9) or steps < 1:
+        raise mpc.MPCError(f"interval = {settings.interval!r} s must be a whole number of plant "
+                           f"steps of {PLANT_STEP:g} s")
+    # the carriage is held while the wheel sinks in (free, the sinking wheel's compaction
+    # resistance would push it backwards) and released at t = 0
+    p_rig = {**rig_parameters(ps, scenario), "rig.carriage": rig.CARRIAGE_KINEMATIC}
+    if plant == "fmu":
+        the_plant = FMUPlant(Path(fmu_dir), ps, p_rig)
+    elif plant == "casadi":
+        the_plant = CasadiPlant(ps, p_rig)
+    else:
+        raise mpc.MPCError(f"plant = {plant!r}; valid: fmu, casadi")
+    started = time.perf_counter()
+    try:
+        return _loop(scenario, ps, plant, settings, steps, p_rig, the_plant, progress, started)
+    finally:
+        the_plant.close()
+
+
+def _loop(scenario, ps, plant_name, settings, steps, p_rig, plant, progress, started) -> Result:
+    controller = mpc.Controller(settings, {**p_rig, "rig.carriage": scenario.carriage})
+    p_nominal = np.array([ps[name] for name in NAMES])
+    p_true = p_nominal.copy()
+    estimator = (SoilEstimator(p_nominal, p_rig["rig.load"], settings.interval)
+                 if scenario.estimate else None)
+    p_model = p_nominal.copy()
+    n = round(scenario.duration / settings.interval)
+    rows: list[tuple] = []
+    state = {"command": rig.references(p_rig)[0], "reference": 0.0}
+    last = {}
+
+    settle_steps = round(scenario.settle / PLANT_STEP)
+
+    def record(x, angle, y, motor_torque):
+        t = (len(rows) - settle_steps) * PLANT_STEP
+        last.update(x=np.array([*x, angle]), forces=np.array(y[:2]))
+        rows.append((t, y[6], state["reference"], state["command"], x[2], motor_torque, x[0],
+                     y[1], y[0], y[2], p_model[INDEX["soil.phi"]],
+                     p_model[INDEX["soil.k_phi"]], p_true[INDEX["soil.phi"]],
+                     p_true[INDEX["soil.k_phi"]], x[4]))
+
+    # the wheel is set down on the soil and sinks in at the speed of the first reference (the
+    # contact's entry angle has an infinite derivative at zero sinkage: no NLP starts there)
+    _, speed = rig.references(p_rig)
+    state["command"] = speed / (p_rig["rig.slip_radius"] * (1 - scenario.reference_at(0.0)))
+    state["reference"] = scenario.reference_at(0.0)
+    plant.advance(state["command"], settle_steps, record)
+    if scenario.carriage != rig.CARRIAGE_KINEMATIC:
+        plant.set_rig({"rig.carriage": scenario.carriage})
+    solve_times, iterations, failures = [], [], 0
+    for k in range(n):
+        t = k * settings.interval
+        if scenario.soil_change_time is not None and math.isclose(
+                t, scenario.soil_change_time, abs_tol=0.5 * PLANT_STEP):
+            change = {name: p_true[INDEX[name]] * factor for name, factor in scenario.soil_change}
+            plant.set_soil(change)
+            for name, value in change.items():
+                p_true[INDEX[name]] = value
+        if estimator is not None and "x" in last:
+            p_model = estimator.update(last["x"], last["forces"])
+        x = plant.state()
+        x[5] = mpc.wrap_angle(x[5])
+        # the reference as it stands now (no preview: a planner above sets it as it goes)
+        step = controller.solve(x, p_model, scenario.reference_at(t), state["command"])
+        solve_times.append(step.solve_time)
+        iterations.append(step.iterations)
+        failures += not step.success
+        state["command"], state["reference"] = step.command, scenario.reference_at(t)
+        plant.advance(step.command, steps, record)
+        if progress:
+            progress(settings.interval)
+    data = np.array(rows[settle_steps:])
+    names = (*RECORD, "carriage_speed")
+    series = {name: data[:, j] for j, name in enumerate(names)}
+    return Result(scenario.name, plant_name, settings, series, np.array(solve_times),
+                  np.array(iterations), failures,
+                  estimator.projections if estimator else 0, time.perf_counter() - started)

@@ -1,0 +1,351 @@
+"""Slip-control NMPC on the CasADi twin: the prediction model is the FMUs' own Functions.
+
+Prediction model
+    The WheelTerrain FMU's Function ``terrain_dynamic`` (the full contact model, grouser ripple
+    included, at the wheel's sinkage, sinkage rate, speeds and angle) closed by the rig's
+    equations :func:`wheelterrain.rig.rates` in the same drive and carriage mode as the plant.
+    States (STATES): sinkage, sinkage rate, wheel speed, the speed loop's integral, carriage
+    speed, wheel angle. No surrogate: the prediction differs from the co-simulated plant only by
+    its discretisation.
+
+Why a speed command (the stiffness analysis, :func:`stiffness`)
+    With the motor torque as the input, the wheel on the calibrated soil has eigenvalues down to
+    -355 1/s (a step of 0.02 s multiplies them by 7) and, at the C4 operating point, an unstable
+    sinkage-slip pair (+6.7 +- 35j 1/s): slip-sinkage softens the soil faster than the wheel
+    slows. A controller sampling at 50 Hz cannot hold that with a held torque. The drive's own
+    speed loop (rig.drive = 1, poles at -rig.speed_bandwidth) does, so the MPC commands the wheel
+    speed and keeps the loop, with its torque, in the prediction and in the constraints.
+
+Discretisation
+    Backward Euler on each interval (the states at the end of the interval are decision
+    variables, the forces are evaluated there): L-stable, so the stiff loop and soil modes decay
+    in the prediction as they do in the plant, with no substeps. Multiple shooting: the NLP
+    holds the states, the interval residuals are equality constraints.
+
+Objectives
+    ``track``: sum of ((slip - reference)/SLIP_SCALE)^2 plus a small penalty on command moves.
+    ``efficiency``: maximise the tractive efficiency DP*V/(T_motor*omega) (drawbar pull per unit
+    of motor power, times the carriage speed), with the same move penalty.
+Constraints: |motor torque| <= torque_limit, motor power <= power_limit, sinkage <=
+sinkage_limit, 0 <= speed command <= speed_limit.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from . import fmu_model, native, rig
+from .parameters import NAMES
+
+STATES = (*rig.STATES, "wheel_angle")
+OUTPUTS = ("slip", "drawbar_pull", "normal_force", "soil_torque", "motor_torque", "power")
+REGULARISATION = 1e-6  # Levenberg-Marquardt term added to the Gauss-Newton Hessian
+SLIP_SCALE = 1e-3  # slip error of weight 1 in the tracking objective
+SOLVERS = ("sqpmethod", "ipopt")
+OBJECTIVES = ("track", "efficiency")
+
+
+class MPCError(ValueError):
+    """A controller setting is out of its valid range; the message names it and the range."""
+
+
+@dataclass(frozen=True)
+class Settings:
+    """NMPC settings; every field is checked by :meth:`check`."""
+
+    horizon: int = 30  # intervals
+    interval: float = 0.02  # s
+    solver: str = "sqpmethod"  # sqpmethod (with qrqp) | ipopt
+    compiled: bool = False  # generate and compile C for the NLP's functions
+    objective: str = "track"  # track | efficiency
+    torque_limit: float = 3.0  # N.m, the wheel motor's
+    power_limit: float = 5.0  # W, the wheel motor's mechanical output
+    sinkage_limit: float = 0.04  # m
+    speed_limit: float = 5.0  # rad/s, largest speed command
+    move_weight: float = 1e-2  # weight of (command move / command scale)^2
+    max_iterations: int = 20
+
+    def check(self) -> Settings:
+        def need(ok: bool, name: str, value, valid: str) -> None:
+            if not ok:
+                raise MPCError(f"{name} = {value!r} is out of range; valid: {valid}")
+
+        need(isinstance(self.horizon, int) and 1 <= self.horizon <= 500, "horizon", self.horizon,
+             "a whole number in [1, 500]")
+        need(1e-4 <= self.interval <= 1.0, "interval", self.interval, "[1e-4, 1] s")
+        need(self.solver in SOLVERS, "solver", self.solver, ", ".join(SOLVERS))
+        need(self.objective in OBJECTIVES, "objective", self.objective, ", ".join(OBJECTIVES))
+        need(0 < self.torque_limit <= 1e4, "torque_limit", self.torque_limit, "(0, 1e4] N.m")
+        need(0 < self.power_limit <= 1e6, "power_limit", self.power_limit, "(0, 1e6] W")
+        need(0 < self.sinkage_limit <= 1.0, "sinkage_limit", self.sinkage_limit, "(0, 1] m")
+        need(0 < self.speed_limit <= 1e3, "speed_limit", self.speed_limit, "(0, 1e3] rad/s")
+        need(0 <= self.move_weight <= 1e6, "move_weight", self.move_weight, "[0, 1e6]")
+        need(1 <= self.max_iterations <= 1000, "max_iterations", self.max_iterations,
+             "[1, 1000]")
+        return self
+
+
+def _named_rig(p: ca.MX) -> dict:
+    return {name: p[k] for k, name in enumerate(rig.RIG_NAMES)}
+
+
+@lru_cache(maxsize=1)
+def dynamics() -> ca.Function:
+    """``dynamics(x, command, p_terrain, p_rig) -> (xdot, y)``: the continuous prediction model
+    (x = STATES, y = OUTPUTS) from the FMUs' Functions: terrain_dynamic and rig.rates."""
+    terrain, _ = fmu_model.terrain_functions()
+    x = ca.MX.sym("x", len(STATES))
+    command = ca.MX.sym("command")
+    pt, pr = ca.MX.sym("p_terrain", len(NAMES)), ca.MX.sym("p_rig", len(rig.RIG_NAMES))
+    named = _named_rig(pr)
+    z, z_rate, omega, _, speed, angle = (x[k] for k in range(len(STATES)))
+    u = ca.vertcat(z, z_rate, omega, speed, named["rig.load"])
+    y = terrain(u, angle, pt)[0]
+    out = dict(zip(fmu_model.TERRAIN_OUTPUTS, ca.vertsplit(y), strict=True))
+    # the command is the speed loop's reference (rig.drive 1) or the torque (rig.drive 2)
+    inputs = (out["normal_force"], out["drawbar_pull"], out["torque"], command, command)
+    x_rig = tuple(x[k] for k in range(len(rig.STATES)))
+    xdot = ca.vertcat(*rig.rates(x_rig, inputs, named), omega)
+    motor = rig.motor_torque(x_rig, inputs, named)
+    outputs = ca.vertcat(out["slip"], out["drawbar_pull"], out["normal_force"], out["torque"],
+                         motor, motor * omega)
+    return ca.Function("wheel_dynamics", [x, command, pt, pr], [xdot, outputs],
+                       ["x", "command", "p_terrain", "p_rig"], ["xdot", "y"])
+
+
+@lru_cache(maxsize=1)
+def interval_residual() -> ca.Function:
+    """``interval(x0, x1, command, p_terrain, p_rig, h) -> (residual, y1)``: backward Euler
+    x1 - x0 - h*f(x1, command) and the outputs at the interval's end."""
+    f = dynamics()
+    x0, x1 = ca.MX.sym("x0", len(STATES)), ca.MX.sym("x1", len(STATES))
+    command, h = ca.MX.sym("command"), ca.MX.sym("h")
+    pt, pr = ca.MX.sym("p_terrain", len(NAMES)), ca.MX.sym("p_rig", len(rig.RIG_NAMES))
+    xdot, y = f(x1, command, pt, pr)
+    return ca.Function("interval", [x0, x1, command, pt, pr, h], [x1 - x0 - h * xdot, y],
+                       ["x0", "x1", "command", "p_terrain", "p_rig", "h"], ["residual", "y"])
+
+
+@lru_cache(maxsize=1)
+def interval_step() -> ca.Function:
+    """``step(x0, command, p_terrain, p_rig, h) -> (x1, y1)``: one backward-Euler interval
+    solved by Newton (for forward rollouts: the first guess and the shift's last interval)."""
+    residual = interval_residual()
+    x0, x1 = ca.MX.sym("x0", len(STATES)), ca.MX.sym("x1", len(STATES))
+    command, h = ca.MX.sym("command"), ca.MX.sym("h")
+    pt, pr = ca.MX.sym("p_terrain", len(NAMES)), ca.MX.sym("p_rig", len(rig.RIG_NAMES))
+    g = ca.Function("g", [x1, ca.vertcat(x0, command, pt, pr, h)],
+                    [residual(x0, x1, command, pt, pr, h)[0]])
+    solve = ca.rootfinder("solve", "newton", g, {"abstol": 1e-12, "max_iter": 50,
+                                                  "error_on_fail": False})
+    params = ca.vertcat(x0, command, pt, pr, h)
+    x_new = solve(x0, params)
+    return ca.Function("interval_step", [x0, command, pt, pr, h],
+                       [x_new, residual(x0, x_new, command, pt, pr, h)[1]],
+                       ["x0", "command", "p_terrain", "p_rig", "h"], ["x1", "y"])
+
+
+def cache_directory() -> Path:
+    """Where compiled prediction models are kept between runs ($WHEELTERRAIN_CACHE, else the
+    user's cache directory)."""
+    root = os.environ.get("WHEELTERRAIN_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "wheelterrain")
+    return Path(root)
+
+
+@lru_cache(maxsize=1)
+def compiled_interval() -> ca.Function:
+    """:func:`interval_residual` as generated C with its Jacobian, compiled once per model
+    version (the C's SHA-256 names the cache entry) and loaded with ``ca.external``."""
+    fn = interval_residual().expand()
+    digest = native.fingerprint(fn)[:16]
+    place = cache_directory() / "mpc" / digest
+    library = place / f"{fn.name()}.so"
+    if not library.is_file():
+        native.compile_function(fn, place, jacobian=True)
+    return ca.external(fn.name(), str(library))
+
+
+def stiffness(pt: np.ndarray, pr: dict, x: np.ndarray, command: float) -> np.ndarray:
+    """Eigenvalues [1/s] of the prediction model's Jacobian d(xdot)/dx at ``x`` (without the
+    wheel angle, a pure integrator), in the drive mode of ``pr``."""
+    f = dynamics()
+    xs = ca.MX.sym("x", len(STATES))
+    jac = ca.Function("a", [xs], [ca.jacobian(f(xs, command, pt, _vector(pr))[0], xs)])
+    a = np.array(jac(x))[:5, :5]
+    keep = [0, 1, 2] + ([3] if pr["rig.drive"] != rig.DRIVE_TORQUE else []) + (
+        [4] if pr["rig.carriage"] == rig.CARRIAGE_FREE else [])
+    return np.linalg.eigvals(a[np.ix_(keep, keep)])
+
+
+def _vector(pr: dict) -> np.ndarray:
+    return np.array([float(pr[name]) for name in rig.RIG_NAMES])
+
+
+@dataclass
+class Step:
+    """One solve: the command to apply and what it cost."""
+
+    command: float
+    solve_time: float  # s, wall time of the solver call
+    iterations: int
+    success: bool
+    status: str
+    predicted: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
+
+
+class Controller:
+    """The NMPC: one NLP built once, solved each interval with a shifted warm start.
+
+    ``p_rig`` are the rig parameters of the plant (with rig.drive = 1, speed command);
+    ``p_terrain`` the soil the controller believes (an estimator may update it per solve).
+    """
+
+    def __init__(self, settings: Settings, p_rig: dict) -> None:
+        self.settings = settings.check()
+        if p_rig["rig.drive"] != rig.DRIVE_SPEED:
+            raise MPCError(f"rig.drive = {p_rig['rig.drive']!r}: the NMPC commands the wheel "
+                           f"speed; valid: {rig.DRIVE_SPEED} (speed-command)")
+        self.p_rig = _vector(p_rig)
+        self.command_scale = p_rig["rig.rim_speed"] / p_rig["rig.slip_radius"]
+        self._build()
+        self.guess: np.ndarray | None = None
+        self.multipliers: tuple[np.ndarray, np.ndarray] | None = None
+
+    # --- the NLP --------------------------------------------------------------------------
+    def _build(self) -> None:
+        s, n, nx = self.settings, self.settings.horizon, len(STATES)
+        x_scale = np.array([1e-2, 1e-2, self.command_scale, 1e-2, 1e-2, 1.0])
+        self.x_scale = np.tile(x_scale, n)
+        u_hat, x_hat = ca.MX.sym("u", n), ca.MX.sym("x", nx, n)
+        x0, pt = ca.MX.sym("x_now", nx), ca.MX.sym("p_terrain", len(NAMES))
+        reference, previous = ca.MX.sym("slip_reference", n), ca.MX.sym("previous_command")
+        pr = ca.DM(self.p_rig)
+        u = u_hat * self.command_scale
+        xs = ca.diag(ca.DM(x_scale)) @ x_hat
+        starts = ca.horzcat(x0, xs[:, :-1])
+        interval = (compiled_interval() if s.compiled else interval_residual()).map(n)
+        residual, y = interval(starts, xs, u.T, pt, pr, s.interval)
+        residual = ca.diag(ca.DM(1 / x_scale)) @ residual
+        # slip, motor torque and power from the states (the same expressions as the plant's),
+        # so the objective's and the limits' derivatives skip the contact model
+        named = _named_rig(pr)
+        omega, speed = xs[2, :].T, xs[4, :].T
+        slip, _ = fmu_model.slips(omega, speed, fmu_model.slip_radius(pt))
+        motor = rig.motor_torque(tuple(xs[k, :].T for k in range(len(rig.STATES))),
+                                 (0, 0, 0, u, u), named)
+        power = motor * omega
+        moves = ca.diff(ca.vertcat(previous, u)) / self.command_scale
+        if s.objective == "track":
+            residuals = ca.vertcat((slip - reference) / SLIP_SCALE,
+                                   math.sqrt(s.move_weight) * moves)
+            cost = ca.sumsqr(residuals)
+        else:
+            residuals = None
+            efficiency = y[1, :].T * speed / ca.fmax(power, 1e-6)
+            cost = -100 * ca.sum1(efficiency) + s.move_weight * ca.sumsqr(moves)
+        g = ca.vertcat(ca.vec(residual), motor, power)
+        w = ca.vertcat(u_hat, ca.vec(x_hat))
+        p = ca.vertcat(x0, pt, reference, previous)
+        nlp = {"x": w, "p": p, "f": cost, "g": g}
+        self.gauss_newton = None
+        if residuals is not None:  # least squares: the Gauss-Newton Hessian 2*J'J
+            jac = ca.jacobian(residuals, w)
+            lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", g.numel())
+            # plus a Levenberg-Marquardt term: the states outside the objective would leave the
+            # Hessian singular, which slows qrqp's active set down by 100x after a soil change
+            hessian = 2 * lam_f * (jac.T @ jac) + REGULARISATION * ca.DM.eye(w.numel())
+            if s.solver == "ipopt":  # ipopt reads the upper triangle, sqpmethod the whole
+                hessian = ca.triu(hessian)
+            self.gauss_newton = ca.Function("gauss_newton", [w, p, lam_f, lam_g], [hessian],
+                                            ["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])
+        self.lbg = np.concatenate([np.zeros(nx * n), -s.torque_limit * np.ones(n),
+                                   -np.inf * np.ones(n)])
+        self.ubg = np.concatenate([np.zeros(nx * n), s.torque_limit * np.ones(n),
+                                   s.power_limit * np.ones(n)])
+        upper = np.array([s.sinkage_limit / x_scale[0]] + [np.inf] * (nx - 1))
+        self.lbx = np.concatenate([np.zeros(n), np.tile(np.full(nx, -np.inf), n)])
+        self.ubx = np.concatenate([s.speed_limit / self.command_scale * np.ones(n),
+                                   np.tile(upper, n)])
+        self.solver = ca.nlpsol("mpc", s.solver, nlp, self._options())
+
+    def _options(self) -> dict:
+        s = self.settings
+        # expanded to SX in the VM; the compiled interval is an external, called as it is
+        common: dict = {"expand": not s.compiled}
+        if self.gauss_newton is not None:
+            common["hess_lag"] = self.gauss_newton
+        if s.solver == "sqpmethod":
+            return {**common, "qpsol": "qrqp", "print_header": False, "print_iteration": False,
+                    "print_status": False, "print_time": False, "max_iter": s.max_iterations,
+                    "error_on_fail": False,
+                    "qpsol_options": {"print_iter": False, "print_header": False,
+                                      "print_info": False, "error_on_fail": False},
+                    "tol_pr": 1e-9, "tol_du": 1e-7, "min_step_size": 1e-12}
+        return {**common, "print_time": False, "error_on_fail": False,
+                "ipopt": {"print_level": 0, "sb": "yes", "max_iter": 10 * s.max_iterations,
+                          "tol": 1e-9, "warm_start_init_point": "yes", "mu_init": 1e-4}}
+
+    # --- solving -----------------------------------------------------------------------------
+    def rollout(self, x_now: np.ndarray, commands: np.ndarray, pt: np.ndarray) -> np.ndarray:
+        """States (len(STATES) x horizon) of the prediction model under ``commands``."""
+        step = interval_step()
+        xs, x = [], np.asarray(x_now, dtype=float)
+        for c in commands:
+            x = np.array(step(x, c, pt, self.p_rig, self.settings.interval)[0]).ravel()
+            xs.append(x)
+        return np.array(xs).T
+
+    def solve(self, x_now, pt, reference, previous: float) -> Step:
+        """Solve the NLP at state ``x_now`` (STATES) with soil ``pt`` and the slip ``reference``
+        (scalar or one per interval); ``previous`` is the command applied until now."""
+        n = self.settings.horizon
+        x_now = np.asarray(x_now, dtype=float)
+        reference = np.broadcast_to(np.asarray(reference, dtype=float), (n,))
+        if self.guess is None:  # forward rollout, not a constant state (a bad local minimum)
+            commands = np.full(n, previous)
+            xs = self.rollout(x_now, commands, pt)
+            self.guess = np.concatenate([commands / self.command_scale,
+                                         (xs / self.x_scale.reshape(n, -1).T).T.ravel()])
+        args = {"x0": self.guess, "p": np.concatenate([x_now, pt, reference, [previous]]),
+                "lbx": self.lbx, "ubx": self.ubx, "lbg": self.lbg, "ubg": self.ubg}
+        if self.multipliers is not None:
+            args["lam_x0"], args["lam_g0"] = self.multipliers
+        started = time.perf_counter()
+        result = self.solver(**args)
+        elapsed = time.perf_counter() - started
+        stats = self.solver.stats()
+        w = np.array(result["x"]).ravel()
+        self.multipliers = (np.array(result["lam_x"]).ravel(), np.array(result["lam_g"]).ravel())
+        commands = w[:n] * self.command_scale
+        xs = (w[n:].reshape(n, -1) * self.x_scale.reshape(n, -1)).T
+        self._shift(w, x_now, pt)
+        return Step(float(commands[0]), elapsed, int(stats.get("iter_count", -1)),
+                    bool(stats.get("success", False)), str(stats.get("return_status", "")),
+                    {"command": commands, "states": xs})
+
+    def _shift(self, w: np.ndarray, x_now: np.ndarray, pt: np.ndarray) -> None:
+        """Warm start for the next solve: the solution moved one interval on, its last
+        interval repeated with the last command."""
+        n, nx = self.settings.horizon, len(STATES)
+        u, x = w[:n], w[n:].reshape(n, nx)
+        last = self.rollout(x[-1] * self.x_scale[:nx], [u[-1] * self.command_scale], pt)[:, 0]
+        self.guess = np.concatenate([np.append(u[1:], u[-1]),
+                                     np.vstack([x[1:], last / self.x_scale[:nx]]).ravel()])
+
+    def reset(self) -> None:
+        self.guess, self.multipliers = None, None
+
+
+def wrap_angle(angle: float) -> float:
+    """The wheel angle the prediction starts from: the ripple has period 2*pi/n_g, so any
+    whole turn can be dropped (keeps the state small and well scaled)."""
+    return math.fmod(angle, 2 * math.pi)
