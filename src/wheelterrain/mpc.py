@@ -47,7 +47,10 @@ from .parameters import NAMES
 
 STATES = (*rig.STATES, "wheel_angle")
 OUTPUTS = ("slip", "drawbar_pull", "normal_force", "soil_torque", "motor_torque", "power")
-REGULARISATION = 1e-6  # Levenberg-Marquardt term added to the Gauss-Newton Hessian
+# Warm-starting qrqp with the last multipliers made it cycle (200 ms QPs, iteration limits)
+# once the estimator moves the soil between solves; the primal warm start is kept.
+WARM_MULTIPLIERS = False
+REGULARISATION = 1e-4  # Levenberg-Marquardt term on the Gauss-Newton Hessian (slip terms ~1e6)
 SLIP_SCALE = 1e-3  # slip error of weight 1 in the tracking objective
 SOLVERS = ("sqpmethod", "ipopt")
 OBJECTIVES = ("track", "efficiency")
@@ -317,7 +320,7 @@ class Controller:
                                          (xs / self.x_scale.reshape(n, -1).T).T.ravel()])
         args = {"x0": self.guess, "p": np.concatenate([x_now, pt, reference, [previous]]),
                 "lbx": self.lbx, "ubx": self.ubx, "lbg": self.lbg, "ubg": self.ubg}
-        if self.multipliers is not None:
+        if self.multipliers is not None and WARM_MULTIPLIERS:
             args["lam_x0"], args["lam_g0"] = self.multipliers
         started = time.perf_counter()
         result = self.solver(**args)

@@ -113,3 +113,38 @@ def sensitivity_bars(elasticity: dict, swing: dict, path: Path, title: str) -> N
     fig.suptitle(title)
     fig.tight_layout()
     _save(fig, path)
+
+
+def closed_loop(result, scenario, path: Path) -> None:
+    """Slip and its reference, the command and torque, sinkage, drawbar pull and the solve time
+    per MPC step of one closed-loop run; the scored samples unshaded."""
+    s = result.series
+    t = s["time"]
+    fig, axes = plt.subplots(5, 1, figsize=(8, 10), sharex=True)
+    axes[0].plot(t, s["slip"], lw=0.8, label="slip (plant)")
+    axes[0].plot(t, s["slip_reference"], "k--", lw=0.8, label="reference")
+    axes[0].set_ylabel("traction slip [-]")
+    axes[1].plot(t, s["motor_torque"], lw=0.8, label="motor torque [N.m]")
+    axes[1].plot(t, s["command"], lw=0.8, label="speed command [rad/s]")
+    axes[1].set_ylabel("drive")
+    axes[2].plot(t, 1e3 * s["sinkage"], lw=0.8)
+    axes[2].set_ylabel("sinkage [mm]")
+    axes[3].plot(t, s["drawbar_pull"], lw=0.8)
+    axes[3].set_ylabel("drawbar pull [N]")
+    steps = np.arange(len(result.solve_times)) * result.settings.interval
+    axes[4].semilogy(steps, 1e3 * result.solve_times, ".", ms=2)
+    axes[4].set_ylabel("solve time [ms]")
+    axes[4].set_xlabel("time [s]")
+    unscored = ~scenario.scored(t)
+    for ax in axes:
+        ax.fill_between(t, 0, 1, where=unscored, color="0.9", transform=ax.get_xaxis_transform(),
+                        zorder=0)
+        ax.grid(True, alpha=0.3)
+    for ax in axes[:2]:
+        ax.legend(loc="best", fontsize=8)
+    settings = result.settings
+    axes[0].set_title(f"NMPC '{scenario.name}' on the {result.plant} plant: {settings.solver}"
+                      f"{' (compiled)' if settings.compiled else ''}, horizon "
+                      f"{settings.horizon} x {settings.interval:g} s")
+    fig.tight_layout()
+    _save(fig, path)
