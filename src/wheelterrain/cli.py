@@ -504,7 +504,10 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool, hor
         sys.exit(EXIT_USAGE)
     except mpc_module.MPCError as err:
         click.echo(f"error: {err}", err=True)
-        sys.exit(EXIT_USAGE if "valid" in str(err) else EXIT_NUMERICAL)
+        sys.exit(EXIT_USAGE)
+    except mpc_module.PlantError as err:
+        click.echo(f"error: {err}", err=True)
+        sys.exit(EXIT_NUMERICAL)
     figures = result.figures(the_scenario)
     out_dir = Path(out)
     plots.closed_loop(result, the_scenario, out_dir / f"{scenario}.png")

@@ -138,7 +138,7 @@ class CasadiPlant:
         u = [z, z_rate, omega, speed, self.p_rig["rig.load"]]
         y, status, info = self.terrain(u, self.angle, self.p)
         if int(status) != fmu_model.STATUS_OK:
-            raise mpc.MPCError(f"plant left the model's domain (status {int(status)}, {info})")
+            raise mpc.PlantError(f"plant left the model's domain (status {int(status)}, {info})")
         return np.array(y).ravel()
 
     def state(self) -> np.ndarray:
@@ -207,7 +207,7 @@ class FMUPlant:
                 self.rig.fmu.doStep(self.t, PLANT_STEP)
                 self.terrain.fmu.doStep(self.t, PLANT_STEP)
             except Exception as err:  # fmpy raises FMICallException on fmi2Discard/Error
-                raise mpc.MPCError(f"the FMU plant refused the step at t = {self.t:g} s: "
+                raise mpc.PlantError(f"the FMU plant refused the step at t = {self.t:g} s: "
                                    f"{err}") from err
             self.t += PLANT_STEP
 
@@ -342,8 +342,8 @@ def run(scenario: Scenario, ps: ParameterSet, plant: str = "fmu",
         settings = mpc.Settings(**{**settings.__dict__, "objective": scenario.objective})
     steps = round(settings.interval / PLANT_STEP)
     if not math.isclose(steps * PLANT_STEP, settings.interval, rel_tol=1e-9) or steps < 1:
-        raise mpc.MPCError(f"interval = {settings.interval!r} s must be a whole number of plant "
-                           f"steps of {PLANT_STEP:g} s")
+        raise mpc.MPCError(f"interval = {settings.interval!r} s is out of range; valid: a whole "
+                           f"number of plant steps of {PLANT_STEP:g} s")
     # the carriage is held while the wheel sinks in (free, the sinking wheel's compaction
     # resistance would push it backwards) and released at t = 0
     p_rig = {**rig_parameters(ps, scenario), "rig.carriage": rig.CARRIAGE_KINEMATIC}

@@ -60,6 +60,10 @@ class MPCError(ValueError):
     """A controller setting is out of its valid range; the message names it and the range."""
 
 
+class PlantError(RuntimeError):
+    """The plant left the model's domain or refused a step; the message says where."""
+
+
 @dataclass(frozen=True)
 class Settings:
     """NMPC settings; every field is checked by :meth:`check`."""

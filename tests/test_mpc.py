@@ -1,0 +1,160 @@
+"""The slip-control NMPC (issue 5): its derivatives, the stiffness that chose the speed command,
+the closed loop against the FMU plant and against the same Functions in process."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from wheelterrain import closed_loop, cosim, fmubuild, model, mpc, native, presets, rig
+from wheelterrain.cli import main
+from wheelterrain.parameters import NAMES, TABLE
+
+PS = presets.load(presets.REPRODUCE_PRESET)
+PT = np.array([PS[name] for name in NAMES])
+
+
+def rig_params(slip_paper=0.25, drive=rig.DRIVE_SPEED):
+    p = cosim.rig_parameters(PS, slip_paper, 62.0, 0.03)
+    p["rig.drive"] = drive
+    return p
+
+
+def operating_state(slip_paper):
+    """Steady sinkage at the case's slip, the wheel at the speed giving it."""
+    p = rig_params(slip_paper)
+    omega, speed = rig.references(p)
+    steady = model.steady_state(PS, load=62.0, slip=slip_paper / (1 + slip_paper))
+    _, ki = rig.gains(p)
+    return np.array([steady["sinkage"], 0.0, omega, steady["torque"] / ki, speed, 0.3]), p
+
+
+def test_interval_jacobian_matches_central_differences():
+    """What the NLP differentiates: the backward-Euler interval residual with respect to the
+    states at both ends, the command and every soil parameter, against central differences
+    (step 1e-6 of each input's scale) within 1e-6 relative: each derivative is taken per unit
+    of its input's scale and compared on the larger of itself and its row's state scale, the
+    convention of tests/test_jacobians.py."""
+    fn = mpc.interval_residual()
+    x0, p = operating_state(0.5)
+    pr = np.array([p[name] for name in rig.RIG_NAMES])
+    x1 = x0 + np.array([2e-4, 1e-3, 0.01, 1e-5, 0.0, 0.01])
+    args = [x0, x1, 0.95, PT, pr, 0.02]
+    blocks = fn.jacobian()(*args, *fn(*args))
+    state_scale = np.array([1e-2, 1e-2, 1.0, 1e-2, 1e-2, 1.0])
+    input_scales = {0: state_scale, 1: state_scale, 2: np.array([1.0]),
+                    3: np.array([max(abs(v), 1e-2 * (t.max - t.min), 1e-3)
+                                 for v, t in zip(PT, TABLE, strict=True)])}
+    for arg, scales in input_scales.items():
+        analytic = np.array(blocks[arg]).reshape(len(mpc.STATES), -1) * scales
+        base = np.atleast_1d(np.asarray(args[arg], dtype=float))
+        numeric = np.zeros_like(analytic)
+        for j in range(base.size):
+            plus, minus = base.copy(), base.copy()
+            plus[j] += 1e-6 * scales[j]
+            minus[j] -= 1e-6 * scales[j]
+            values = []
+            for shifted in (plus, minus):
+                a = list(args)
+                a[arg] = shifted if base.size > 1 else shifted[0]
+                values.append(np.array(fn(*a)[0]).ravel())
+            numeric[:, j] = (values[0] - values[1]) / 2e-6
+        tol = 1e-6 * np.maximum(np.abs(analytic), state_scale[:, None])
+        bad = np.argwhere(np.abs(analytic - numeric) > tol)
+        assert bad.size == 0, (f"input {arg}, entry {bad[0]}: AD {analytic[tuple(bad[0])]!r} "
+                               f"vs FD {numeric[tuple(bad[0])]!r}")
+
+
+@pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
+def test_compiled_interval_and_jacobian_equal_the_vm(tmp_path, monkeypatch):
+    monkeypatch.setenv("WHEELTERRAIN_CACHE", str(tmp_path))
+    mpc.compiled_interval.cache_clear()
+    try:
+        compiled, vm = mpc.compiled_interval(), mpc.interval_residual()
+        x0, p = operating_state(0.25)
+        pr = np.array([p[name] for name in rig.RIG_NAMES])
+        args = [x0, x0 * 1.01, 0.62, PT, pr, 0.02]
+        for a, b in zip(compiled(*args), vm(*args), strict=True):
+            np.testing.assert_allclose(np.array(a), np.array(b), rtol=1e-12, atol=1e-14)
+        for a, b in zip(compiled.jacobian()(*args, *compiled(*args)),
+                        vm.jacobian()(*args, *vm(*args)), strict=True):
+            np.testing.assert_allclose(np.array(a), np.array(b), rtol=1e-10, atol=1e-12)
+    finally:
+        mpc.compiled_interval.cache_clear()
+
+
+def test_stiffness_is_why_the_mpc_commands_speed():
+    """Torque-driven, the wheel has modes far faster than a 20 ms interval and an unstable
+    sinkage-slip pair at C4; under the drive's speed loop every mode is stable."""
+    x, p = operating_state(0.75)
+    torque_driven = mpc.stiffness(PT, {**p, "rig.drive": rig.DRIVE_TORQUE}, x, 1.8)
+    assert torque_driven.real.min() < -100
+    assert torque_driven.real.max() > 0
+    speed_driven = mpc.stiffness(PT, p, x, x[2])
+    assert speed_driven.real.max() < 0
+
+
+def test_settings_out_of_range_are_named():
+    with pytest.raises(mpc.MPCError, match=r"horizon = 0 .*\[1, 500\]"):
+        mpc.Settings(horizon=0).check()
+    with pytest.raises(mpc.MPCError, match=r"solver = 'osqp'.*sqpmethod, ipopt"):
+        mpc.Settings(solver="osqp").check()
+    with pytest.raises(mpc.MPCError, match=r"rig\.drive"):
+        mpc.Controller(mpc.Settings(), rig_params(drive=rig.DRIVE_PAPER))
+
+
+@pytest.fixture(scope="module")
+def fmu_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("mpc_fmus")
+    fmubuild.build(out)
+    return out
+
+
+@pytest.fixture(scope="module")
+def nominal_runs(fmu_dir):
+    scenario = closed_loop.SCENARIOS["nominal"]
+    return scenario, {plant: closed_loop.run(scenario, PS, plant, fmu_dir=fmu_dir)
+                      for plant in ("fmu", "casadi")}
+
+
+def test_fmu_plant_and_in_process_plant_agree(nominal_runs):
+    """Same Functions, same coupling: the two loops agree to 1e-6 (measured: bit-identical)."""
+    _, runs = nominal_runs
+    a, b = runs["fmu"].series, runs["casadi"].series
+    for name in ("slip", "command", "motor_torque", "sinkage", "drawbar_pull", "normal_force"):
+        scale = max(np.max(np.abs(b[name])), 1e-12)
+        assert np.max(np.abs(a[name] - b[name])) / scale <= 1e-6, name
+
+
+def test_nominal_tracking_on_the_fmu_plant(nominal_runs):
+    scenario, runs = nominal_runs
+    figures = runs["fmu"].figures(scenario)
+    assert figures["failed_solves"] == 0
+    assert figures["slip_rms_error"] <= 5e-4, figures
+
+
+def test_terrain_change_is_estimated_and_tracked():
+    scenario = closed_loop.SCENARIOS["terrain-change"]
+    result = closed_loop.run(scenario, PS, "casadi")
+    figures = result.figures(scenario)
+    assert figures["phi_relative_error_final"] < 1e-3, figures
+    assert figures["k_phi_relative_error_final"] < 1e-3, figures
+    assert figures["slip_rms_error"] <= 5e-3, figures
+
+
+def test_free_carriage_tracks_while_the_vehicle_moves():
+    scenario = dataclasses.replace(closed_loop.SCENARIOS["free-carriage"], duration=3.0)
+    result = closed_loop.run(scenario, PS, "casadi")
+    speed = result.series["carriage_speed"]
+    assert np.ptp(speed) > 1e-4  # the carriage is a state, not held
+    assert result.figures(scenario)["slip_rms_error"] <= 5e-4
+
+
+def test_cli_rejects_a_bad_interval_with_exit_code_2(tmp_path):
+    run = CliRunner().invoke(main, ["mpc", "--plant", "casadi", "--interval", "0.0015",
+                                    "--out", str(tmp_path)])
+    assert run.exit_code == 2
+    assert "interval = 0.0015 s is out of range" in run.output
