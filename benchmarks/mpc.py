@@ -1,0 +1,62 @@
+"""Solve time of the slip-control NMPC per step, horizon 30 x 20 ms, full contact model, in the
+closed loop of the nominal scenario (in-process plant, so only the controller is timed), for
+each solver set-up, VM and compiled prediction model, measured in the same run:
+
+    python benchmarks/mpc.py [--repeats 3] [--horizon 30] [--scenario nominal]
+
+Each figure is the median over repeats of the per-run median (and 90th percentile) of the wall
+time of the solver call. The baseline for the ratios is ipopt on the CasADi VM. Goals
+(issue 5): median <= 2 ms compiled, <= 10 ms uncompiled. The first compiled run generates and
+compiles the prediction model (~30 s, cached).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+
+from wheelterrain import closed_loop, mpc, native, presets
+
+SETUPS = (("ipopt", False), ("sqpmethod", False), ("ipopt", True), ("sqpmethod", True))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--horizon", type=int, default=30)
+    parser.add_argument("--scenario", default="nominal", choices=sorted(closed_loop.SCENARIOS))
+    args = parser.parse_args()
+    ps = presets.load(presets.REPRODUCE_PRESET)
+    scenario = closed_loop.SCENARIOS[args.scenario]
+    rows = []
+    for solver, compiled in SETUPS:
+        if compiled and native.compiler() is None:
+            print(f"{solver} compiled: skipped (no C compiler)")
+            continue
+        settings = mpc.Settings(solver=solver, compiled=compiled, horizon=args.horizon,
+                                objective=scenario.objective)
+        medians, p90s, rms, iters = [], [], [], []
+        for _ in range(args.repeats):
+            result = closed_loop.run(scenario, ps, "casadi", settings)
+            figures = result.figures(scenario)
+            medians.append(figures["solve_time_median_s"])
+            p90s.append(figures["solve_time_p90_s"])
+            iters.append(figures["iterations_median"])
+            rms.append(figures.get("slip_rms_error", float("nan")))
+        rows.append((solver, compiled, statistics.median(medians), statistics.median(p90s),
+                     statistics.median(iters), statistics.median(rms)))
+        print(f"{solver:10} {'compiled' if compiled else 'VM':8} median "
+              f"{1e3 * rows[-1][2]:7.2f} ms  p90 {1e3 * rows[-1][3]:7.2f} ms  "
+              f"iterations {rows[-1][4]:.0f}  slip RMS {rows[-1][5]:.2e}", flush=True)
+    baseline = rows[0][2]
+    print(f"\nhorizon {args.horizon} x {mpc.Settings().interval:g} s, scenario {args.scenario}, "
+          f"{args.repeats} repeats; ratio = ipopt VM median / set-up median")
+    for solver, compiled, median, p90, _, _ in rows:
+        goal = 2e-3 if compiled else 10e-3
+        print(f"  {solver:10} {'compiled' if compiled else 'VM':8} median {1e3 * median:6.2f} ms"
+              f" (goal {1e3 * goal:g} ms: {'met' if median <= goal else 'NOT met'}), p90 "
+              f"{1e3 * p90:6.2f} ms, {baseline / median:4.1f}x")
+
+
+if __name__ == "__main__":
+    main()
