@@ -291,6 +291,10 @@ class Controller:
         if self.gauss_newton is not None:
             common["hess_lag"] = self.gauss_newton
         if s.solver == "sqpmethod":
+            if self.gauss_newton is not None:
+                # full Gauss-Newton steps from the shifted warm start (2 iterations per solve
+                # in every scenario, as with the line search, which cost ~1.5 ms per solve)
+                common["max_iter_ls"] = 0
             return {**common, "qpsol": "qrqp", "print_header": False, "print_iteration": False,
                     "print_status": False, "print_time": False, "max_iter": s.max_iterations,
                     "error_on_fail": False,
