@@ -6,13 +6,21 @@ import math
 
 import pytest
 
-from wheelterrain import presets
+from wheelterrain import fmubuild, presets
 from wheelterrain.parameters import ParameterSet
 
 
 @pytest.fixture(scope="session")
 def table2() -> ParameterSet:
     return presets.load("paper-table2")
+
+
+@pytest.fixture(scope="session")
+def fmu_dir(tmp_path_factory):
+    """Both pythonfmu FMUs, built once for every test that only runs them."""
+    out = tmp_path_factory.mktemp("fmus")
+    fmubuild.build(out)
+    return out
 
 
 def classical_set(R: float, b: float, c: float, phi_deg: float, kc: float, kphi: float, n: float,

@@ -20,18 +20,11 @@ import numpy as np
 import pytest
 from fmpy import extract
 
-from wheelterrain import cosim, fmubuild, model, presets, ssp
+from wheelterrain import cosim, model, presets, ssp
 from wheelterrain.slip import traction_from_paper
 
 LOAD, RIM = 62.0, 0.03
 CASES = [("C1", 0.0), ("C2", 0.25), ("C3", 0.5), ("C4", 0.75)]
-
-
-@pytest.fixture(scope="module")
-def fmu_dir(tmp_path_factory):
-    out = tmp_path_factory.mktemp("cosim_fmus")
-    fmubuild.build(out)
-    return out
 
 
 @pytest.fixture(scope="module")

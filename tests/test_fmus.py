@@ -15,16 +15,15 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from fmu_support import Instance
-from wheelterrain import fmubuild, model, presets
+from wheelterrain import model, presets
 from wheelterrain.parameters import TABLE
 
 NAMES = ("WheelTerrain", "SingleWheelRig")
 
 
 @pytest.fixture(scope="session")
-def fmus(tmp_path_factory):
-    out = tmp_path_factory.mktemp("fmus")
-    fmubuild.build(out)
+def fmus(fmu_dir):
+    out = fmu_dir
     unzip = {name: extract(str(out / f"{name}.fmu")) for name in NAMES}
     yield {"dir": out, **{name: out / f"{name}.fmu" for name in NAMES}, "unzip": unzip}
     for d in unzip.values():

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from wheelterrain import closed_loop, cosim, fmubuild, model, mpc, native, presets, rig
+from wheelterrain import closed_loop, cosim, model, mpc, native, presets, rig
 from wheelterrain.cli import main
 from wheelterrain.parameters import NAMES, TABLE
 
@@ -104,13 +104,6 @@ def test_settings_out_of_range_are_named():
         mpc.Settings(solver="osqp").check()
     with pytest.raises(mpc.MPCError, match=r"rig\.drive"):
         mpc.Controller(mpc.Settings(), rig_params(drive=rig.DRIVE_PAPER))
-
-
-@pytest.fixture(scope="module")
-def fmu_dir(tmp_path_factory):
-    out = tmp_path_factory.mktemp("mpc_fmus")
-    fmubuild.build(out)
-    return out
 
 
 @pytest.fixture(scope="module")

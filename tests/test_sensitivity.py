@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from wheelterrain import fmubuild, model, presets, sensitivity
+from wheelterrain import model, presets, sensitivity
 from wheelterrain.slip import traction_from_paper
 
 
@@ -57,10 +57,9 @@ def test_paper_trends_hold():
     assert all(o["normal_force"] == pytest.approx(62.0, rel=1e-9) for o in outs)
 
 
-def test_swings_through_the_fmu(tmp_path):
-    fmubuild.build(tmp_path, ("WheelTerrain",))
+def test_swings_through_the_fmu(fmu_dir):
     ps = presets.load("paper-table2")
-    sw = sensitivity.swings(tmp_path / "WheelTerrain.fmu", ps, 0.25, points=3,
+    sw = sensitivity.swings(fmu_dir / "WheelTerrain.fmu", ps, 0.25, points=3,
                             names=("soil.phi", "soil.k_c"))
     assert sw["soil.phi"]["drawbar_pull"] > 1.0
     assert sw["soil.k_c"]["drawbar_pull"] == 0.0  # no cohesion: k_c has no effect (the paper)

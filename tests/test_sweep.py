@@ -9,7 +9,7 @@ import math
 import pytest
 from click.testing import CliRunner
 
-from wheelterrain import fmubuild, model, presets
+from wheelterrain import model, presets
 from wheelterrain import sweep as sweeper
 from wheelterrain.cli import main
 from wheelterrain.errors import ParameterError
@@ -18,10 +18,8 @@ from wheelterrain.slip import traction_from_paper
 
 
 @pytest.fixture(scope="module")
-def fmu(tmp_path_factory):
-    out = tmp_path_factory.mktemp("sweep_fmus")
-    fmubuild.build(out, ("WheelTerrain",))
-    return out / "WheelTerrain.fmu"
+def fmu(fmu_dir):
+    return fmu_dir / "WheelTerrain.fmu"
 
 
 def test_parse_axis():
