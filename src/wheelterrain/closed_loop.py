@@ -65,13 +65,17 @@ class Scenario:
                 value = slip
         return value
 
-    def scored(self, t: np.ndarray) -> np.ndarray:
-        """Samples outside every transient window (a reference step, the soil change)."""
+    def events(self) -> list[float]:
+        """Times [s] that start a transient: reference steps and the soil change."""
         events = [start for start, _ in self.reference]
         if self.soil_change_time is not None:
             events.append(self.soil_change_time)
+        return sorted(events)
+
+    def scored(self, t: np.ndarray) -> np.ndarray:
+        """Samples outside every transient window (a reference step, the soil change)."""
         mask = np.ones_like(t, dtype=bool)
-        for event in events:
+        for event in self.events():
             mask &= ~((t >= event - 1e-12) & (t < event + self.score_after))
         return mask
 
@@ -165,18 +169,7 @@ class FMUPlant:
 
         paths = cosim.fmu_paths(fmu_dir)
         self.unzipped = {name: extract(str(p)) for name, p in paths.items()}
-        self.terrain = cosim._Instance(paths["WheelTerrain"], self.unzipped["WheelTerrain"],
-                                       "terrain")
-        self.rig = cosim._Instance(paths["SingleWheelRig"], self.unzipped["SingleWheelRig"],
-                                   "rig")
-        for inst in (self.terrain, self.rig):
-            inst.fmu.setupExperiment(startTime=0.0)
-            inst.fmu.enterInitializationMode()
-        self.terrain.set({p.name: ps[p.name] for p in TABLE})
-        self.terrain.set({"quasi_static": False})
-        self.rig.set(p_rig)
-        for inst in (self.terrain, self.rig):
-            inst.fmu.exitInitializationMode()
+        self.terrain, self.rig = cosim.start_pair(paths, self.unzipped, ps, p_rig)
         states = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")
         self.rig_out = self.rig.refs((*states, "speed_error_integral", "motor_torque"))
         self.ter_in = self.terrain.refs(states)
@@ -305,7 +298,7 @@ class Result:
         if scenario.objective == "track":
             out["slip_rms_error"] = float(np.sqrt(np.mean(error[mask] ** 2)))
             out["slip_max_error"] = float(np.max(np.abs(error[mask])))
-            out["scored_from_s"] = [float(e) for e in _events(scenario)]
+            out["scored_from_s"] = [float(e) for e in scenario.events()]
             out["transient_s"] = scenario.score_after
         else:
             late = t >= t[-1] - 1.0
@@ -322,13 +315,6 @@ class Result:
                 out[f"{key}_true"] = float(true)
                 out[f"{key}_relative_error_final"] = float(abs(est - true) / abs(true))
         return out
-
-
-def _events(scenario: Scenario) -> list[float]:
-    events = [start for start, _ in scenario.reference]
-    if scenario.soil_change_time is not None:
-        events.append(scenario.soil_change_time)
-    return sorted(events)
 
 
 def run(scenario: Scenario, ps: ParameterSet, plant: str = "fmu",

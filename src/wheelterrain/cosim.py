@@ -114,6 +114,28 @@ class _Instance:
         self.fmu.freeInstance()
 
 
+def start_pair(paths: dict[str, Path], unzipped: dict[str, str], ps: ParameterSet,
+               rig_values: dict[str, float], stop: float | None = None) -> tuple:
+    """(terrain, rig) instances, initialised: the table parameters ``ps`` on WheelTerrain in
+    dynamic mode, ``rig_values`` on SingleWheelRig."""
+    terrain = _Instance(paths["WheelTerrain"], unzipped["WheelTerrain"], "terrain")
+    rig_fmu = _Instance(paths["SingleWheelRig"], unzipped["SingleWheelRig"], "rig")
+    try:
+        for inst in (terrain, rig_fmu):
+            inst.fmu.setupExperiment(startTime=0.0, stopTime=stop)
+            inst.fmu.enterInitializationMode()
+        terrain.set({p.name: ps[p.name] for p in TABLE})
+        terrain.set({"quasi_static": False})
+        rig_fmu.set(rig_values)
+        for inst in (terrain, rig_fmu):
+            inst.fmu.exitInitializationMode()
+    except BaseException:
+        terrain.close()
+        rig_fmu.close()
+        raise
+    return terrain, rig_fmu
+
+
 def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, rim_speed: float,
              case: str = "", stop: float = STOP_TIME, step: float = STEP,
              unzipped: dict[str, str] | None = None, settle: float = SETTLE_TIME) -> CaseResult:
@@ -124,18 +146,9 @@ def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, ri
     own = unzipped is None
     unzipped = unzipped or {name: extract(str(p)) for name, p in paths.items()}
     started = time.perf_counter()
-    terrain = _Instance(paths["WheelTerrain"], unzipped["WheelTerrain"], "terrain")
-    rig_fmu = _Instance(paths["SingleWheelRig"], unzipped["SingleWheelRig"], "rig")
+    terrain, rig_fmu = start_pair(paths, unzipped, ps,
+                                  rig_parameters(ps, slip_paper, load, rim_speed), stop)
     try:
-        for inst in (terrain, rig_fmu):
-            inst.fmu.setupExperiment(startTime=0.0, stopTime=stop)
-            inst.fmu.enterInitializationMode()
-        terrain.set({p.name: ps[p.name] for p in TABLE})
-        terrain.set({"quasi_static": False})
-        rig_fmu.set(rig_parameters(ps, slip_paper, load, rim_speed))
-        for inst in (terrain, rig_fmu):
-            inst.fmu.exitInitializationMode()
-
         states = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")
         rig_out, ter_in = rig_fmu.refs(states), terrain.refs(states)
         forces = ("normal_force", "drawbar_pull", "torque")
@@ -272,7 +285,12 @@ def write_atomic(path: Path, text: str) -> None:
 
 
 def write_csv(path: Path, result: CaseResult, every: int = 10) -> None:
-    names = ["time", *RECORD]
-    data = np.column_stack([result.series[n] for n in names])[::every]
+    write_series(path, {name: result.series[name] for name in ("time", *RECORD)}, every)
+
+
+def write_series(path: Path, series: dict[str, np.ndarray], every: int = 1) -> None:
+    """Equal-length columns ``series`` as CSV, every ``every``-th row, written atomically."""
+    names = list(series)
+    data = np.column_stack([series[n] for n in names])[::every]
     lines = [",".join(names)] + [",".join(f"{x:.10g}" for x in row) for row in data]
     write_atomic(path, "\n".join(lines) + "\n")

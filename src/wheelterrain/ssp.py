@@ -63,8 +63,8 @@ def system_description(case: str, ps: ParameterSet, slip_paper: float, load: flo
                            f"slip s = {slip_paper:g} (paper's definition), load {load:g} N")
     elements = ET.SubElement(system, _q("ssd", "Elements"))
     terrain_params = {p.name: _binding(p, ps[p.name]) for p in TABLE}
-    rig_params = {p.name: _binding(p, rig_parameters(ps, slip_paper, load, rim_speed)[p.name])
-                  for p in rig.RIG_TABLE}
+    rig_values = rig_parameters(ps, slip_paper, load, rim_speed)
+    rig_params = {p.name: _binding(p, rig_values[p.name]) for p in rig.RIG_TABLE}
     _component(elements, "rig", "resources/SingleWheelRig.fmu", FORCES, RIG_OUTPUTS, rig_params,
                case)
     _component(elements, "terrain", "resources/WheelTerrain.fmu", STATES, TERRAIN_OUTPUTS,
