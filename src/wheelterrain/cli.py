@@ -511,10 +511,7 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool, hor
     figures = result.figures(the_scenario)
     out_dir = Path(out)
     plots.closed_loop(result, the_scenario, out_dir / f"{scenario}.png")
-    names = list(result.series)
-    data = np.column_stack([result.series[n] for n in names])
-    lines = [",".join(names)] + [",".join(f"{x:.10g}" for x in row) for row in data[::5]]
-    cosim.write_atomic(out_dir / f"{scenario}.csv", "\n".join(lines) + "\n")
+    cosim.write_series(out_dir / f"{scenario}.csv", result.series, every=5)
     if as_json:
         click.echo(json.dumps(figures, indent=2))
         return

@@ -47,9 +47,6 @@ from .parameters import NAMES
 
 STATES = (*rig.STATES, "wheel_angle")
 OUTPUTS = ("slip", "drawbar_pull", "normal_force", "soil_torque", "motor_torque", "power")
-# Warm-starting qrqp with the last multipliers made it cycle (200 ms QPs, iteration limits)
-# once the estimator moves the soil between solves; the primal warm start is kept.
-WARM_MULTIPLIERS = False
 REGULARISATION = 1e-4  # Levenberg-Marquardt term on the Gauss-Newton Hessian (slip terms ~1e6)
 SLIP_SCALE = 1e-3  # slip error of weight 1 in the tracking objective
 SOLVERS = ("sqpmethod", "ipopt")
@@ -225,7 +222,6 @@ class Controller:
         self.command_scale = p_rig["rig.rim_speed"] / p_rig["rig.slip_radius"]
         self._build()
         self.guess: np.ndarray | None = None
-        self.multipliers: tuple[np.ndarray, np.ndarray] | None = None
 
     # --- the NLP --------------------------------------------------------------------------
     def _build(self) -> None:
@@ -328,14 +324,13 @@ class Controller:
                                          (xs / self.x_scale.reshape(n, -1).T).T.ravel()])
         args = {"x0": self.guess, "p": np.concatenate([x_now, pt, reference, [previous]]),
                 "lbx": self.lbx, "ubx": self.ubx, "lbg": self.lbg, "ubg": self.ubg}
-        if self.multipliers is not None and WARM_MULTIPLIERS:
-            args["lam_x0"], args["lam_g0"] = self.multipliers
+        # primal warm start only: qrqp warm-started with the last multipliers cycled (200 ms
+        # QPs, iteration limits) once the estimator moved the soil between solves
         started = time.perf_counter()
         result = self.solver(**args)
         elapsed = time.perf_counter() - started
         stats = self.solver.stats()
         w = np.array(result["x"]).ravel()
-        self.multipliers = (np.array(result["lam_x"]).ravel(), np.array(result["lam_g"]).ravel())
         commands = w[:n] * self.command_scale
         xs = (w[n:].reshape(n, -1) * self.x_scale.reshape(n, -1)).T
         self._shift(w, x_now, pt)
@@ -353,7 +348,7 @@ class Controller:
                                      np.vstack([x[1:], last / self.x_scale[:nx]]).ravel()])
 
     def reset(self) -> None:
-        self.guess, self.multipliers = None, None
+        self.guess = None
 
 
 def wrap_angle(angle: float) -> float:
