@@ -34,7 +34,7 @@ from .parameters import INDEX, NAMES, TABLE, ParameterSet
 PLANT_STEP = cosim.STEP  # s, the co-simulation's communication step
 RECORD = ("time", "slip", "slip_reference", "command", "wheel_speed", "motor_torque",
           "sinkage", "drawbar_pull", "normal_force", "soil_torque", "phi_estimate",
-          "k_phi_estimate", "phi_true", "k_phi_true")
+          "k_phi_estimate", "phi_true", "k_phi_true", "carriage_speed")
 ESTIMATED = ("soil.phi", "soil.k_phi")
 
 
@@ -355,9 +355,7 @@ def _loop(scenario, ps, plant_name, settings, steps, p_rig, plant, progress, sta
     p_model = p_nominal.copy()
     n = round(scenario.duration / settings.interval)
     rows: list[tuple] = []
-    state = {"command": rig.references(p_rig)[0], "reference": 0.0}
     last = {}
-
     settle_steps = round(scenario.settle / PLANT_STEP)
 
     def record(x, angle, y, motor_torque):
@@ -371,8 +369,8 @@ def _loop(scenario, ps, plant_name, settings, steps, p_rig, plant, progress, sta
     # the wheel is set down on the soil and sinks in at the speed of the first reference (the
     # contact's entry angle has an infinite derivative at zero sinkage: no NLP starts there)
     _, speed = rig.references(p_rig)
-    state["command"] = speed / (p_rig["rig.slip_radius"] * (1 - scenario.reference_at(0.0)))
-    state["reference"] = scenario.reference_at(0.0)
+    first = scenario.reference_at(0.0)
+    state = {"command": speed / (p_rig["rig.slip_radius"] * (1 - first)), "reference": first}
     plant.advance(state["command"], settle_steps, record)
     if scenario.carriage != rig.CARRIAGE_KINEMATIC:
         plant.set_rig({"rig.carriage": scenario.carriage})
@@ -399,8 +397,7 @@ def _loop(scenario, ps, plant_name, settings, steps, p_rig, plant, progress, sta
         if progress:
             progress(settings.interval)
     data = np.array(rows[settle_steps:])
-    names = (*RECORD, "carriage_speed")
-    series = {name: data[:, j] for j, name in enumerate(names)}
+    series = {name: data[:, j] for j, name in enumerate(RECORD)}
     return Result(scenario.name, plant_name, settings, series, np.array(solve_times),
                   np.array(iterations), failures,
                   estimator.projections if estimator else 0, time.perf_counter() - started)

@@ -125,7 +125,7 @@ def rig_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
     """(rig_step, rig_outputs, rig_initial(p) -> x0)."""
     x, u = ca.SX.sym("x", len(rig.STATES)), ca.SX.sym("u", len(rig.INPUTS))
     p, torque = ca.SX.sym("p", len(rig.RIG_NAMES)), ca.SX.sym("motor_torque")
-    named = {name: p[k] for k, name in enumerate(rig.RIG_NAMES)}
+    named = rig.named(p)
     y = rig_outputs(tuple(x[k] for k in range(len(rig.STATES))),
                     tuple(u[k] for k in range(len(rig.INPUTS))), named, torque)
     outputs = ca.Function("rig_outputs", [x, u, p, torque], [ca.vertcat(*y)],

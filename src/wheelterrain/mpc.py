@@ -97,10 +97,6 @@ class Settings:
         return self
 
 
-def _named_rig(p: ca.MX) -> dict:
-    return {name: p[k] for k, name in enumerate(rig.RIG_NAMES)}
-
-
 @lru_cache(maxsize=1)
 def dynamics() -> ca.Function:
     """``dynamics(x, command, p_terrain, p_rig) -> (xdot, y)``: the continuous prediction model
@@ -109,7 +105,7 @@ def dynamics() -> ca.Function:
     x = ca.MX.sym("x", len(STATES))
     command = ca.MX.sym("command")
     pt, pr = ca.MX.sym("p_terrain", len(NAMES)), ca.MX.sym("p_rig", len(rig.RIG_NAMES))
-    named = _named_rig(pr)
+    named = rig.named(pr)
     z, z_rate, omega, _, speed, angle = (x[k] for k in range(len(STATES)))
     u = ca.vertcat(z, z_rate, omega, speed, named["rig.load"])
     y = terrain(u, angle, pt)[0]
@@ -226,8 +222,8 @@ class Controller:
     # --- the NLP --------------------------------------------------------------------------
     def _build(self) -> None:
         s, n, nx = self.settings, self.settings.horizon, len(STATES)
-        x_scale = np.array([1e-2, 1e-2, self.command_scale, 1e-2, 1e-2, 1.0])
-        self.x_scale = np.tile(x_scale, n)
+        # scale of each state in the NLP's variables: m, m/s, rad/s, rad, m/s, rad
+        self.x_scale = x_scale = np.array([1e-2, 1e-2, self.command_scale, 1e-2, 1e-2, 1.0])
         u_hat, x_hat = ca.MX.sym("u", n), ca.MX.sym("x", nx, n)
         x0, pt = ca.MX.sym("x_now", nx), ca.MX.sym("p_terrain", len(NAMES))
         reference, previous = ca.MX.sym("slip_reference", n), ca.MX.sym("previous_command")
@@ -240,7 +236,7 @@ class Controller:
         residual = ca.diag(ca.DM(1 / x_scale)) @ residual
         # slip, motor torque and power from the states (the same expressions as the plant's),
         # so the objective's and the limits' derivatives skip the contact model
-        named = _named_rig(pr)
+        named = rig.named(pr)
         omega, speed = xs[2, :].T, xs[4, :].T
         slip, _ = fmu_model.slips(omega, speed, fmu_model.slip_radius(pt))
         motor = rig.motor_torque(tuple(xs[k, :].T for k in range(len(rig.STATES))),
@@ -321,7 +317,7 @@ class Controller:
             commands = np.full(n, previous)
             xs = self.rollout(x_now, commands, pt)
             self.guess = np.concatenate([commands / self.command_scale,
-                                         (xs / self.x_scale.reshape(n, -1).T).T.ravel()])
+                                         (xs.T / self.x_scale).ravel()])
         args = {"x0": self.guess, "p": np.concatenate([x_now, pt, reference, [previous]]),
                 "lbx": self.lbx, "ubx": self.ubx, "lbg": self.lbg, "ubg": self.ubg}
         # primal warm start only: qrqp warm-started with the last multipliers cycled (200 ms
@@ -332,20 +328,20 @@ class Controller:
         stats = self.solver.stats()
         w = np.array(result["x"]).ravel()
         commands = w[:n] * self.command_scale
-        xs = (w[n:].reshape(n, -1) * self.x_scale.reshape(n, -1)).T
-        self._shift(w, x_now, pt)
+        xs = (w[n:].reshape(n, -1) * self.x_scale).T
+        self._shift(w, pt)
         return Step(float(commands[0]), elapsed, int(stats.get("iter_count", -1)),
                     bool(stats.get("success", False)), str(stats.get("return_status", "")),
                     {"command": commands, "states": xs})
 
-    def _shift(self, w: np.ndarray, x_now: np.ndarray, pt: np.ndarray) -> None:
+    def _shift(self, w: np.ndarray, pt: np.ndarray) -> None:
         """Warm start for the next solve: the solution moved one interval on, its last
         interval repeated with the last command."""
         n, nx = self.settings.horizon, len(STATES)
         u, x = w[:n], w[n:].reshape(n, nx)
-        last = self.rollout(x[-1] * self.x_scale[:nx], [u[-1] * self.command_scale], pt)[:, 0]
+        last = self.rollout(x[-1] * self.x_scale, [u[-1] * self.command_scale], pt)[:, 0]
         self.guess = np.concatenate([np.append(u[1:], u[-1]),
-                                     np.vstack([x[1:], last / self.x_scale[:nx]]).ravel()])
+                                     np.vstack([x[1:], last / self.x_scale]).ravel()])
 
     def reset(self) -> None:
         self.guess = None

@@ -115,6 +115,11 @@ def pick(condition, if_true, if_false):
     return ca.if_else(condition, if_true, if_false)
 
 
+def named(p) -> dict:
+    """The rig parameter vector ``p`` (RIG_NAMES order, e.g. CasADi symbols) by name."""
+    return {name: p[k] for k, name in enumerate(RIG_NAMES)}
+
+
 def references(p) -> tuple:
     """omega_ref [rad/s] and carriage speed V [m/s] from the rig parameters ``p[name]``."""
     omega_ref = p["rig.rim_speed"] / p["rig.slip_radius"]
@@ -207,9 +212,8 @@ def build() -> ca.Function:
     :func:`step` (for generated C)."""
     x, u = ca.SX.sym("x", len(STATES)), ca.SX.sym("u", len(INPUTS))
     p, h = ca.SX.sym("p", len(RIG_NAMES)), ca.SX.sym("h")
-    named = {name: p[k] for k, name in enumerate(RIG_NAMES)}
     nxt, torque = step(tuple(x[k] for k in range(len(STATES))),
-                       tuple(u[k] for k in range(len(INPUTS))), named, h)
+                       tuple(u[k] for k in range(len(INPUTS))), named(p), h)
     return ca.Function("rig_step", [x, u, p, h], [ca.vertcat(*nxt), torque],
                        ["x", "u", "p", "h"], ["x_next", "motor_torque"])
 
