@@ -88,6 +88,24 @@ def test_cli_writes_a_preset_with_provenance(tmp_path):
     assert ps["soil.phi"] == pytest.approx(prov["fitted"]["soil.phi"]["value"])
 
 
+def test_written_preset_keeps_the_overrides_the_fit_ran_with(tmp_path):
+    """A --set switch (here the soil-element shear) is part of the fitted model: the preset must
+    reproduce the fit's residuals, not the base preset's model with the fitted values."""
+    out = tmp_path / "fit.json"
+    run = CliRunner().invoke(main, ["calibrate", "--params", "soil.phi", "--cases", "C2",
+                                    "--set", "model.shear_kinematics=1", "--set",
+                                    "model.shear_radius_factor=0.5", "--starts", "1",
+                                    "--out", str(out)])
+    assert run.exit_code == 0, run.output
+    doc = json.loads(out.read_text())
+    assert doc["provenance"]["overrides"] == {"model.shear_kinematics": 1,
+                                              "model.shear_radius_factor": 0.5}
+    ps = presets.load(str(out))
+    assert ps["model.shear_kinematics"] == 1
+    err = calibration.errors_on(ps, ["C2"])["C2"]["drawbar_pull"]
+    assert err == pytest.approx(doc["provenance"]["residuals"]["C2"]["drawbar_pull"], abs=1e-9)
+
+
 @pytest.mark.parametrize(("args", "needle"), [
     (["--params", "soil.gamma"], "cannot be calibrated"),
     (["--params", "soil.phi", "--cases", "C9"], "unknown case"),

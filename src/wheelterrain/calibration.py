@@ -29,7 +29,7 @@ from scipy.optimize import least_squares
 
 from . import __version__, model
 from .errors import CalibrationError, WheelTerrainError
-from .parameters import DEG, INDEX, ParameterSet
+from .parameters import DEG, INDEX, NAMES, ParameterSet
 from .slip import traction_from_paper
 
 SCALES = {"drawbar_pull": 1.0, "sinkage": 1e-3}  # N, m: one unit of residual each
@@ -198,11 +198,15 @@ def code_version() -> str:
 
 def preset_document(name: str, base_name: str, base: ParameterSet, result: Fit,
                     protocol: str) -> dict:
-    """A preset file: the base preset's values with the fitted ones, and the provenance."""
+    """A preset file: the base preset's values, the overrides the fit ran with (``base``'s values
+    that differ from the base preset's, e.g. ``--set``), the fitted ones, and the provenance."""
     from . import presets
 
     base_doc = presets.read(base_name)
+    stock = presets.load(base_name)
+    overrides = {n: base[n] for n in NAMES if base[n] != stock[n] and n not in result.values}
     values = dict(base_doc["values"])
+    values.update(overrides)
     values.update(result.values)
     return {
         "name": name,
@@ -210,6 +214,7 @@ def preset_document(name: str, base_name: str, base: ParameterSet, result: Fit,
                        f"{', '.join(result.cases)} ({protocol}).",
         "provenance": {
             "base_preset": base_name,
+            "overrides": overrides,
             "data": "validation/paper_table3.json (the paper's Table III experimental means)",
             "protocol": protocol,
             "fitted_on": result.cases,
