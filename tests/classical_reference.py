@@ -5,6 +5,11 @@ scipy's adaptive quadrature (QUADPACK) and Brent's root finder; it shares no cod
 Classical means: theta_r = 0, theta_m = (a0 + a1*i)*theta_f, Reece pressure-sinkage with a constant
 exponent n, Janosi shear 1 - exp(-j/K), every radius the rim radius, no ripple, no damping.
 
+``kinematics="soil"`` swaps the shear displacement for the soil element's (the slip accumulated
+over a ground-fixed soil element while the wheel passes it, as the Soil Contact Model counts it):
+j(theta) = R*int_theta^theta_f (1/(1 - i) - cos(t))*cos(t) dt, integrated here numerically
+(Gauss-Legendre) rather than in the closed form the package uses.
+
 For braking (i < 0) the shear displacement changes sign along the arc; the reference then uses the
 same odd extension of Janosi's law as the package (tau = sign(j)*(1 - exp(-|j|/K))*tau_max), and
 splits the quadrature at the sign change, which it finds with brentq.
@@ -17,8 +22,11 @@ import math
 import warnings
 from dataclasses import dataclass
 
+import numpy as np
 from scipy.integrate import IntegrationWarning, quad
 from scipy.optimize import brentq
+
+_GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(30)
 
 
 @dataclass(frozen=True)
@@ -34,6 +42,7 @@ class Classical:
     K: float      # Janosi shear modulus [m]
     a0: float = 0.4
     a1: float = 0.15
+    kinematics: str = "wheel"  # or "soil"
 
     def _parts(self, z: float, i: float):
         tf = math.acos(1.0 - z / self.R)
@@ -47,6 +56,10 @@ class Classical:
             return keq * max(math.cos(te) - math.cos(tf), 0.0) ** self.n
 
         def j(t: float) -> float:
+            if self.kinematics == "soil":  # smooth integrand: 30-node Gauss-Legendre is exact
+                u = t + (tf - t) * (_GL_NODES + 1.0) / 2.0
+                rate = (1.0 / (1.0 - i) - np.cos(u)) * np.cos(u)
+                return self.R * (tf - t) / 2.0 * float(_GL_WEIGHTS @ rate)
             return self.R * ((tf - t) - (1.0 - i) * (math.sin(tf) - math.sin(t)))
 
         def tau(t: float) -> float:

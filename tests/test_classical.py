@@ -88,3 +88,37 @@ def test_braking_forces_match_reference(row, slip):
             ref_scale = abs(want["normal_force"]) * (R if key == "torque" else 1.0)
             assert abs(got[key] - want[key]) <= RTOL * max(abs(want[key]), ref_scale), (
                 f"{key} at z={frac * R:g}, i={slip}: {got[key]!r} vs {want[key]!r}")
+
+
+# The soil-element shear kinematics (model.shear_kinematics = 1, the Soil Contact Model's way of
+# counting the Janosi displacement) against the same reference with its j integrated numerically.
+SOIL_KINEMATICS_SLIPS = [-0.5, 0.0, 0.2, 0.7, 0.99]
+
+
+@pytest.mark.parametrize("row", SOILS, ids=[s[0] for s in SOILS])
+@pytest.mark.parametrize("slip", SOIL_KINEMATICS_SLIPS)
+def test_soil_element_kinematics_matches_reference(row, slip):
+    _, R, b, c, phi, kc, kphi, n, gamma, K, a0, a1 = row
+    ref = Classical(R=R, b=b, c=c, phi=math.radians(phi), kc=kc, kphi=kphi, n=n, gamma=gamma,
+                    K=K, a0=a0, a1=a1, kinematics="soil")
+    ps = classical_set(R, b, c, phi, kc, kphi, n, gamma, K, a0, a1).with_values(
+        {"model.shear_kinematics": 1})
+    for frac in (0.01, 0.3, 0.9):
+        z = frac * R
+        want, got = ref.forces(z, slip), model.contact_forces(ps, z, slip)
+        for key in want:
+            scale = abs(want["normal_force"]) * (R if key == "torque" else 1.0)
+            scale = scale if key != "normal_force" else 0.0
+            assert _close(got[key], want[key], scale), (
+                f"{key} at z={z:g} m, i={slip}: model {got[key]!r} vs reference {want[key]!r}")
+
+
+def test_soil_element_kinematics_gains_pull_with_slip_faster_than_the_wheel_element():
+    """The switch really changes the model: the soil element's j grows like 1/(1 - i) = 1 + s,
+    the wheel element's like (1 - i), so the soil-element pull overtakes at higher slip."""
+    _, R, b, c, phi, kc, kphi, n, gamma, K, a0, a1 = SOILS[0]
+    wheel = classical_set(R, b, c, phi, kc, kphi, n, gamma, K, a0, a1)
+    soil = wheel.with_values({"model.shear_kinematics": 1})
+    gaps = [model.contact_forces(soil, 0.02, i)["drawbar_pull"]
+            - model.contact_forces(wheel, 0.02, i)["drawbar_pull"] for i in (0.1, 0.5, 0.9)]
+    assert gaps[0] < 0 < gaps[1] < gaps[2]  # measured -0.34, 1.38, 5.06 N

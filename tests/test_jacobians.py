@@ -21,9 +21,9 @@ POINT = {
 }
 
 
-@pytest.fixture(scope="module")
-def point_params(table2):
-    return table2.with_values(POINT)
+@pytest.fixture(scope="module", params=[0, 1], ids=["wheel-element-j", "soil-element-j"])
+def point_params(table2, request):
+    return table2.with_values({**POINT, "model.shear_kinematics": request.param})
 
 
 def _scales(p: np.ndarray) -> np.ndarray:

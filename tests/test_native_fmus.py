@@ -66,6 +66,7 @@ def _random_terrain_values(rng):
             "ripple.phase": rng.uniform(-3, 3), "model.shear_model": int(rng.integers(0, 2)),
             "model.exit_ratio": rng.uniform(0, 0.9), "grouser.height": rng.uniform(0, 0.02),
             "model.slip_radius_factor": rng.uniform(0, 1),
+            "model.shear_kinematics": int(rng.integers(0, 2)),
             "sinkage": rng.uniform(0.0, 0.04), "sinkage_rate": rng.uniform(-0.05, 0.05),
             "wheel_speed": rng.uniform(0.2, 1.0), "carriage_speed": rng.uniform(0.0, 0.03),
             "load": rng.uniform(5, 60)}

@@ -24,12 +24,16 @@ Equations (Wong & Reece 1967; Wong, *Theory of Ground Vehicles*; Ishigami et al.
     sigma(theta) = k_eq*(cos(theta) - cos(theta_f))**n                   theta_m <= theta <= theta_f
     sigma(theta) = k_eq*(cos(theta*) - cos(theta_f))**n,                 theta_r <= theta < theta_m
         theta* = theta_f - (theta - theta_r)/(theta_m - theta_r)*(theta_f - theta_m)
-    j(theta) = R_s*(theta_f - theta) - (1 - i)*R_ref*(sin(theta_f) - sin(theta))
+    j(theta) = R_s*(theta_f - theta) - (1 - i)*R_ref*(sin(theta_f) - sin(theta))  (wheel element)
+    j(theta) = R_c*[R_s/((1 - i)*R_ref)*(sin(theta_f) - sin(theta))                  (soil element,
+               - (theta_f - theta)/2 - (sin(2*theta_f) - sin(2*theta))/4]           SCM; see below)
     tau = (c + sigma*tan(phi)) * g(j),   g = 1 - exp(-j/K)  (Janosi)  or Wong's hump form
     Fz = b*int(R_c*sigma*cos + R_s*tau*sin),  DP = b*int(R_s*tau*cos - R_c*sigma*sin),
     T  = b*R_s**2*int(tau)                                               over [theta_r, theta_f]
 
-With every extension off (n1 = 0, f_c = f_s = f_ref = 0, Janosi, lambda = 0, no ripple) this is the
+The shear-displacement kinematics (``model.shear_kinematics``) is documented at
+:class:`_Displacement`. With every extension off (n1 = 0, f_c = f_s = f_ref = 0, Janosi,
+wheel-element kinematics, lambda = 0, no ripple) this is the
 classical Wong-Reece rigid wheel, exactly.
 
 Grouser ripple (Irani et al. 2011, as read in shared/spec/model-notes.md): the normal stress on the
@@ -111,38 +115,84 @@ def _split_rule(split: ca.SX, nodes: tuple[int, int]) -> tuple[ca.SX, ca.SX]:
     return g, weights
 
 
-def _reversal_offset(theta_f, theta_r, d_front, d_rear, Rs, v_ratio) -> ca.SX:
+def _reversal_offset(theta_f, theta_r, d_front, d_rear, displacement) -> ca.SX:
     """Where the shear displacement j changes sign on the arc, as the offset g in [0, 1] shared by
     both quadrature panels (front: theta = theta_f - d_front*g, rear: theta = theta_r + d_rear*g),
     so that a panel edge sits on the kink of the odd shear law; 1 when j keeps its sign.
 
-    With x = theta_f - theta, j(x) = R_s*x - v*(sin(theta_f) - sin(theta_f - x)), v = (1 - i)*R_ref,
-    j'(x) = R_s - v*cos(theta). j rises from 0 at the entry while v*cos(theta) < R_s, peaks where
-    cos(theta) = R_s/v (theta = theta_c), and falls while |theta| < theta_c: a braked wheel
-    (v > R_s) has its reversal on that falling stretch, found by Newton safeguarded by bisection.
-    A second reversal beyond -theta_c needs an exit angle past -theta_c under deep braking; it is
-    not split (its kink then costs accuracy, not robustness).
+    ``displacement`` is the :class:`_Displacement` of the arc. With x = theta_f - theta, under
+    either kinematics j'(x) has the sign of R_s - v*cos(theta), v = (1 - i)*R_ref: j rises from 0
+    at the entry while v*cos(theta) < R_s, peaks where cos(theta) = R_s/v (theta = theta_c), and
+    falls while |theta| < theta_c: a braked wheel (v > R_s) has its reversal on that falling
+    stretch, found by Newton safeguarded by bisection. A second reversal beyond -theta_c needs an
+    exit angle past -theta_c under deep braking; it is not split (its kink then costs accuracy,
+    not robustness).
     """
+    Rs, v_ratio = displacement.Rs, displacement.v_ratio
     ratio = Rs / ca.fmax(v_ratio, 1e-300)
     theta_c = ca.if_else(ratio < 1, ca.acos(ca.fmin(ratio, 1)), math.pi)
     span = theta_f - theta_r
 
-    def j(x):
-        return Rs * x - v_ratio * 2 * ca.cos(theta_f - x / 2) * ca.sin(x / 2)
-
     lo = ca.fmax(theta_f - theta_c, 0)  # the peak of j
     hi = ca.fmin(span, theta_f + theta_c)
-    crossing = ca.logic_and(theta_c < theta_f, j(hi) < 0)
+    crossing = ca.logic_and(theta_c < theta_f, displacement.along(hi) < 0)
     x = hi
     for _ in range(REVERSAL_ITERATIONS):
-        f = j(x)
+        f = displacement.along(x)
         lo, hi = ca.if_else(f > 0, x, lo), ca.if_else(f > 0, hi, x)
-        step = x - f / (Rs - v_ratio * ca.cos(theta_f - x))
+        step = x - f / displacement.slope(x)
         x = ca.if_else(ca.logic_and(step >= lo, step <= hi), step, (lo + hi) / 2)
     front = x / ca.fmax(d_front, 1e-300)
     rear = (span - x) / ca.fmax(d_rear, 1e-300)
     offset = ca.if_else(x <= d_front, front, rear)
     return ca.if_else(crossing, ca.fmin(ca.fmax(offset, 0), 1), 1)
+
+
+SPIN_FLOOR = 1e-9  # soil-element kinematics: 1 - i is floored here (j -> inf as i -> 1)
+
+
+class _Displacement:
+    """Shear displacement j(theta) on the arc, x = theta_f - theta, under either kinematics
+    (``model.shear_kinematics``):
+
+    0, the wheel element (Wong & Reece 1967): the slip accumulated by the wheel-surface element
+      now at theta since it entered the soil, dt = dtheta/omega:
+      j = int (omega*R_s - V*cos(t)) dt = R_s*x - v*(sin(theta_f) - sin(theta)), v = V/omega.
+    1, the soil element: the slip accumulated over the soil element now at theta since the wheel
+      reached it. The element stays put while the axle advances at V, so it moves along the
+      contact circle with dt = R_c*cos(t)*dtheta/V:
+      j = R_c*int_theta^theta_f (R_s/v - cos(t))*cos(t) dt
+        = R_c*[(R_s/v)*(sin(theta_f) - sin(theta)) - x/2 - sin(x)*cos(theta_f + theta)/2].
+      This is how the Soil Contact Model accumulates the Janosi displacement per soil node
+      (Krenn & Hirzinger 2009; Project Chrono's SCMTerrain, ``kshear``). R_s/v = (R_s/R_ref)*
+      (1 + s) is linear in the paper's slip s; j grows without bound as i -> 1 (the soil under a
+      spinning wheel is sheared for ever), so 1 - i is floored at SPIN_FLOOR, where the shear is
+      fully mobilised to machine precision except within ~1e-9*R of the entry.
+    Both vanish at the entry and are identical in sign pattern (same peak theta_c).
+    """
+
+    def __init__(self, theta_f, slip, P, Rc, Rs, Rref) -> None:
+        self.theta_f, self.Rc, self.Rs = theta_f, Rc, Rs
+        self.v_ratio = (1 - slip) * Rref  # carriage speed / wheel angular speed
+        self.ratio = Rs / (ca.fmax(1 - slip, SPIN_FLOOR) * Rref)  # R_s/v, soil element
+        self.soil = P["model.shear_kinematics"]
+
+    def at(self, o: dict) -> ca.SX:
+        """j at the nodes of an :func:`_offset_trig` dict."""
+        wheel = self.Rs * o["x"] - self.v_ratio * o["sin_drop"]
+        soil = self.Rc * (self.ratio * o["sin_drop"] - o["x"] / 2
+                          - ca.sin(o["x"]) * ca.cos(2 * self.theta_f - o["x"]) / 2)
+        return (1 - self.soil) * wheel + self.soil * soil
+
+    def along(self, x: ca.SX) -> ca.SX:
+        return self.at(_offset_trig(self.theta_f, x))
+
+    def slope(self, x: ca.SX) -> ca.SX:
+        """dj/dx."""
+        cos_t = ca.cos(self.theta_f - x)
+        wheel = self.Rs - self.v_ratio * cos_t
+        soil = self.Rc * cos_t * (self.ratio - cos_t)
+        return (1 - self.soil) * wheel + self.soil * soil
 
 
 class _P:
@@ -199,9 +249,9 @@ def _arc(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tuple[in
     theta_r = -2 * ca.asin(ca.sqrt(lam) * ca.sin(theta_f / 2))
     theta_m = (P["model.a0"] + P["model.a1"] * slip) * theta_f
 
-    v_ratio = (1 - slip) * Rref  # carriage speed / wheel angular speed
+    displacement = _Displacement(theta_f, slip, P, Rc, Rs, Rref)
     d_front, d_rear = theta_f - theta_m, theta_m - theta_r
-    split = _reversal_offset(theta_f, theta_r, d_front, d_rear, Rs, v_ratio)
+    split = _reversal_offset(theta_f, theta_r, d_front, d_rear, displacement)
     g, w = _split_rule(split, nodes)
     # x = theta_f - theta at each node, formed without cancellation
     front = _offset_trig(theta_f, d_front * g)  # also theta* of the rear nodes
@@ -210,8 +260,8 @@ def _arc(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tuple[in
     cos_f, sin_f, cos_r, sin_r = front["cos"], front["sin"], rear["cos"], rear["sin"]
     sigma0 = k_eq * front["cos_drop"] ** n  # shared by both panels
 
-    g_front = shear_function(Rs * front["x"] - v_ratio * front["sin_drop"], P)
-    g_rear = shear_function(Rs * rear["x"] - v_ratio * rear["sin_drop"], P)
+    g_front = shear_function(displacement.at(front), P)
+    g_rear = shear_function(displacement.at(rear), P)
 
     def integrals(sigma: ca.SX) -> dict:
         tau_f, tau_r = (c + sigma * tan_phi) * g_front, (c + sigma * tan_phi) * g_rear

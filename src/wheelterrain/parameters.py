@@ -210,6 +210,12 @@ TABLE: tuple[Parameter, ...] = (
        "Bekker 1960, Off-the-road locomotion (grouser thrust); Rankine passive earth pressure "
        "(Wong, Theory of Ground Vehicles, ch. 2)", kind="enum",
        choices=MappingProxyType({0: "off", 1: "passive-earth-pressure"})),
+    _P("model.shear_kinematics", "1", 0, 0, 1,
+       "Whose slip the Janosi displacement j counts: 0 = the wheel-surface element's since it "
+       "entered the soil (Wong-Reece); 1 = the soil element's since the wheel reached it, as the "
+       "Soil Contact Model accumulates it per soil node (j linear in the paper's slip s).",
+       "Wong & Reece 1967 (0); Krenn & Hirzinger 2009, SCM, as in Project Chrono's SCMTerrain "
+       "(1)", kind="enum", choices=MappingProxyType({0: "wheel-element", 1: "soil-element"})),
 )
 
 INDEX: Mapping[str, int] = MappingProxyType({p.name: k for k, p in enumerate(TABLE)})
