@@ -29,7 +29,8 @@ from wheelterrain.cosim import write_atomic
 SOIL = ["soil.phi", "soil.k_phi", "soil.n0", "soil.cohesion", "soil.shear_modulus"]
 CLASSICAL = {"soil.n1": 0.0, "model.contact_radius_factor": 0.0,
              "model.shear_radius_factor": 0.0, "model.slip_radius_factor": 0.0,
-             "model.shear_model": 0, "model.exit_ratio": 0.0, "model.grouser_thrust": 0}
+             "model.shear_model": 0, "model.exit_ratio": 0.0, "model.grouser_thrust": 0,
+             "model.shear_kinematics": 0}
 VARIANTS = [
     ("classical Wong-Reece", [], {}),
     ("+ slip-sinkage n1 (Ding 2011)", ["soil.n1"], {}),
@@ -39,11 +40,15 @@ VARIANTS = [
     ("+ Wong hump shear", [], {"model.shear_model": 1}),
     ("+ exit angle (Ishigami)", ["model.exit_ratio"], {}),
     ("+ grouser passive thrust (Bekker)", [], {"model.grouser_thrust": 1}),
+    ("+ soil-element shear (SCM)", [], {"model.shear_kinematics": 1}),
     ("n1 + shear radius + exit angle", ["soil.n1", "model.shear_radius_factor",
                                         "model.exit_ratio"], {}),
+    ("n1 + shear radius + exit + SCM shear", ["soil.n1", "model.shear_radius_factor",
+                                               "model.exit_ratio"],
+     {"model.shear_kinematics": 1}),
     ("all of the above", ["soil.n1", "model.shear_radius_factor", "model.contact_radius_factor",
                           "model.slip_radius_factor", "model.exit_ratio"],
-     {"model.shear_model": 1, "model.grouser_thrust": 1}),
+     {"model.shear_model": 1, "model.grouser_thrust": 1, "model.shear_kinematics": 1}),
 ]
 CASES = ["C1", "C2", "C3", "C4"]
 
