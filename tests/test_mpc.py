@@ -87,12 +87,12 @@ def test_compiled_interval_and_jacobian_equal_the_vm(tmp_path, monkeypatch):
 
 
 def test_stiffness_is_why_the_mpc_commands_speed():
-    """Torque-driven, the wheel has modes far faster than a 20 ms interval and an unstable
-    sinkage-slip pair at C4; under the drive's speed loop every mode is stable."""
+    """Torque-driven, the wheel has modes far faster than a 20 ms interval (1/0.02 s = 50 1/s;
+    measured -152 1/s at C4 on rashid-calibrated); under the drive's speed loop every mode is
+    stable. (The earlier, wheel-element calibration also had an unstable pair at C4: mpc.py.)"""
     x, p = operating_state(0.75)
     torque_driven = mpc.stiffness(PT, {**p, "rig.drive": rig.DRIVE_TORQUE}, x, 1.8)
     assert torque_driven.real.min() < -100
-    assert torque_driven.real.max() > 0
     speed_driven = mpc.stiffness(PT, p, x, x[2])
     assert speed_driven.real.max() < 0
 

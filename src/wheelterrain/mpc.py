@@ -10,10 +10,12 @@ Prediction model
 
 Why a speed command (the stiffness analysis, :func:`stiffness`)
     With the motor torque as the input, the wheel on the calibrated soil has eigenvalues down to
-    -355 1/s (a step of 0.02 s multiplies them by 7) and, at the C4 operating point, an unstable
-    sinkage-slip pair (+6.7 +- 35j 1/s): slip-sinkage softens the soil faster than the wheel
-    slows. A controller sampling at 50 Hz cannot hold that with a held torque. The drive's own
-    speed loop (rig.drive = 1, poles at -rig.speed_bandwidth) does, so the MPC commands the wheel
+    -314 1/s at C1 and -152 1/s at C4 (a step of 0.02 s multiplies them by 3 to 6): the slip
+    moves within a few ms of a torque change, far inside a 50 Hz controller's hold. The
+    eigenstructure is the soil's: on the earlier calibration (wheel-element shear, whose pull
+    saturates with slip) the C4 sinkage-slip pair was unstable (+6.7 +- 35j 1/s), slip-sinkage
+    softening the soil faster than the wheel slows. The drive's own speed loop (rig.drive = 1,
+    poles at -rig.speed_bandwidth) holds the slip on either soil, so the MPC commands the wheel
     speed and keeps the loop, with its torque, in the prediction and in the constraints.
 
 Discretisation
