@@ -129,3 +129,17 @@ def test_profile_finds_the_true_value_and_brackets_it():
     assert min(ssr) < 1e-10
     lo, hi = calibration.profile_interval(points, 0.0)
     assert lo <= 35 * DEG <= hi
+
+
+def test_diagnostic_bounds_let_a_fit_leave_the_plausible_box():
+    """Data made at K = 80 mm (beyond the plausible 40 mm): the plausible fit stops at the bound
+    and flags it; with the bound widened for diagnosis the fit recovers the value."""
+    base = presets.load(presets.REPRODUCE_PRESET)
+    data = synthetic(base.with_values({"soil.shear_modulus": 0.08}))
+    boxed = calibration.fit(base, ["soil.shear_modulus"], list(SLIPS), starts=1, data=data)
+    assert boxed.values["soil.shear_modulus"] == pytest.approx(0.04)
+    assert boxed.at_bound == ["soil.shear_modulus"]
+    wide = calibration.fit(base, ["soil.shear_modulus"], list(SLIPS), starts=1, data=data,
+                           bounds={"soil.shear_modulus": (0.002, 0.1)})
+    assert wide.values["soil.shear_modulus"] == pytest.approx(0.08, rel=1e-6)
+    assert wide.bounds["soil.shear_modulus"] == (0.002, 0.1)

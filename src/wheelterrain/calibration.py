@@ -119,16 +119,20 @@ def _residuals_and_jacobian(x, names, base, cases, load, want_jac=True):
 
 def fit(base: ParameterSet, names: list[str], case_names: list[str], starts: int = 8,
         seed: int = 0, load: float = 62.0, data: list[dict] | None = None,
-        initial: dict[str, float] | None = None) -> Fit:
+        initial: dict[str, float] | None = None,
+        bounds: dict[str, tuple[float, float]] | None = None) -> Fit:
     """Fit ``names`` to the drawbar pull and sinkage of ``case_names`` (see module docstring).
 
     ``data``: cases in the form of validation/paper_table3.json (default: that file).
     ``initial``: the first start (e.g. the optimum of a nested model); the base preset's values
-    for names it omits. The other starts are random over the plausible box."""
+    for names it omits. The other starts are random over the plausible box.
+    ``bounds``: replaces the plausible range of the parameters it names (diagnostics: what the
+    data would want outside the plausible box; never for a preset)."""
     check_free(names)
     cases = _case_rows(case_names, data)
-    lo = np.array([PLAUSIBLE[n][0] for n in names])
-    hi = np.array([PLAUSIBLE[n][1] for n in names])
+    box = {n: (bounds or {}).get(n, PLAUSIBLE[n][:2]) for n in names}
+    lo = np.array([box[n][0] for n in names])
+    hi = np.array([box[n][1] for n in names])
     rng = np.random.default_rng(seed)
     first = np.clip(np.array([(initial or {}).get(n, base[n]) for n in names]), lo, hi)
     candidates = [first] + [lo + rng.uniform(0.05, 0.95, len(names)) * (hi - lo)
