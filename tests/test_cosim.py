@@ -97,3 +97,14 @@ def test_ssp_file_runs_in_fmpy_ssp_and_agrees(fmu_dir, unzipped, tmp_path):
         # fmpy.ssp couples by Jacobi (forces lag the rig's state by one step), our master by
         # Gauss-Seidel: first-order schemes that agree to O(step).
         assert _relative(theirs, ours.means[key]) < 1e-3, (key, theirs, ours.means[key])
+
+
+def test_an_fmu_built_from_another_table_is_named_not_a_key_error():
+    """A stale FMU (built before a table row existed) gets one sentence saying what to do; the
+    CLI turns it into exit code 2 (reproduce, sweep and mpc catch FMUError)."""
+    from wheelterrain.errors import FMUError
+
+    with pytest.raises(FMUError, match=r"old/WheelTerrain\.fmu has no variable "
+                                       r"'soil\.phi' \(1 missing\).*wheelterrain build"):
+        cosim.set_values(None, {}, {"soil.n0": "Real"}, {"soil.phi": 0.4},
+                         where="old/WheelTerrain.fmu")

@@ -16,6 +16,7 @@ import numpy as np
 from . import __version__, model, presets
 from .errors import (
     CalibrationError,
+    FMUError,
     InputError,
     LoadTooLargeError,
     ParameterError,
@@ -234,7 +235,7 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_file
                                file=sys.stderr) as bar:
             results = cosim.reproduce(Path(fmu_dir), ps, step=step, stop=stop,
                                       progress=lambda case: bar.update(1))
-    except FileNotFoundError as err:
+    except (FileNotFoundError, FMUError) as err:
         click.echo(f"error: {err}", err=True)
         sys.exit(EXIT_USAGE)
     rows = cosim.comparison(results)
@@ -429,7 +430,7 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
             rows = sweeper.run(Path(fmu), sweeper.base_values(ps), axes, slip_definition,
                                workers=workers, dask_address=dask_address,
                                progress=bar.update)
-    except FileNotFoundError as err:
+    except (FileNotFoundError, FMUError) as err:
         click.echo(f"error: {err}", err=True)
         sys.exit(EXIT_USAGE)
     sweeper.write_csv(Path(out), rows)
@@ -499,7 +500,7 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool, hor
                                file=sys.stderr) as bar:
             result = closed_loop.run(the_scenario, ps, plant, settings, Path(fmu_dir),
                                      progress=lambda _: bar.update(1))
-    except FileNotFoundError as err:
+    except (FileNotFoundError, FMUError) as err:
         click.echo(f"error: {err}", err=True)
         sys.exit(EXIT_USAGE)
     except mpc_module.MPCError as err:

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from . import rig
+from .errors import FMUError
 from .parameters import TABLE, ParameterSet
 
 STOP_TIME = 30.0  # s, per case (the paper's runs are ~30 s)
@@ -76,9 +77,17 @@ def averaging_window(ps: ParameterSet, rim_speed: float, stop: float,
     return (stop - periods * period, stop) if periods >= 1 else (settle, stop)
 
 
-def set_values(fmu, vr: dict[str, int], types: dict[str, str], values: dict) -> None:
+def set_values(fmu, vr: dict[str, int], types: dict[str, str], values: dict,
+               where: str = "the FMU") -> None:
     """Set ``values`` (by variable name) on an fmpy FMU2Slave with the setter of each
-    variable's type (Integer values rounded: table integers are whole numbers)."""
+    variable's type (Integer values rounded: table integers are whole numbers). A name the FMU
+    lacks means it was built from another version of the parameter table: FMUError."""
+    missing = [name for name in values if name not in types]
+    if missing:
+        raise FMUError(
+            f"{where} has no variable {missing[0]!r} ({len(missing)} missing): it was built by "
+            "another version of wheelterrain; rebuild it with `wheelterrain build` (add "
+            "`--flavor native` for the native FMUs)")
     for name, value in values.items():
         kind = types[name]
         if kind == "Real":
@@ -97,6 +106,8 @@ class _Instance:
         from fmpy.fmi2 import FMU2Slave
 
         md = read_model_description(str(path))
+        self.path = path
+        self.running = False  # initialised (terminate is legal only then)
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
         self.types = {v.name: v.type for v in md.modelVariables}
         self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip,
@@ -104,13 +115,14 @@ class _Instance:
         self.fmu.instantiate(loggingOn=log is not None)
 
     def set(self, values: dict[str, float]) -> None:
-        set_values(self.fmu, self.vr, self.types, values)
+        set_values(self.fmu, self.vr, self.types, values, where=str(self.path))
 
     def refs(self, names) -> list[int]:
         return [self.vr[n] for n in names]
 
     def close(self) -> None:
-        self.fmu.terminate()
+        if self.running:  # an FMU refuses fmi2Terminate before initialisation has ended
+            self.fmu.terminate()
         self.fmu.freeInstance()
 
 
@@ -129,6 +141,7 @@ def start_pair(paths: dict[str, Path], unzipped: dict[str, str], ps: ParameterSe
         rig_fmu.set(rig_values)
         for inst in (terrain, rig_fmu):
             inst.fmu.exitInitializationMode()
+            inst.running = True
     except BaseException:
         terrain.close()
         rig_fmu.close()

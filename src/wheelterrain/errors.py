@@ -43,5 +43,9 @@ class SolveError(WheelTerrainError):
     """The quasi-static sinkage solve did not converge (never returned as a number)."""
 
 
+class FMUError(WheelTerrainError):
+    """An FMU given to a master does not fit this version (e.g. built from another table)."""
+
+
 class CalibrationError(WheelTerrainError):
     """A calibration request that cannot be carried out (unknown case or parameter, ...)."""

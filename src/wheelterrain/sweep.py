@@ -135,7 +135,7 @@ def run_points(fmu: str, base: dict[str, float], points: list[dict[str, float]],
             set_values(w["inst"], w["vr"], w["types"],
                        {**values, "wheel_speed": WHEEL_SPEED,
                         "carriage_speed": WHEEL_SPEED * r_ref * (1 - i),
-                        "load": point.get("load", 62.0)})
+                        "load": point.get("load", 62.0)}, where=str(fmu))
             w["inst"].doStep(w["time"], 1e-6)  # refuses (fmi2Discard) an infeasible point
             w["time"] += 1e-6
             out = w["inst"].getReal([w["vr"][k] for k in OUTPUTS])
