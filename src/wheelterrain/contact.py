@@ -226,7 +226,7 @@ def shear_function(j: ca.SX, P: _P) -> ca.SX:
 
 
 def _offset_trig(theta_f: ca.SX, x: ca.SX) -> dict:
-    """cos/sin of theta = theta_f - x, and the differences cos(theta) - cos(theta_f) and
+    """cos/sin of theta = theta_f - x, sin(x), and the differences cos(theta) - cos(theta_f) and
     sin(theta_f) - sin(theta), through half angles so that no difference cancels at small angles
     (the plain difference loses ~eps/theta_f**2 relative: 1e-4 at theta_f = 1e-6)."""
     a, h = theta_f - x / 2, x / 2
