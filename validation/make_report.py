@@ -209,7 +209,8 @@ def main() -> None:
             f"bounds are the plausible ranges, each with its source "
             "(`wheelterrain params --preset rashid-calibrated`). The fitted model is the "
             "quasi-static steady state (equal to the co-simulation means to < 3e-3).", ""]
-    protocols_section(names, model_form(doc), args.starts, out)
+    form = model_form(doc)
+    protocols_section(names, form, args.starts, out)
     out += ["## 3. Model-form study (ablation)", "",
             "Classical soil parameters (phi, k_phi', n0, c, K) free in every variant; one "
             "mechanism added at a time. Selection criterion fixed in advance: the leave-one-out "
@@ -229,14 +230,13 @@ def main() -> None:
     sensitivity_section(fmu, out)
     fitted = doc["provenance"]["fitted"]
     at_bound = [n for n, f in fitted.items() if f["at_bound"]]
-    refit = calibration.fit(model_form(doc), names, CASES,
-                            starts=1, initial={n: f["value"] for n, f in fitted.items()})
+    best = {n: f["value"] for n, f in fitted.items()}
+    refit = calibration.fit(form, names, CASES, starts=1, initial=best)
     # diagnosis only: would the data reach the bar if the shear and sinkage parameters could
     # leave their plausible ranges (up to the table's validity limits)?
     wide = {"soil.shear_modulus": (0.002, 0.1), "soil.cohesion": (0.0, 20000.0),
             "soil.n0": (0.3, 1.5)}
-    loose = calibration.fit(model_form(doc), names, CASES, starts=args.starts,
-                            initial={n: f["value"] for n, f in fitted.items()}, bounds=wide)
+    loose = calibration.fit(form, names, CASES, starts=args.starts, initial=best, bounds=wide)
     loose_dp, loose_z = model_form_study.mae(loose.residuals.values())
     loose_pattern = ", ".join("+" if loose.residuals[c]["drawbar_pull"] > 0 else "-"
                               for c in CASES)
