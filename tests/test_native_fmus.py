@@ -181,6 +181,23 @@ def test_bad_parameter_gives_fmi2error_with_the_reason_even_without_logging(flav
         t.close()
 
 
+def test_both_flavours_refuse_a_slip_outside_the_domain_with_the_same_sentence(flavours):
+    messages = []
+    for flavour in ("pythonfmu", "native"):
+        t = instance(flavours, flavour, "WheelTerrain", f"slip-{flavour}")
+        try:
+            t.set({"wheel_speed": 0.6, "carriage_speed": 0.075})  # i = -1.5: rim too slow
+            with pytest.raises(FMICallException):
+                t.fmu.doStep(0.0, 1e-3)
+            messages.append([m for m in t.errors() if "outside the model's domain" in m])
+        finally:
+            t.close()
+    assert messages[0], messages
+    assert messages[1], messages
+    assert "gives traction slip -1.5," in messages[1][0]
+    assert messages[0][0] == messages[1][0]  # one sentence, from fmu_model.SLIP_DOMAIN
+
+
 def test_state_round_trip_and_serialization(flavours):
     t = instance(flavours, "native", "WheelTerrain", "s",
                  {"sinkage": 0.03, "wheel_speed": 0.6, "carriage_speed": 0.024})

@@ -9,8 +9,8 @@ WheelTerrain
     ``terrain_dynamic(u, angle, p) -> (y, status, info)`` and
     ``terrain_quasi_static(u, p) -> (y, status, info)`` with u = TERRAIN_INPUTS, y =
     TERRAIN_OUTPUTS (without wheel_angle, which the wrapper integrates). ``status``: STATUS_OK,
-    STATUS_SLIP (wheel turning against the carriage: traction slip outside [-1, 1]; ``info`` is
-    the slip), STATUS_LOAD (load beyond the capacity; ``info`` is the capacity),
+    STATUS_SLIP (traction slip outside [-1, 1], or the wheel or the carriage moving backward;
+    ``info`` is the slip), STATUS_LOAD (load beyond the capacity; ``info`` is the capacity),
     STATUS_UNCONVERGED (the solve's convergence check failed). On a status other than OK the
     wrappers keep their previous outputs and refuse the next step with the reason.
 SingleWheelRig
@@ -38,26 +38,35 @@ RIG_OUTPUTS = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "moto
                "speed_error_integral", "sensor.drawbar_pull", "sensor.normal_force",
                "sensor.sinkage", "sensor.slip_paper")
 STATUS_OK, STATUS_SLIP, STATUS_LOAD, STATUS_UNCONVERGED = 0, 1, 2, 3
+SLIP_DOMAIN = ("the model covers forward rolling (wheel and carriage speeds >= 0) with traction "
+               "slip i = (omega*R_ref - V)/(omega*R_ref) in [-1, 1], from a rim turning at half "
+               "the carriage speed (-1) to spinning in place (1)")  # STATUS_SLIP's message
 
 
 def slips(wheel_speed, carriage_speed, slip_radius):
-    """(traction slip, paper's slip) from the wheel's and the carriage's speeds.
+    """(traction slip, paper's slip, forward) from the wheel's and the carriage's speeds.
 
-    Traction slip i = (omega*R - V)/(omega*R) when driving; regularised to
-    (omega*R - V)/max(|omega*R|, |V|) so that braking (V > omega*R) gives the skid ratio in
-    [-1, 0] and zero speeds give 0. The paper's s = (omega*R - V)/V, +-1/SPEED_FLOOR with the
-    carriage at rest.
+    Traction slip i = (omega*R - V)/(omega*R), exactly the slip the contact model takes
+    (:mod:`wheelterrain.slip`), so the forces are those of the true kinematics V/omega =
+    (1 - i)*R. Its domain [-1, 1] runs from a rim turning at half the carriage speed (braking,
+    -1) to spinning in place (1); a slower rim (down to a locked wheel, i -> -inf) is outside
+    it. A rim speed below SPEED_FLOOR counts as SPEED_FLOOR, so a locked wheel under a moving
+    carriage gives a large negative slip, not a division by zero; both at rest give 0.
+    ``forward`` is false when the wheel or the carriage moves backward (beyond SPEED_FLOOR):
+    the model covers forward rolling only. The paper's s = (omega*R - V)/V, +-1/SPEED_FLOOR with
+    the carriage at rest.
     """
     rim = wheel_speed * slip_radius
     difference = rim - carriage_speed
-    scale = ca.fmax(ca.fabs(rim), ca.fabs(carriage_speed))
-    at_rest = scale < SPEED_FLOOR
-    traction = ca.if_else(at_rest, 0, difference / ca.fmax(scale, SPEED_FLOOR))
+    at_rest = ca.fmax(ca.fabs(rim), ca.fabs(carriage_speed)) < SPEED_FLOOR
+    rim_safe = ca.if_else(ca.fabs(rim) < SPEED_FLOOR, SPEED_FLOOR, rim)
+    traction = ca.if_else(at_rest, 0, difference / rim_safe)
+    forward = ca.logic_and(rim > -SPEED_FLOOR, carriage_speed > -SPEED_FLOOR)
     still = ca.fabs(carriage_speed) < SPEED_FLOOR
     paper = ca.if_else(at_rest, 0, ca.if_else(
         still, ca.if_else(difference >= 0, 1 / SPEED_FLOOR, -1 / SPEED_FLOOR),
         difference / ca.fmax(ca.fabs(carriage_speed), SPEED_FLOOR)))
-    return traction, paper
+    return traction, paper, forward
 
 
 def paper_slip(wheel_speed, carriage_speed, slip_radius):
@@ -83,8 +92,8 @@ def terrain_functions() -> tuple[ca.Function, ca.Function]:
     u, angle, p = ca.MX.sym("u", len(TERRAIN_INPUTS)), ca.MX.sym("angle"), ca.MX.sym(
         "p", len(NAMES))
     sinkage, rate, omega, speed, load = (u[k] for k in range(len(TERRAIN_INPUTS)))
-    traction, paper = slips(omega, speed, slip_radius(p))
-    slip_bad = ca.logic_or(traction < -1, traction > 1)
+    traction, paper, forward = slips(omega, speed, slip_radius(p))
+    slip_bad = ca.logic_or(ca.logic_not(forward), ca.logic_or(traction < -1, traction > 1))
     safe_slip = ca.fmin(ca.fmax(traction, -1), 1)  # only used when the status is OK
 
     out = dict(zip(contact.CONTACT_OUTPUTS, fns.contact(sinkage, rate, safe_slip, angle, p),

@@ -107,6 +107,7 @@ static const int P_VRS[{n_p}] = {_int_list(vr[p.name] for p in TABLE)};
 #define VR_QUASI_STATIC {vr['quasi_static']}
 #define VR_WHEEL_ANGLE {vr['wheel_angle']}
 #define VR_WHEEL_SPEED {vr['wheel_speed']}
+#define VR_CARRIAGE_SPEED {vr['carriage_speed']}
 #define VR_LOAD {vr['load']}
 
 static void model_work(casadi_int *sz_arg, casadi_int *sz_res, casadi_int *sz_iw,
@@ -138,8 +139,9 @@ static int model_refresh(Instance *c, char *message) {{
         if (terrain_dynamic(c->arg, c->res, c->iw, c->w, 0)) status = -1.0;
     }}
     if (status == {fmu_model.STATUS_SLIP}) {{
-        snprintf(message, MAX_MESSAGE, "slip %g outside the model's domain [-1, 1] (wheel "
-                 "turning against the carriage's motion)", info);
+        snprintf(message, MAX_MESSAGE, "wheel speed %g rad/s with carriage speed %g m/s gives "
+                 "traction slip %g, outside the model's domain: {fmu_model.SLIP_DOMAIN}",
+                 c->b.v[VR_WHEEL_SPEED], c->b.v[VR_CARRIAGE_SPEED], info);
         return 1;
     }}
     if (status == {fmu_model.STATUS_LOAD}) {{

@@ -356,12 +356,19 @@ _PARAMETERS = {**BY_NAME, **{p.name: p for p in rig.RIG_TABLE}}
 OPERATING_POINT = "operating point"  # the key of the error the model's status reports
 
 
+def slip_problem(omega: float, speed: float, slip: float) -> str:
+    """The message for STATUS_SLIP (the native wrapper prints the same sentence)."""
+    return (f"wheel speed {omega:g} rad/s with carriage speed {speed:g} m/s gives traction slip "
+            f"{slip:g}, outside the model's domain: {fmu_model.SLIP_DOMAIN}")
+
+
 def terrain_problem(status: int, info: float, u: list[float]) -> str:
     """The message for a status of :mod:`wheelterrain.fmu_model`'s terrain Functions."""
     load = u[fmu_model.TERRAIN_INPUTS.index("load")]
     if status == fmu_model.STATUS_SLIP:
-        return (f"slip {info:g} outside the model's domain [-1, 1] (wheel turning against the "
-                "carriage's motion)")
+        omega = u[fmu_model.TERRAIN_INPUTS.index("wheel_speed")]
+        speed = u[fmu_model.TERRAIN_INPUTS.index("carriage_speed")]
+        return slip_problem(omega, speed, info)
     if status == fmu_model.STATUS_LOAD:
         return (f"load {load:g} N exceeds what the wheel can carry fully buried "
                 f"({info:.6g} N); valid range [0, {info:.6g}] N")
