@@ -52,3 +52,29 @@ def test_calibration_protocols_report_held_out_errors_of_the_fitted_values(tmp_p
         held = calibration.errors_on(base.with_values(p["values"]), list(p["held_out_errors"]))
         for case, err in p["held_out_errors"].items():
             assert err["drawbar_pull"] == pytest.approx(held[case]["drawbar_pull"], rel=1e-12)
+
+
+@pytest.mark.parametrize(("rms", "verdict"), [(3.97, "keeps the smaller set"),
+                                              (3.5, "should be refitted with it"),
+                                              (4.2, "")])
+def test_report_weighs_a_left_out_mechanism_by_its_figures(monkeypatch, rms, verdict):
+    monkeypatch.syspath_prepend(str(ROOT / "validation"))
+    import make_report
+    import model_form_study
+
+    def row(name, rms_objective, dp):
+        return {"variant": name, "all_case": {"mae_drawbar_pull": dp},
+                "leave_one_out": {"rms_objective": rms_objective}}
+
+    rows = [row(model_form_study.CHOSEN, 4.0, 1.46)]
+    rows += [row(label, rms + 1.0 + k, 2.0) for k, (label, _, _) in
+             enumerate(model_form_study.ON_TOP[1:])]
+    rows.append(row(model_form_study.ON_TOP[0][0], rms, 1.40))
+    text = make_report.on_top_verdict(rows)
+    assert f"'{model_form_study.ON_TOP[0][0]}' does best" in text
+    assert f"RMS {rms:.2f} against 4.00" in text
+    assert "1.40 N against 1.46 N" in text
+    if verdict:
+        assert verdict in text
+    else:
+        assert "preset" not in text  # worse than the chosen set: nothing to weigh
