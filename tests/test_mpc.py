@@ -136,6 +136,8 @@ def test_terrain_change_is_estimated_and_tracked():
     assert figures["phi_relative_error_final"] < 1e-3, figures
     assert figures["k_phi_relative_error_final"] < 1e-3, figures
     assert figures["slip_rms_error"] <= 5e-3, figures
+    # qrqp cycled to its iteration limit in 3 of these solves with its default dual tolerance
+    assert figures["failed_solves"] == 0, figures
 
 
 def test_free_carriage_tracks_while_the_vehicle_moves():

@@ -52,6 +52,7 @@ OUTPUTS = ("slip", "drawbar_pull", "normal_force", "soil_torque", "motor_torque"
 REGULARISATION = 1e-4  # Levenberg-Marquardt term on the Gauss-Newton Hessian (slip terms ~1e6)
 SLIP_SCALE = 1e-3  # slip error of weight 1 in the tracking objective
 SOLVERS = ("sqpmethod", "ipopt")
+QP_DUAL_TOLERANCE = 1e-7  # sqpmethod's tol_du and qrqp's dual_inf_tol (see Controller._options)
 OBJECTIVES = ("track", "efficiency")
 
 
@@ -292,9 +293,14 @@ class Controller:
             return {**common, "qpsol": "qrqp", "print_header": False, "print_iteration": False,
                     "print_status": False, "print_time": False, "max_iter": s.max_iterations,
                     "error_on_fail": False,
+                    # qrqp's own dual tolerance (default 1e-8) no looser than the SQP's tol_du:
+                    # at 1e-8, with a torque or power limit weakly active (zero multiplier),
+                    # its active set cycled (enforce/drop the same bound) to its 1000-iteration
+                    # limit, ~0.5 s, and the SQP ended Search_Direction_Becomes_Too_Small
                     "qpsol_options": {"print_iter": False, "print_header": False,
-                                      "print_info": False, "error_on_fail": False},
-                    "tol_pr": 1e-9, "tol_du": 1e-7, "min_step_size": 1e-12}
+                                      "print_info": False, "error_on_fail": False,
+                                      "dual_inf_tol": QP_DUAL_TOLERANCE},
+                    "tol_pr": 1e-9, "tol_du": QP_DUAL_TOLERANCE, "min_step_size": 1e-12}
         return {**common, "print_time": False, "error_on_fail": False,
                 "ipopt": {"print_level": 0, "sb": "yes", "max_iter": 10 * s.max_iterations,
                           "tol": 1e-9, "warm_start_init_point": "yes", "mu_init": 1e-4}}
