@@ -114,8 +114,9 @@ def terrain_variables() -> list[Var]:
          "N", "Force"),
         ("contact_sinkage", "Sinkage the forces were evaluated at: the input in dynamic mode, "
          "the solved one in quasi-static mode", "m", "Length"),
-        ("slip", "Traction slip i = (omega*R_ref - V)/(omega*R_ref) used by the model "
-         "(regularised: (omega*R_ref - V)/max(|omega*R_ref|, |V|) when braking)", "1", None),
+        ("slip", "Traction slip i = (omega*R_ref - V)/(omega*R_ref) used by the model, "
+         "braking included (domain [-1, 1]: a rim at half the carriage speed to spinning)", "1",
+         None),
         ("slip_paper", "Slip in the paper's definition s = (omega*R_ref - V)/V (0 with the "
          "carriage at rest)", "1", None),
         ("entry_angle", "Entry angle theta_f of the contact arc", "rad", "Angle"),
