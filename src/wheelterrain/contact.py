@@ -128,8 +128,7 @@ def _reversal_offset(theta_f, theta_r, d_front, d_rear, displacement) -> ca.SX:
     exit angle past -theta_c under deep braking; it is not split (its kink then costs accuracy,
     not robustness).
     """
-    Rs, v_ratio = displacement.Rs, displacement.v_ratio
-    ratio = Rs / ca.fmax(v_ratio, 1e-300)
+    ratio = displacement.ratio  # R_s/v
     theta_c = ca.if_else(ratio < 1, ca.acos(ca.fmin(ratio, 1)), math.pi)
     span = theta_f - theta_r
 
@@ -176,12 +175,13 @@ class _Displacement:
         self.v_ratio = (1 - slip) * Rref  # carriage speed / wheel angular speed
         self.ratio = Rs / (ca.fmax(1 - slip, SPIN_FLOOR) * Rref)  # R_s/v, soil element
         self.soil = P["model.shear_kinematics"]
+        self.cos_f, self.sin_f = ca.cos(theta_f), ca.sin(theta_f)  # once, not per node
 
     def at(self, o: dict) -> ca.SX:
         """j at the nodes of an :func:`_offset_trig` dict."""
         wheel = self.Rs * o["x"] - self.v_ratio * o["sin_drop"]
-        soil = self.Rc * (self.ratio * o["sin_drop"] - o["x"] / 2
-                          - ca.sin(o["x"]) * ca.cos(2 * self.theta_f - o["x"]) / 2)
+        cos_sum = self.cos_f * o["cos"] - self.sin_f * o["sin"]  # cos(theta_f + theta)
+        soil = self.Rc * (self.ratio * o["sin_drop"] - o["x"] / 2 - o["sin_x"] * cos_sum / 2)
         return (1 - self.soil) * wheel + self.soil * soil
 
     def along(self, x: ca.SX) -> ca.SX:
@@ -231,7 +231,7 @@ def _offset_trig(theta_f: ca.SX, x: ca.SX) -> dict:
     (the plain difference loses ~eps/theta_f**2 relative: 1e-4 at theta_f = 1e-6)."""
     a, h = theta_f - x / 2, x / 2
     sa, cs, sh, ch = ca.sin(a), ca.cos(a), ca.sin(h), ca.cos(h)
-    return {"x": x, "cos": cs * ch + sa * sh, "sin": sa * ch - cs * sh,
+    return {"x": x, "cos": cs * ch + sa * sh, "sin": sa * ch - cs * sh, "sin_x": 2 * sh * ch,
             "cos_drop": 2 * sa * sh, "sin_drop": 2 * cs * sh}
 
 
