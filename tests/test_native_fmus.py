@@ -195,7 +195,7 @@ def test_both_flavours_refuse_a_slip_outside_the_domain_with_the_same_sentence(f
     assert messages[0], messages
     assert messages[1], messages
     assert "gives traction slip -1.5," in messages[1][0]
-    assert messages[0][0] == messages[1][0]  # one sentence, from fmu_model.SLIP_DOMAIN
+    assert messages[0][0] == messages[1][0]  # one template: fmu_model.STATUS_MESSAGES
 
 
 def test_state_round_trip_and_serialization(flavours):

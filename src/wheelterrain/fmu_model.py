@@ -38,9 +38,20 @@ RIG_OUTPUTS = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "moto
                "speed_error_integral", "sensor.drawbar_pull", "sensor.normal_force",
                "sensor.sinkage", "sensor.slip_paper")
 STATUS_OK, STATUS_SLIP, STATUS_LOAD, STATUS_UNCONVERGED = 0, 1, 2, 3
-SLIP_DOMAIN = ("the model covers forward rolling (wheel and carriage speeds >= 0) with traction "
-               "slip i = (omega*R_ref - V)/(omega*R_ref) in [-1, 1], from a rim turning at half "
-               "the carriage speed (-1) to spinning in place (1)")  # STATUS_SLIP's message
+# What each status tells the user, as printf templates that both FMU flavours fill (the
+# pythonfmu slaves with %, the native wrapper with snprintf), so both print one sentence.
+# Arguments: SLIP wheel_speed, carriage_speed, slip; LOAD load, capacity, capacity;
+# UNCONVERGED load.
+STATUS_MESSAGES = {
+    STATUS_SLIP: ("wheel speed %g rad/s with carriage speed %g m/s gives traction slip %g, "
+                  "outside the model's domain: the model covers forward rolling (wheel and "
+                  "carriage speeds >= 0) with traction slip i = (omega*R_ref - V)/(omega*R_ref) "
+                  "in [-1, 1], from a rim turning at half the carriage speed (-1) to spinning "
+                  "in place (1)"),
+    STATUS_LOAD: ("load %g N exceeds what the wheel can carry fully buried (%.6g N); valid range "
+                  "[0, %.6g] N"),
+    STATUS_UNCONVERGED: "sinkage solve did not converge for load %g N",
+}
 
 
 def slips(wheel_speed, carriage_speed, slip_radius):

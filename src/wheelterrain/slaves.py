@@ -357,23 +357,16 @@ _PARAMETERS = {**BY_NAME, **{p.name: p for p in rig.RIG_TABLE}}
 OPERATING_POINT = "operating point"  # the key of the error the model's status reports
 
 
-def slip_problem(omega: float, speed: float, slip: float) -> str:
-    """The message for STATUS_SLIP (the native wrapper prints the same sentence)."""
-    return (f"wheel speed {omega:g} rad/s with carriage speed {speed:g} m/s gives traction slip "
-            f"{slip:g}, outside the model's domain: {fmu_model.SLIP_DOMAIN}")
-
-
 def terrain_problem(status: int, info: float, u: list[float]) -> str:
-    """The message for a status of :mod:`wheelterrain.fmu_model`'s terrain Functions."""
-    load = u[fmu_model.TERRAIN_INPUTS.index("load")]
+    """The message for a status of :mod:`wheelterrain.fmu_model`'s terrain Functions (the
+    native wrapper fills the same templates)."""
+    v = dict(zip(fmu_model.TERRAIN_INPUTS, u, strict=True))
+    template = fmu_model.STATUS_MESSAGES
     if status == fmu_model.STATUS_SLIP:
-        omega = u[fmu_model.TERRAIN_INPUTS.index("wheel_speed")]
-        speed = u[fmu_model.TERRAIN_INPUTS.index("carriage_speed")]
-        return slip_problem(omega, speed, info)
+        return template[status] % (v["wheel_speed"], v["carriage_speed"], info)
     if status == fmu_model.STATUS_LOAD:
-        return (f"load {load:g} N exceeds what the wheel can carry fully buried "
-                f"({info:.6g} N); valid range [0, {info:.6g}] N")
-    return f"sinkage solve did not converge for load {load:g} N"
+        return template[status] % (v["load"], info, info)
+    return template[fmu_model.STATUS_UNCONVERGED] % v["load"]
 
 
 class RigCore(_Core):
