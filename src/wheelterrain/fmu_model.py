@@ -73,15 +73,13 @@ def slips(wheel_speed, carriage_speed, slip_radius):
     rim_safe = ca.if_else(ca.fabs(rim) < SPEED_FLOOR, SPEED_FLOOR, rim)
     traction = ca.if_else(at_rest, 0, difference / rim_safe)
     forward = ca.logic_and(rim > -SPEED_FLOOR, carriage_speed > -SPEED_FLOOR)
-    still = ca.fabs(carriage_speed) < SPEED_FLOOR
-    paper = ca.if_else(at_rest, 0, ca.if_else(
-        still, ca.if_else(difference >= 0, 1 / SPEED_FLOOR, -1 / SPEED_FLOOR),
-        difference / ca.fmax(ca.fabs(carriage_speed), SPEED_FLOOR)))
-    return traction, paper, forward
+    return traction, paper_slip(wheel_speed, carriage_speed, slip_radius), forward
 
 
 def paper_slip(wheel_speed, carriage_speed, slip_radius):
-    """The paper's slip of :func:`slips` in plain arithmetic (floats or CasADi symbols)."""
+    """The paper's slip s = (omega*R - V)/V, 0 with both at rest and +-1/SPEED_FLOOR with the
+    carriage at rest; plain arithmetic on floats or CasADi symbols (:func:`slips` and the rig's
+    outputs)."""
     difference = wheel_speed * slip_radius - carriage_speed
     at_rest = rig.pick(abs(wheel_speed * slip_radius) < SPEED_FLOOR,
                        abs(carriage_speed) < SPEED_FLOOR, False)
