@@ -443,10 +443,6 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
     click.echo(f"wrote {out} ({total} points, {bad} infeasible) and {png}")
 
 
-if __name__ == "__main__":  # pragma: no cover
-    main()
-
-
 @main.command(epilog=EPILOG)
 @click.option("--scenario", type=click.Choice(["nominal", "terrain-change", "free-carriage",
                                                "efficiency"]), default="nominal",
@@ -500,10 +496,7 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool, hor
                                file=sys.stderr) as bar:
             result = closed_loop.run(the_scenario, ps, plant, settings, Path(fmu_dir),
                                      progress=lambda _: bar.update(1))
-    except (FileNotFoundError, FMUError) as err:
-        click.echo(f"error: {err}", err=True)
-        sys.exit(EXIT_USAGE)
-    except mpc_module.MPCError as err:
+    except (FileNotFoundError, FMUError, mpc_module.MPCError) as err:
         click.echo(f"error: {err}", err=True)
         sys.exit(EXIT_USAGE)
     except mpc_module.PlantError as err:
@@ -521,3 +514,7 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool, hor
         text = f"{value:.4g}" if isinstance(value, float) else str(value)
         click.echo(f"  {key:34} {text}")
     click.echo(f"wrote {out_dir}/{scenario}.png, {out_dir}/{scenario}.csv")
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()
