@@ -131,7 +131,11 @@ def start_pair(paths: dict[str, Path], unzipped: dict[str, str], ps: ParameterSe
     """(terrain, rig) instances, initialised: the table parameters ``ps`` on WheelTerrain in
     dynamic mode, ``rig_values`` on SingleWheelRig."""
     terrain = _Instance(paths["WheelTerrain"], unzipped["WheelTerrain"], "terrain")
-    rig_fmu = _Instance(paths["SingleWheelRig"], unzipped["SingleWheelRig"], "rig")
+    try:
+        rig_fmu = _Instance(paths["SingleWheelRig"], unzipped["SingleWheelRig"], "rig")
+    except BaseException:
+        terrain.close()
+        raise
     try:
         for inst in (terrain, rig_fmu):
             inst.fmu.setupExperiment(startTime=0.0, stopTime=stop)
