@@ -181,8 +181,9 @@ def step(x, u, p, h):
     J = p["rig.wheel_inertia"]
     kp, ki = gains(p)
     omega_ref = speed_reference(u, p)
+    dx = rates(x, u, p)  # the explicit parts below step along these
 
-    z_rate_next = z_rate + h * (p["rig.load"] - u[0]) / p["rig.mass"]
+    z_rate_next = z_rate + h * dx[1]
     z_next = z + h * z_rate_next
     # implicit Euler of J*omega' = kp*(ref - omega) + ki*e - T_soil, e' = ref - omega
     omega_loop = ((J / h) * omega + kp * omega_ref + ki * (e_int + h * omega_ref)
@@ -190,13 +191,11 @@ def step(x, u, p, h):
     e_loop = e_int + h * (omega_ref - omega_loop)
     torque_loop = kp * (omega_ref - omega_loop) + ki * e_loop
     # torque-driven: the applied torque and the soil's are both held over the step
-    applied = u[INPUTS.index("motor_torque_command")]
-    omega_direct = omega + h * (applied - soil_torque) / J
     direct = p["rig.drive"] == DRIVE_TORQUE
-    omega_next = pick(direct, omega_direct, omega_loop)
+    omega_next = pick(direct, omega + h * dx[2], omega_loop)
     e_next = pick(direct, e_int, e_loop)
-    torque = pick(direct, applied, torque_loop)
-    speed_next = speed + h * carriage_acceleration(u, p)
+    torque = pick(direct, u[INPUTS.index("motor_torque_command")], torque_loop)
+    speed_next = speed + h * dx[4]
     return (z_next, z_rate_next, omega_next, e_next, speed_next), torque
 
 
