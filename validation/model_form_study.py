@@ -81,10 +81,11 @@ def study(starts: int = 4, echo=print) -> list[dict]:
     chosen = next(v for v in VARIANTS if v[0] == CHOSEN)
     on_top = [(label, chosen[1] + extra, {**chosen[2], **switches}) for label, extra, switches
               in ON_TOP]
-    for label, extra, switches in VARIANTS + on_top:
+    runs = [(*v, False) for v in VARIANTS] + [(*v, True) for v in on_top]
+    for label, extra, switches, from_chosen in runs:
         names = SOIL + extra
         ps = base.with_values(switches)
-        first = nested_chosen if label in dict((v[0], 0) for v in on_top) else nested
+        first = nested_chosen if from_chosen else nested
         full = calibration.fit(ps, names, CASES, starts=starts, initial=first.get("all"))
         held, optima = [], {"all": full.values}
         for out in CASES:
