@@ -75,6 +75,7 @@ import casadi as ca
 import numpy as np
 
 from .parameters import INDEX, NAMES
+from .slip import reference_radius
 
 DEFAULT_NODES = (16, 10)  # per panel: up to the shear reversal, after it
 GRADING = 3
@@ -209,7 +210,7 @@ def _radii(P: _P) -> tuple[ca.SX, ca.SX, ca.SX]:
     R, h = P["wheel.radius"], P["grouser.height"]
     return (R + P["model.contact_radius_factor"] * h,
             R + P["model.shear_radius_factor"] * h,
-            R + P["model.slip_radius_factor"] * h)
+            reference_radius(P))
 
 
 def shear_function(j: ca.SX, P: _P) -> ca.SX:

@@ -31,6 +31,7 @@ import numpy as np
 from . import rig
 from .errors import FMUError
 from .parameters import TABLE, ParameterSet
+from .slip import reference_radius
 
 STOP_TIME = 30.0  # s, per case (the paper's runs are ~30 s)
 STEP = 1e-3  # s, communication step
@@ -50,16 +51,12 @@ class CaseResult:
     wall_time: float = 0.0
 
 
-def slip_radius(ps: ParameterSet) -> float:
-    return ps["wheel.radius"] + ps["model.slip_radius_factor"] * ps["grouser.height"]
-
-
 def rig_parameters(ps: ParameterSet, slip_paper: float, load: float,
                    rim_speed: float) -> dict[str, float]:
     values = rig.defaults()
     values.update({"rig.load": load, "rig.mass": load / rig.STANDARD_GRAVITY,
                    "rig.rim_speed": rim_speed, "rig.slip_paper": slip_paper,
-                   "rig.slip_radius": slip_radius(ps)})
+                   "rig.slip_radius": reference_radius(ps)})
     for name, value in values.items():
         rig.check(name, value)
     return values
@@ -68,7 +65,7 @@ def rig_parameters(ps: ParameterSet, slip_paper: float, load: float,
 def averaging_window(ps: ParameterSet, rim_speed: float, stop: float,
                      settle: float = SETTLE_TIME) -> tuple[float, float]:
     """[start, stop]: the most whole grouser periods that fit after ``settle``."""
-    omega = rim_speed / slip_radius(ps)
+    omega = rim_speed / reference_radius(ps)
     count = ps["grouser.count"]
     if count <= 0 or omega <= 0:
         return settle, stop

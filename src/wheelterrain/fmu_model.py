@@ -26,7 +26,8 @@ import casadi as ca
 
 from . import contact, rig
 from .model import RESIDUAL_TOLERANCE, STEP_TOLERANCE
-from .parameters import INDEX, NAMES
+from .parameters import NAMES
+from .slip import reference_radius
 
 SPEED_FLOOR = 1e-9  # m/s: below this the wheel and the carriage are both at rest (slip 0)
 TERRAIN_INPUTS = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "load")
@@ -91,8 +92,7 @@ def paper_slip(wheel_speed, carriage_speed, slip_radius):
 
 def slip_radius(p):
     """Radius R_ref the slip is referenced to, from the table parameter vector ``p``."""
-    return (p[INDEX["wheel.radius"]]
-            + p[INDEX["model.slip_radius_factor"]] * p[INDEX["grouser.height"]])
+    return reference_radius(contact._P(p))
 
 
 @lru_cache(maxsize=2)

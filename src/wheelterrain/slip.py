@@ -20,6 +20,13 @@ PAPER_RANGE = (-0.5, math.inf)
 DEFINITIONS = ("traction", "paper")
 
 
+def reference_radius(values):
+    """The radius R_ref = R + f_ref*h_g both slips are referenced to (``omega*R_ref`` is the rim
+    speed in them): the rim (f_ref = 0) up to the grouser tips (1). ``values``: anything indexed
+    by table name (a ParameterSet, a dict, the model's symbolic parameters)."""
+    return values["wheel.radius"] + values["model.slip_radius_factor"] * values["grouser.height"]
+
+
 def traction_from_paper(s: float) -> float:
     """Traction slip i = s/(1 + s) from the paper's slip s."""
     return s / (1.0 + s)

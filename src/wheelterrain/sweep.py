@@ -24,7 +24,7 @@ import numpy as np
 
 from .errors import ParameterError
 from .parameters import BY_NAME, DEG, TABLE
-from .slip import traction_from_paper
+from .slip import reference_radius, traction_from_paper
 
 OUTPUTS = ("contact_sinkage", "normal_force", "drawbar_pull", "torque", "slip", "slip_paper",
            "entry_angle", "contact_length")
@@ -130,8 +130,7 @@ def run_points(fmu: str, base: dict[str, float], points: list[dict[str, float]],
         try:
             slip = point.get("slip", 0.0)
             i = traction_from_paper(slip) if slip_definition == "paper" else slip
-            r_ref = values["wheel.radius"] + values["model.slip_radius_factor"] * values[
-                "grouser.height"]
+            r_ref = reference_radius(values)
             set_values(w["inst"], w["vr"], w["types"],
                        {**values, "wheel_speed": WHEEL_SPEED,
                         "carriage_speed": WHEEL_SPEED * r_ref * (1 - i),
