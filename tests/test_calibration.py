@@ -109,6 +109,8 @@ def test_written_preset_keeps_the_overrides_the_fit_ran_with(tmp_path):
 @pytest.mark.parametrize(("args", "needle"), [
     (["--params", "soil.gamma"], "cannot be calibrated"),
     (["--params", "soil.phi", "--cases", "C9"], "unknown case"),
+    (["--params", "soil.phi", "--outputs", "normal_force"], "give one or both of drawbar_pull"),
+    (["--params", "soil.phi", "--outputs", "sinkage,sinkage"], "each once"),
 ])
 def test_cli_refuses_bad_requests(args, needle):
     run = CliRunner().invoke(main, ["calibrate", *args])
@@ -143,3 +145,57 @@ def test_diagnostic_bounds_let_a_fit_leave_the_plausible_box():
                            bounds={"soil.shear_modulus": (0.002, 0.1)})
     assert wide.values["soil.shear_modulus"] == pytest.approx(0.08, rel=1e-6)
     assert wide.bounds["soil.shear_modulus"] == (0.002, 0.1)
+
+
+def test_a_fit_to_one_output_recovers_what_that_output_determines():
+    """Sinkage data alone pin k_phi' (phi fixed at the truth); both outputs are reported."""
+    base = presets.load("paper-table2").with_values({"soil.phi": 35 * DEG})
+    data = synthetic(base.with_values({"soil.k_phi": 600.0}))
+    result = calibration.fit(base, ["soil.k_phi"], list(SLIPS), starts=2, data=data,
+                             outputs=("sinkage",))
+    assert result.outputs == ("sinkage",)
+    assert result.values["soil.k_phi"] == pytest.approx(600.0, rel=1e-6)
+    assert set(result.residuals["C2"]) == {"drawbar_pull", "sinkage"}
+    assert abs(result.residuals["C2"]["drawbar_pull"]) < 1e-6
+
+
+def test_a_pull_only_fit_matches_the_pull_at_least_as_well_as_the_joint_fit():
+    """Started from the joint optimum, the pull-only fit can only lower the pull's squares; the
+    sinkage it leaves is reported, not fitted."""
+    base = presets.load(presets.REPRODUCE_PRESET)
+    names = ["soil.phi", "soil.k_phi", "soil.cohesion"]
+    joint = calibration.fit(base, names, list(SLIPS), starts=1)
+    pull = calibration.fit(base, names, list(SLIPS), starts=1, initial=joint.values,
+                           outputs=("drawbar_pull",))
+
+    def squares(fit, key):
+        return sum(r[key] ** 2 for r in fit.residuals.values())
+
+    assert squares(pull, "drawbar_pull") <= squares(joint, "drawbar_pull") + 1e-9
+    assert pull.cost == pytest.approx(squares(pull, "drawbar_pull") / 2, rel=1e-9)
+    assert squares(pull, "sinkage") > 0
+
+
+def test_least_absolute_loss_ignores_one_bad_case_that_least_squares_follows():
+    """Pull data from the model at phi = 35 deg with C3 off by 5 N: the soft-L1 fit (scale far
+    below the residuals, ~ least absolute error) keeps phi, least squares is pulled away."""
+    base = presets.load("paper-table2")
+    data = synthetic(base.with_values({"soil.phi": 35 * DEG}))
+    data[2]["experiment"]["drawbar_pull"] += 5.0
+    kwargs = {"starts": 1, "data": data, "outputs": ("drawbar_pull",),
+              "initial": {"soil.phi": 30 * DEG}}
+    robust = calibration.fit(base, ["soil.phi"], list(SLIPS), loss="soft_l1", loss_scale=1e-4,
+                             **kwargs)
+    squares = calibration.fit(base, ["soil.phi"], list(SLIPS), **kwargs)
+    assert robust.values["soil.phi"] == pytest.approx(35 * DEG, rel=1e-4)
+    assert abs(squares.values["soil.phi"] - 35 * DEG) > 100 * abs(robust.values["soil.phi"]
+                                                                   - 35 * DEG)
+    assert robust.residuals["C3"]["drawbar_pull"] == pytest.approx(-5.0, abs=1e-2)
+    assert robust.standard_errors is None  # they assume squares
+
+
+@pytest.mark.parametrize(("loss", "scale"), [("cauchy", 1.0), ("soft_l1", 0.0)])
+def test_an_unsupported_loss_is_refused(loss, scale):
+    with pytest.raises(calibration.CalibrationError, match="give 'linear' or 'soft_l1'"):
+        calibration.fit(presets.load("paper-table2"), ["soil.phi"], ["C2"], loss=loss,
+                        loss_scale=scale)

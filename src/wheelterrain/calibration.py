@@ -3,8 +3,8 @@
 The model side of each case is the quasi-static steady state at the case's slip and load. The
 co-simulation's window means equal it to < 1e-3 relative (tests/test_cosim.py), and one
 evaluation costs ~1 ms instead of ~2 s. Residuals are drawbar pull in N and sinkage in mm: both
-are measured to about that resolution. The normal force is the rig's load in every case, so it
-carries no information about the soil.
+are measured to about that resolution (a fit can also be asked to match one of them alone). The
+normal force is the rig's load in every case, so it carries no information about the soil.
 
 The fit uses scipy's trust-region reflective least squares with the exact Jacobian
 (:func:`wheelterrain.model.steady_jacobian`, implicit function theorem) inside bounds. Several
@@ -33,6 +33,8 @@ from .parameters import DEG, INDEX, NAMES, ParameterSet
 from .slip import traction_from_paper
 
 SCALES = {"drawbar_pull": 1.0, "sinkage": 1e-3}  # N, m: one unit of residual each
+OUTPUTS = ("drawbar_pull", "sinkage")  # what a fit can be asked to match, in residual order
+RESIDUAL_UNITS = {"drawbar_pull": "drawbar pull [N]", "sinkage": "sinkage [mm]"}
 OUTPUT_ROW = {"sinkage": 0, "drawbar_pull": 2}  # rows of steady_jacobian's d_params
 
 _LUNAR = ("Lunar regolith and its simulants (Carrier, Olhoeft & Mendell, Lunar Sourcebook "
@@ -70,6 +72,7 @@ class Fit:
     starts: int
     converged_starts: int
     spread: dict[str, float] = field(default_factory=dict)  # of near-optimal starts
+    outputs: tuple[str, ...] = OUTPUTS  # the quantities the residuals compared
 
 
 def paper_cases() -> list[dict]:
@@ -102,7 +105,17 @@ def predictions(ps: ParameterSet, cases: list[dict], load: float = 62.0
     return [model.steady_state(ps, load, traction_from_paper(c["slip_paper"])) for c in cases]
 
 
-def _residuals_and_jacobian(x, names, base, cases, load, want_jac=True):
+def check_outputs(outputs) -> tuple[str, ...]:
+    """``outputs`` as a tuple in residual order; an unknown or repeated name is refused."""
+    outputs = tuple(outputs)
+    unknown = [o for o in outputs if o not in OUTPUTS]
+    if unknown or not outputs or len(set(outputs)) != len(outputs):
+        raise CalibrationError(f"outputs {list(outputs)} invalid: give one or both of "
+                               f"{', '.join(OUTPUTS)}, each once")
+    return tuple(o for o in OUTPUTS if o in outputs)
+
+
+def _residuals_and_jacobian(x, names, base, cases, load, want_jac=True, outputs=OUTPUTS):
     ps = base.with_values(dict(zip(names, x, strict=True)))
     r, rows = [], []
     for c in cases:
@@ -110,7 +123,7 @@ def _residuals_and_jacobian(x, names, base, cases, load, want_jac=True):
         out = model.steady_state(ps, load, slip)
         if want_jac:
             jac = model.steady_jacobian(ps, load, slip, state=out)["d_params"]
-        for key in ("drawbar_pull", "sinkage"):
+        for key in outputs:
             r.append((out[key] - c["experiment"][key]) / SCALES[key])
             if want_jac:
                 rows.append([jac[OUTPUT_ROW[key], INDEX[n]] / SCALES[key] for n in names])
@@ -120,15 +133,28 @@ def _residuals_and_jacobian(x, names, base, cases, load, want_jac=True):
 def fit(base: ParameterSet, names: list[str], case_names: list[str], starts: int = 8,
         seed: int = 0, load: float = 62.0, data: list[dict] | None = None,
         initial: dict[str, float] | None = None,
-        bounds: dict[str, tuple[float, float]] | None = None) -> Fit:
+        bounds: dict[str, tuple[float, float]] | None = None,
+        outputs: tuple[str, ...] = OUTPUTS, loss: str = "linear",
+        loss_scale: float = 1.0) -> Fit:
     """Fit ``names`` to the drawbar pull and sinkage of ``case_names`` (see module docstring).
 
     ``data``: cases in the form of validation/paper_table3.json (default: that file).
     ``initial``: the first start (e.g. the optimum of a nested model); the base preset's values
     for names it omits. The other starts are random over the plausible box.
     ``bounds``: replaces the plausible range of the parameters it names (diagnostics: what the
-    data would want outside the plausible box; never for a preset)."""
+    data would want outside the plausible box; never for a preset).
+    ``outputs``: the measured quantities the residuals compare (default both). A fit to the
+    drawbar pull alone asks how well the model's pull-slip curve can follow the rig's at all,
+    whatever it does to the sinkage. ``Fit.residuals`` holds both outputs either way.
+    ``loss``, ``loss_scale``: scipy's robust loss and its scale in residual units (N, mm).
+    "soft_l1" with a scale far below the residuals minimises ~ the sum of absolute residuals,
+    i.e. the mean absolute error a target is stated in; ``Fit.cost`` is then that loss, and
+    standard errors and profiles (which assume squares) are for "linear" fits only."""
     check_free(names)
+    outputs = check_outputs(outputs)
+    if loss not in ("linear", "soft_l1") or not loss_scale > 0:
+        raise CalibrationError(f"loss {loss!r} with scale {loss_scale}: give 'linear' or "
+                               "'soft_l1' and a scale > 0")
     cases = _case_rows(case_names, data)
     box = {n: (bounds or {}).get(n, PLAUSIBLE[n][:2]) for n in names}
     lo = np.array([box[n][0] for n in names])
@@ -143,24 +169,26 @@ def fit(base: ParameterSet, names: list[str], case_names: list[str], starts: int
         key = np.asarray(x).tobytes()
         if key not in cache:
             try:
-                cache[key] = _residuals_and_jacobian(x, names, base, cases, load)
+                cache[key] = _residuals_and_jacobian(x, names, base, cases, load,
+                                                     outputs=outputs)
             except WheelTerrainError:  # e.g. the load is beyond capacity at this trial point
-                cache[key] = (np.full(2 * len(cases), 1e3), np.zeros((2 * len(cases),
-                                                                      len(names))))
+                m = len(outputs) * len(cases)
+                cache[key] = (np.full(m, 1e3), np.zeros((m, len(names))))
         return cache[key]
 
     results = []
     for x0 in candidates:
         sol = least_squares(lambda x: both(x)[0], x0, jac=lambda x: both(x)[1],
-                            bounds=(lo, hi), x_scale="jac", max_nfev=200)
+                            bounds=(lo, hi), x_scale="jac", max_nfev=200, loss=loss,
+                            f_scale=loss_scale)
         results.append(sol)
     best = min(results, key=lambda s: s.cost)
     near = [s for s in results if s.cost <= best.cost * (1 + 1e-3) + 1e-12]
     spread = {n: float(np.ptp([s.x[k] for s in near])) for k, n in enumerate(names)}
-    r, J = _residuals_and_jacobian(best.x, names, base, cases, load)
+    r, J = _residuals_and_jacobian(best.x, names, base, cases, load, outputs=outputs)
     m, p = len(r), len(names)
     errors, corr = None, None
-    if m > p:
+    if m > p and loss == "linear":
         s2 = float(r @ r) / (m - p)
         try:
             inverse = np.linalg.inv(J.T @ J)
@@ -173,13 +201,15 @@ def fit(base: ParameterSet, names: list[str], case_names: list[str], starts: int
     tol = 1e-6 * (hi - lo)
     at_bound = [n for k, n in enumerate(names)
                 if best.x[k] <= lo[k] + tol[k] or best.x[k] >= hi[k] - tol[k]]
-    residuals = {c["case"]: {"drawbar_pull": float(r[2 * k] * SCALES["drawbar_pull"]),
-                             "sinkage": float(r[2 * k + 1] * SCALES["sinkage"])}
+    every = r if outputs == OUTPUTS else _residuals_and_jacobian(
+        best.x, names, base, cases, load, want_jac=False)[0]
+    residuals = {c["case"]: {key: float(every[len(OUTPUTS) * k + o] * SCALES[key])
+                             for o, key in enumerate(OUTPUTS)}
                  for k, c in enumerate(cases)}
     return Fit(list(names), list(case_names), dict(zip(names, map(float, best.x), strict=True)),
                {n: (float(lo[k]), float(hi[k])) for k, n in enumerate(names)}, at_bound,
                errors, corr, residuals, float(best.cost), len(candidates),
-               sum(s.success for s in results), spread)
+               sum(s.success for s in results), spread, outputs)
 
 
 def errors_on(ps: ParameterSet, case_names: list[str], load: float = 62.0
@@ -230,15 +260,16 @@ def preset_document(name: str, base_name: str, base: ParameterSet, result: Fit,
             "date_of_fit": datetime.date.today().isoformat(),
             "code_version": code_version(),
             "method": "scipy least_squares (trf) with the exact CasADi Jacobian, "
-                      f"{result.starts} starts; residuals drawbar pull [N] and sinkage [mm]",
+                      f"{result.starts} starts; residuals "
+                      + " and ".join(RESIDUAL_UNITS[o] for o in result.outputs),
         },
         "values": values,
     }
 
 
 def profile(base: ParameterSet, names: list[str], case_names: list[str], best: dict[str, float],
-            name: str, points: int = 7, load: float = 62.0, data: list[dict] | None = None
-            ) -> list[tuple[float, float]]:
+            name: str, points: int = 7, load: float = 62.0, data: list[dict] | None = None,
+            outputs: tuple[str, ...] = OUTPUTS) -> list[tuple[float, float]]:
     """Profile of ``name``: (value, sum of squared residuals) with ``name`` fixed at ``points``
     values across its plausible range, plus its best value, and the other parameters refitted
     from ``best``. The interval's resolution is the grid step.
@@ -254,12 +285,13 @@ def profile(base: ParameterSet, names: list[str], case_names: list[str], best: d
         try:
             if others:
                 r = fit(fixed, others, case_names, starts=1, load=load, data=data,
-                        initial={n: best[n] for n in others})
+                        initial={n: best[n] for n in others}, outputs=outputs)
                 ssr = 2 * r.cost
             else:
                 res, _ = _residuals_and_jacobian(np.array([]), [], fixed,
                                                  _case_rows(case_names, data), load,
-                                                 want_jac=False)
+                                                 want_jac=False,
+                                                 outputs=check_outputs(outputs))
                 ssr = float(res @ res)
         except WheelTerrainError:  # no feasible fit with this value (load beyond capacity)
             ssr = math.inf

@@ -287,10 +287,14 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_file
               type=click.IntRange(0, 101), help="Profile each parameter at this many values "
               "across its plausible range (the others refitted): the identifiability measure "
               "where standard errors do not exist (no more residuals than parameters).")
+@click.option("--outputs", default="drawbar_pull,sinkage", show_default=True,
+              help="The measured quantities the fit matches. drawbar_pull alone asks how "
+              "closely the model's pull-slip curve can follow the rig's at all, whatever the "
+              "sinkage does (both are reported either way).")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, starts: int,
               seed: int, out_file: str | None, name: str, protocol: str | None,
-              profile_points: int, as_json: bool) -> None:
+              profile_points: int, outputs: str, as_json: bool) -> None:
     """Fit parameters to the rig's C1-C4 drawbar pull and sinkage by least squares.
 
     \b
@@ -309,21 +313,24 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
     base = _load(preset, assignments)
     names = [n.strip() for n in free.split(",") if n.strip()]
     case_names = [c.strip() for c in cases.split(",") if c.strip()]
+    matched = tuple(o.strip() for o in outputs.split(",") if o.strip())
     try:
-        result = calibration.fit(base, names, case_names, starts=starts, seed=seed)
+        result = calibration.fit(base, names, case_names, starts=starts, seed=seed,
+                                 outputs=matched)
         fitted = base.with_values(result.values)
         held_out = [c for c in ("C1", "C2", "C3", "C4") if c not in case_names]
         held = calibration.errors_on(fitted, held_out) if held_out else {}
         profiles = {}
         for n in names if profile_points >= 2 else []:
             points = calibration.profile(base, names, case_names, result.values, n,
-                                         profile_points)
+                                         profile_points, outputs=result.outputs)
             profiles[n] = {"points": points, "interval": calibration.profile_interval(
                 points, 2 * result.cost)}
     except WheelTerrainError as err:
         _fail(err)
     payload = {
-        "preset": preset, "fitted_on": case_names, "values": result.values,
+        "preset": preset, "fitted_on": case_names, "outputs": list(result.outputs),
+        "values": result.values,
         "plausible_ranges": result.bounds, "at_bound": result.at_bound,
         "standard_errors": result.standard_errors,
         "correlation": None if result.correlation is None else result.correlation.tolist(),
@@ -334,8 +341,8 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
     if as_json:
         click.echo(json.dumps(payload, indent=2))
     else:
-        click.echo(f"fit of {', '.join(names)} to {', '.join(case_names)} "
-                   f"({result.starts} starts, base preset {preset})")
+        click.echo(f"fit of {', '.join(names)} to the {' and '.join(result.outputs)} of "
+                   f"{', '.join(case_names)} ({result.starts} starts, base preset {preset})")
         for n in names:
             lo, hi = result.bounds[n]
             unit = "deg" if n == "soil.phi" else ""
