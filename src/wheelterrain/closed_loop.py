@@ -170,11 +170,10 @@ class FMUPlant:
         paths = cosim.fmu_paths(fmu_dir)
         self.unzipped = {name: extract(str(p)) for name, p in paths.items()}
         self.terrain, self.rig = cosim.start_pair(paths, self.unzipped, ps, p_rig)
-        states = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")
-        self.rig_out = self.rig.refs((*states, "speed_error_integral", "motor_torque"))
-        self.ter_in = self.terrain.refs(states)
-        self.ter_out = self.terrain.refs((*fmu_model.TERRAIN_OUTPUTS, "wheel_angle"))
-        self.rig_in = self.rig.refs((*rig.FORCE_INPUTS, "wheel_speed_command"))
+        self.pair = cosim.Coupling(
+            self.terrain, self.rig, rig_extra=("speed_error_integral", "motor_torque"),
+            terrain_extra=(*fmu_model.TERRAIN_OUTPUTS[len(rig.FORCE_INPUTS):], "wheel_angle"),
+            commands=("wheel_speed_command",))
         self.t = 0.0
 
     def set_soil(self, values: dict[str, float]) -> None:
@@ -184,21 +183,15 @@ class FMUPlant:
         self.rig.set(values)
 
     def state(self) -> np.ndarray:
-        r = self.rig.fmu.getReal(self.rig_out)
-        angle = self.terrain.fmu.getReal([self.ter_out[-1]])[0]
-        return np.array([r[0], r[1], r[2], r[4], r[3], angle])
+        """mpc.STATES: the rig's states (rig.STATES), then the terrain's wheel angle."""
+        return np.array([*self.rig.get(rig.STATES), *self.terrain.get(("wheel_angle",))])
 
     def advance(self, command: float, steps: int, record: Callable) -> None:
-        get_r, get_t = self.rig.fmu.getReal, self.terrain.fmu.getReal
         for _ in range(steps):
-            r = get_r(self.rig_out)
-            self.terrain.fmu.setReal(self.ter_in, r[:4])
-            y = get_t(self.ter_out)
-            self.rig.fmu.setReal(self.rig_in, [*y[:3], command])
+            r, y = self.pair.exchange((command,))
             record((r[0], r[1], r[2], r[4], r[3]), y[-1], y[:-1], r[5])
             try:
-                self.rig.fmu.doStep(self.t, PLANT_STEP)
-                self.terrain.fmu.doStep(self.t, PLANT_STEP)
+                self.pair.step(self.t, PLANT_STEP)
             except Exception as err:  # fmpy raises FMICallException on fmi2Discard/Error
                 raise mpc.PlantError(f"the FMU plant refused the step at t = {self.t:g} s: "
                                    f"{err}") from err

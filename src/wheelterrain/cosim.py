@@ -117,6 +117,9 @@ class _Instance:
     def refs(self, names) -> list[int]:
         return [self.vr[n] for n in names]
 
+    def get(self, names) -> list[float]:
+        return self.fmu.getReal(self.refs(names))
+
     def close(self) -> None:
         if self.running:  # an FMU refuses fmi2Terminate before initialisation has ended
             self.fmu.terminate()
@@ -150,6 +153,43 @@ def start_pair(paths: dict[str, Path], unzipped: dict[str, str], ps: ParameterSe
     return terrain, rig_fmu
 
 
+STATES = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")  # rig -> terrain
+
+
+class Coupling:
+    """The FMU pair's coupling scheme, written once: Gauss-Seidel, rig first.
+
+    :meth:`exchange` reads the rig's wheel states (STATES), hands them to the terrain, reads the
+    terrain's forces (rig.FORCE_INPUTS) and hands them, with any ``commands``, to the rig;
+    :meth:`step` then advances the rig and the terrain over the same interval. ``rig_extra`` and
+    ``terrain_extra`` name further outputs read with the states and with the forces (what a
+    caller records), ``commands`` further rig inputs set with the forces. Used by the C1-C4
+    master (:func:`run_case`) and the MPC's FMU plant (``closed_loop.FMUPlant``).
+    """
+
+    def __init__(self, terrain: _Instance, rig_fmu: _Instance, rig_extra: tuple = (),
+                 terrain_extra: tuple = (), commands: tuple = ()) -> None:
+        self.terrain, self.rig = terrain, rig_fmu
+        self._rig_out = rig_fmu.refs((*STATES, *rig_extra))
+        self._ter_in = terrain.refs(STATES)
+        self._ter_out = terrain.refs((*rig.FORCE_INPUTS, *terrain_extra))
+        self._rig_in = rig_fmu.refs((*rig.FORCE_INPUTS, *commands))
+        self._states, self._forces = len(STATES), len(rig.FORCE_INPUTS)
+
+    def exchange(self, commands: tuple = ()) -> tuple[list[float], list[float]]:
+        """One exchange; returns (rig outputs: STATES + rig_extra, terrain outputs: forces +
+        terrain_extra)."""
+        x = self.rig.fmu.getReal(self._rig_out)
+        self.terrain.fmu.setReal(self._ter_in, x[:self._states])
+        y = self.terrain.fmu.getReal(self._ter_out)
+        self.rig.fmu.setReal(self._rig_in, [*y[:self._forces], *commands])
+        return x, y
+
+    def step(self, t: float, h: float) -> None:
+        self.rig.fmu.doStep(t, h)
+        self.terrain.fmu.doStep(t, h)
+
+
 def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, rim_speed: float,
              case: str = "", stop: float = STOP_TIME, step: float = STEP,
              unzipped: dict[str, str] | None = None, settle: float = SETTLE_TIME) -> CaseResult:
@@ -163,28 +203,17 @@ def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, ri
     terrain, rig_fmu = start_pair(paths, unzipped, ps,
                                   rig_parameters(ps, slip_paper, load, rim_speed), stop)
     try:
-        states = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")
-        rig_out, ter_in = rig_fmu.refs(states), terrain.refs(states)
-        forces = ("normal_force", "drawbar_pull", "torque")
-        ter_out = terrain.refs((*forces, "slip", "slip_paper", "wheel_angle"))
-        rig_in, rig_rec = rig_fmu.refs(forces), rig_fmu.refs(("motor_torque",))
+        pair = Coupling(terrain, rig_fmu, rig_extra=("motor_torque",),
+                        terrain_extra=("slip", "slip_paper", "wheel_angle"))
+        exchange, advance = pair.exchange, pair.step
         n = round(stop / step)
         data = np.empty((n + 1, len(RECORD) + 1))
-        get_r, get_t = rig_fmu.fmu.getReal, terrain.fmu.getReal
-        set_r, set_t = rig_fmu.fmu.setReal, terrain.fmu.setReal
-        step_r, step_t = rig_fmu.fmu.doStep, terrain.fmu.doStep
-        t = 0.0
         for k in range(n + 1):
             t = k * step
-            x = get_r(rig_out)
-            set_t(ter_in, x)
-            y = get_t(ter_out)
-            set_r(rig_in, y[:3])
-            data[k] = (t, x[0], y[0], y[1], y[2], y[3], y[4], x[2], x[3], get_r(rig_rec)[0],
-                       y[5])
+            x, y = exchange()
+            data[k] = (t, x[0], y[0], y[1], y[2], y[3], y[4], x[2], x[3], x[4], y[5])
             if k < n:
-                step_r(t, step)
-                step_t(t, step)
+                advance(t, step)
     finally:
         terrain.close()
         rig_fmu.close()
