@@ -78,3 +78,26 @@ def test_report_weighs_a_left_out_mechanism_by_its_figures(monkeypatch, rms, ver
         assert verdict in text
     else:
         assert "preset" not in text  # worse than the chosen set: nothing to weigh
+
+
+@pytest.mark.parametrize(("floor", "sinkage", "verdict"), [
+    (0.55, 15.1, "still above the 0.48 N bar"),
+    (0.40, 15.1, "at or below the 0.48 N bar, but only with the sinkage given up"),
+    (0.40, 0.70, "at or below the 0.48 N bar."),
+])
+def test_report_states_the_pull_floor_from_its_figures(monkeypatch, floor, sinkage, verdict):
+    monkeypatch.syspath_prepend(str(ROOT / "validation"))
+    import make_report
+
+    def row(name, dp, z):
+        fit = {"mae_drawbar_pull": dp, "mae_sinkage_mm": z,
+               "drawbar_pull_residuals": [-dp, 0.0, dp, 0.0]}
+        return {"variant": name, "least_squares": fit, "least_absolute": fit}
+
+    rows = [row("chosen", floor + 0.1, 15.0), row("every", floor, sinkage)]
+    text = "\n".join(make_report.pull_floor_lines(rows))
+    assert f"The lowest pull MAE is {floor:.2f} N (every, least absolute error; sinkage MAE " \
+           f"{sinkage:.2f} mm there)" in text
+    assert verdict in text
+    assert text.count("| chosen |") == 1
+    assert text.count("| every |") == 1
