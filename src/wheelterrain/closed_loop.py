@@ -142,7 +142,8 @@ class CasadiPlant:
         u = [z, z_rate, omega, speed, self.p_rig["rig.load"]]
         y, status, info = self.terrain(u, self.angle, self.p)
         if int(status) != fmu_model.STATUS_OK:
-            raise mpc.PlantError(f"plant left the model's domain (status {int(status)}, {info})")
+            raise mpc.PlantError("the in-process plant refused the step: "
+                                 + fmu_model.status_message(int(status), float(info), u))
         return np.array(y).ravel()
 
     def state(self) -> np.ndarray:

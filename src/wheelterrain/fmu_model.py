@@ -55,6 +55,17 @@ STATUS_MESSAGES = {
 }
 
 
+def status_message(status: int, info: float, u) -> str:
+    """STATUS_MESSAGES filled for a status of the terrain Functions with their inputs ``u``
+    (TERRAIN_INPUTS); the native wrapper fills the same templates in C."""
+    v = dict(zip(TERRAIN_INPUTS, u, strict=True))
+    if status == STATUS_SLIP:
+        return STATUS_MESSAGES[status] % (v["wheel_speed"], v["carriage_speed"], info)
+    if status == STATUS_LOAD:
+        return STATUS_MESSAGES[status] % (v["load"], info, info)
+    return STATUS_MESSAGES[STATUS_UNCONVERGED] % v["load"]
+
+
 def slips(wheel_speed, carriage_speed, slip_radius):
     """(traction slip, paper's slip, forward) from the wheel's and the carriage's speeds.
 

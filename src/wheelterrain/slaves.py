@@ -331,7 +331,7 @@ class TerrainCore(_Core):
             y, status, info = self.dynamic(u, self.angle, p)
         self.errors.pop(OPERATING_POINT, None)
         if status != fmu_model.STATUS_OK:
-            self.errors[OPERATING_POINT] = terrain_problem(int(status), info, u)
+            self.errors[OPERATING_POINT] = fmu_model.status_message(int(status), info, u)
             self.log_error(self.errors[OPERATING_POINT])
             return
         v.update(zip(fmu_model.TERRAIN_OUTPUTS, y, strict=True))
@@ -355,18 +355,6 @@ class TerrainCore(_Core):
 
 _PARAMETERS = {**BY_NAME, **{p.name: p for p in rig.RIG_TABLE}}
 OPERATING_POINT = "operating point"  # the key of the error the model's status reports
-
-
-def terrain_problem(status: int, info: float, u: list[float]) -> str:
-    """The message for a status of :mod:`wheelterrain.fmu_model`'s terrain Functions (the
-    native wrapper fills the same templates)."""
-    v = dict(zip(fmu_model.TERRAIN_INPUTS, u, strict=True))
-    template = fmu_model.STATUS_MESSAGES
-    if status == fmu_model.STATUS_SLIP:
-        return template[status] % (v["wheel_speed"], v["carriage_speed"], info)
-    if status == fmu_model.STATUS_LOAD:
-        return template[status] % (v["load"], info, info)
-    return template[fmu_model.STATUS_UNCONVERGED] % v["load"]
 
 
 class RigCore(_Core):
