@@ -21,9 +21,13 @@ POINT = {
 }
 
 
-@pytest.fixture(scope="module", params=[0, 1], ids=["wheel-element-j", "soil-element-j"])
+@pytest.fixture(scope="module", params=[(0, 0), (1, 0), (0, 1), (1, 1)],
+                ids=["arc-wheel-element-j", "arc-soil-element-j", "patch-wheel-element-j",
+                     "patch-soil-element-j"])
 def point_params(table2, request):
-    return table2.with_values({**POINT, "model.shear_kinematics": request.param})
+    kinematics, form = request.param
+    return table2.with_values({**POINT, "model.shear_kinematics": kinematics,
+                               "model.contact_form": form})
 
 
 def _scales(p: np.ndarray) -> np.ndarray:

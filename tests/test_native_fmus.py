@@ -76,12 +76,14 @@ TERRAIN_OUT = ("normal_force", "drawbar_pull", "torque", "contact_sinkage", "sli
                "entry_angle", "exit_angle", "contact_length", "wheel_angle")
 
 
+@pytest.mark.parametrize("contact_form", [0, 1], ids=["arc", "patch"])
 @pytest.mark.parametrize("quasi_static", [False, True])
-def test_flavours_agree_on_wheelterrain(flavours, quasi_static):
+def test_flavours_agree_on_wheelterrain(flavours, quasi_static, contact_form):
     rng = np.random.default_rng(3)
     checked = 0
     for k in range(25):
-        values = {**_random_terrain_values(rng), "quasi_static": quasi_static}
+        values = {**_random_terrain_values(rng), "quasi_static": quasi_static,
+                  "model.contact_form": contact_form}
         out = []
         for flavour in ("pythonfmu", "native"):
             t = instance(flavours, flavour, "WheelTerrain", f"{flavour}{k}")
@@ -129,7 +131,7 @@ def test_flavours_agree_on_the_rig(flavours):
 
 
 def test_flavours_give_the_same_c1_c4_means(flavours):
-    ps = presets.load("paper-table2")
+    ps = presets.load("paper-table2-arc")
     for case, slip in (("C1", 0.0), ("C2", 0.25), ("C3", 0.5), ("C4", 0.75)):
         means = []
         for flavour in ("pythonfmu", "native"):
@@ -175,7 +177,7 @@ def test_bad_parameter_gives_fmi2error_with_the_reason_even_without_logging(flav
         with pytest.raises(FMICallException) as info:
             t.fmu.doStep(0.0, 1e-3)
         assert info.value.status == 2  # fmi2Discard
-        t.set({name: presets.load("paper-table2")[name]})
+        t.set({name: presets.load("paper-table2-arc")[name]})
         t.fmu.doStep(0.0, 1e-3)  # recovered
     finally:
         t.close()
@@ -223,7 +225,7 @@ def test_state_round_trip_and_serialization(flavours):
 
 def test_ecos_runs_the_ssp_and_gives_the_fmpy_means(flavours, tmp_path):
     pytest.importorskip("ecospy")
-    ps = presets.load("paper-table2")
+    ps = presets.load("paper-table2-arc")
     stop, step = 11.0, 1e-3
     root = flavours["root"] / "native"
     path = ssp.write(tmp_path / "C3.ssp", root, "C3", ps, 0.5, 62.0, 0.03, stop, step)

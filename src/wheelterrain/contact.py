@@ -31,6 +31,12 @@ Equations (Wong & Reece 1967; Wong, *Theory of Ground Vehicles*; Ishigami et al.
     Fz = b*int(R_c*sigma*cos + R_s*tau*sin),  DP = b*int(R_s*tau*cos - R_c*sigma*sin),
     T  = b*R_s**2*int(tau)                                               over [theta_r, theta_f]
 
+Two contact forms, selected by ``model.contact_form`` (both written here, once): 0, the arc
+above; 1, the patch (:func:`_patch_form`), the Reece pressure acting uniformly on the flat
+contact patch with Bekker's patch thrust and compaction resistance, the soft-soil reading of the
+paper's eq. 1. Every Function below (contact, Jacobians, sinkage solve, steady state) takes the
+switch from the parameter vector, so the FMUs, the MPC, the calibration and the sweeps get both.
+
 The shear-displacement kinematics (``model.shear_kinematics``) is documented at
 :class:`_Displacement`. With every extension off (n1 = 0, f_c = f_s = f_ref = 0, Janosi,
 wheel-element kinematics, lambda = 0, no ripple) this is the
@@ -236,9 +242,10 @@ def _offset_trig(theta_f: ca.SX, x: ca.SX) -> dict:
             "cos_drop": 2 * sa * sh, "sin_drop": 2 * cs * sh}
 
 
-def _arc(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tuple[int, int],
-         ripple: bool) -> dict:
-    """All contact quantities for a given entry angle (no damping). ``ripple=False`` drops it."""
+def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tuple[int, int],
+              ripple: bool) -> dict:
+    """The arc form: all contact quantities for a given entry angle (no damping).
+    ``ripple=False`` drops the ripple."""
     Rc, Rs, Rref = _radii(P)
     b = P["wheel.width"]
     c, tan_phi = P["soil.cohesion"], ca.tan(P["soil.phi"])
@@ -344,12 +351,117 @@ def _grouser_thrust(theta_f, front, rear, w_front, w_rear, g_front, g_rear, P: _
     return horizontal, vertical, torque
 
 
+SMALL_MOBILISATION = 1e-3  # |x*l/K| below which the patch-mean shear uses its Taylor series
+
+
+def patch_shear_mean(a: ca.SX, P: _P) -> ca.SX:
+    """Mean mobilised shear fraction over a patch whose displacement grows linearly from 0 at
+    the front to ``a`` = x*l/K at the rear (x the shearing slip, l the patch length):
+    (1/a)*int_0^a g(u*K) du for the shear law of ``model.shear_model``, odd in ``a`` as g is.
+
+    Janosi: 1 - (1 - exp(-a))/a, the bracket of Bekker's patch thrust
+    H = (A*c + W*tan(phi))*[1 - K/(x*l)*(1 - exp(-x*l/K))] (Bekker 1960; Wong, *Theory of
+    Ground Vehicles*, ch. 2). Wong's hump form g = K_r*[(1 - E) + C*e*(E - E**2)],
+    E = exp(-j/K), C = 1/(K_r*(1 - 1/e)) - 1, integrates the same way:
+    K_r*[1 - (1 - exp(-a))/a + C*e*((1 - exp(-a)) - (1 - exp(-2a))/2)/a].
+    Below SMALL_MOBILISATION the 0/0 is replaced by the Taylor series (three terms, error
+    ~a**4).
+    """
+    Kr, hump = P["soil.residual_ratio"], P["model.shear_model"]
+    m = ca.fabs(a)
+    small = m < SMALL_MOBILISATION
+    safe = ca.if_else(small, 1, m)
+    one_minus = -ca.expm1(-safe)  # 1 - exp(-a) without cancellation
+    janosi = ca.if_else(small, m / 2 - m**2 / 6 + m**3 / 24, 1 - one_minus / safe)
+    rise = ca.if_else(small, m / 2 - m**2 / 2 + 7 * m**3 / 24,
+                      (one_minus + ca.expm1(-2 * safe) / 2) / safe)
+    C = 1 / (Kr * (1 - math.exp(-1))) - 1
+    wong = Kr * (janosi + C * math.e * rise)
+    return ca.sign(a) * ((1 - hump) * janosi + hump * wong)
+
+
+def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: bool) -> dict:
+    """The patch form (``model.contact_form`` = 1): all contact quantities for a given entry
+    angle (no damping), the keys of :func:`_arc_form`.
+
+    The soft-soil reading of the paper's eq. 1: the Reece pressure of the sinkage acts uniformly
+    on the flat contact patch, as in Bekker's and Wong's flat-plate analysis of a wheel::
+
+        z = R_c*(1 - cos(theta_f)),   theta_r as in the arc form (lambda = model.exit_ratio)
+        l = R_c*(sin(theta_f) - sin(theta_r))   (lambda = 1: the chord 2*sqrt(2*R_c*z - z**2))
+        p = (c*k_c' + gamma*b*k_phi')*(z/b)**n,  n = n0 + n1*|i|          (Reece 1965)
+        Fz = b*l*max(p + A*sin(n_g*wheel_angle + Phi), 0)                 (ripple as the arc's)
+        H  = (c*b*l + Fz*tan(phi))*m(x*l/K)                               (Bekker 1960)
+        R_comp = b*int_0^z p dz' = b*p*z/(n + 1)                          (Bekker 1956)
+        DP = H - R_comp,   T = R_s*H
+
+    m is :func:`patch_shear_mean`. x is the slip of the shearing surface (radius R_s) that the
+    shear displacement j = x*(distance from the patch front) counts, by
+    ``model.shear_kinematics``: 0, the wheel element's i_s = 1 - v/R_s (v = (1 - i)*R_ref, the
+    carriage speed per wheel rad/s; with R_s = R_ref this is the traction slip); 1, the soil
+    element's s_s = R_s/v - 1, the slip velocity over the time the patch takes to pass a soil
+    element (with R_s = R_ref the paper's slip s). Choices, documented: the compaction
+    resistance is the ripple-free rut work; the shear acts horizontally, so it adds nothing to
+    Fz; the grouser thrust of the arc form (``model.grouser_thrust``) and the max-stress angle
+    (a0, a1) have no meaning on a uniform patch and are not used (max_stress_angle is reported
+    as 0).
+    """
+    Rc, Rs, Rref = _radii(P)
+    b, c = P["wheel.width"], P["soil.cohesion"]
+    n = P["soil.n0"] + P["soil.n1"] * ca.fabs(slip)
+    half = ca.sin(theta_f / 2)
+    z = 2 * Rc * half**2  # R_c*(1 - cos(theta_f)) without cancellation
+    theta_r = -2 * ca.asin(ca.sqrt(P["model.exit_ratio"]) * half)
+    length = Rc * (ca.sin(theta_f) - ca.sin(theta_r))
+    modulus = c * P["soil.k_c"] + P["soil.gamma"] * b * P["soil.k_phi"]
+    pressure = modulus * (z / b) ** n
+    normal_static = b * length * pressure
+    amplitude = P["ripple.k_g"] * pressure + P["ripple.k_0"] * length * P["soil.gamma_variation"]
+    if ripple:
+        phase = P["grouser.count"] * wheel_angle + P["ripple.phase"]
+        normal = b * length * ca.fmax(pressure + amplitude * ca.sin(phase), 0)
+    else:
+        normal = normal_static
+    v = ca.fmax(1 - slip, SPIN_FLOOR) * Rref
+    kinematics = P["model.shear_kinematics"]
+    x = (1 - kinematics) * (1 - (1 - slip) * Rref / Rs) + kinematics * (Rs / v - 1)
+    mobilised = patch_shear_mean(x * length / P["soil.shear_modulus"], P)
+    thrust = (c * b * length + normal * ca.tan(P["soil.phi"])) * mobilised
+    compaction = b * pressure * z / (n + 1)
+    return {
+        "normal_force": normal,
+        "drawbar_pull": thrust - compaction,
+        "torque": Rs * thrust,
+        "gross_thrust": thrust,
+        "compaction_resistance": compaction,
+        "entry_angle": theta_f,
+        "exit_angle": theta_r,
+        "max_stress_angle": ca.SX(0),
+        "contact_length": length,
+        "mean_pressure": pressure,
+        "sinkage_exponent": n,
+        "ripple_amplitude": amplitude if ripple else ca.SX(0),
+        "normal_force_static": normal_static,
+    }
+
+
+def _at_entry_angle(theta_f, slip, wheel_angle, P: _P, nodes: tuple[int, int],
+                    ripple: bool) -> dict:
+    """Every contact quantity at entry angle ``theta_f`` in the form ``model.contact_form``
+    selects (0 arc, 1 patch). Both forms are in the expression; the switch picks one exactly
+    (if_else, so neither form's value leaks into the other's)."""
+    arc = _arc_form(theta_f, slip, wheel_angle, P, nodes, ripple)
+    patch = _patch_form(theta_f, slip, wheel_angle, P, ripple)
+    is_patch = P["model.contact_form"] == 1
+    return {k: ca.if_else(is_patch, patch[k], arc[k]) for k in arc}
+
+
 def _contact(z, z_rate, slip, wheel_angle, P: _P, nodes: tuple[int, int], ripple: bool) -> dict:
     """Contact quantities at sinkage z (m, to the contact circle), with damping C_f*dz/dt."""
     Rc, _, _ = _radii(P)
     # arccos(1 - z/R_c) in its half-angle form, accurate for tiny sinkage (1 - z/R_c rounds)
     theta_f = 2 * ca.asin(ca.sqrt(ca.fmax(z, 0) / (2 * Rc)))
-    out = _arc(theta_f, slip, wheel_angle, P, nodes, ripple)
+    out = _at_entry_angle(theta_f, slip, wheel_angle, P, nodes, ripple)
     damping = ca.if_else(z > 0, P["soil.damping"] * z_rate, 0)
     out["normal_force"] = ca.fmax(out["normal_force"] + damping, 0)
     return out
@@ -474,7 +586,7 @@ def _static_functions(nodes: tuple[int, int]) -> tuple[ca.Function, ca.Function,
     d/d(theta_f)), Fz_static alone, and every CONTACT_OUTPUT. Called with SX arguments they
     inline; with MX arguments they stay calls."""
     th, sl, pp = ca.SX.sym("theta_f"), ca.SX.sym("slip"), ca.SX.sym("p", len(NAMES))
-    arc = _arc(th, sl, 0, _P(pp), nodes, ripple=False)
+    arc = _at_entry_angle(th, sl, 0, _P(pp), nodes, ripple=False)
     fz = arc["normal_force_static"]
     return (ca.Function("fz_static", [th, sl, pp], [fz, ca.jacobian(fz, th)]),
             ca.Function("fz_static_value", [th, sl, pp], [fz]),
@@ -504,7 +616,8 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
                                 ["sinkage", "residual", "last_step", "capacity"])
     capacity_fn = ca.Function("capacity", [slip, p], [capacity], ["slip", "p"], ["capacity"])
 
-    quasi = _arc(theta, slip, 0, P, nodes, ripple=False)  # at the solved angle: no round trip
+    # at the solved angle: no round trip through the sinkage
+    quasi = _at_entry_angle(theta, slip, 0, P, nodes, ripple=False)
     steady = ca.Function("steady", [load, slip, p],
                          [sink, *(quasi[k] for k in CONTACT_OUTPUTS), residual, last_step,
                           capacity],

@@ -216,6 +216,14 @@ TABLE: tuple[Parameter, ...] = (
        "Soil Contact Model accumulates it per soil node (j linear in the paper's slip s).",
        "Wong & Reece 1967 (0); Krenn & Hirzinger 2009, SCM, as in Project Chrono's SCMTerrain "
        "(1)", kind="enum", choices=MappingProxyType({0: "wheel-element", 1: "soil-element"})),
+    _P("model.contact_form", "1", 0, 0, 1,
+       "How the soil's stresses act on the wheel: 0 = arc, the Wong-Reece stress distribution "
+       "integrated over the contact arc; 1 = patch, the Reece pressure p(z) acting uniformly on "
+       "the flat contact patch (width b, chord between the entry and exit angles), thrust by "
+       "Janosi (or hump) shear over the patch length and Bekker's compaction resistance.",
+       "Wong & Reece 1967 (0); Bekker 1956/1960 and Wong, Theory of Ground Vehicles, ch. 2 and "
+       "4 (1), the soft-soil reading of Abubakar et al.'s eq. 1", kind="enum",
+       choices=MappingProxyType({0: "arc", 1: "patch"})),
 )
 
 INDEX: Mapping[str, int] = MappingProxyType({p.name: k for k, p in enumerate(TABLE)})
