@@ -138,7 +138,7 @@ def fit(base: ParameterSet, names: list[str], case_names: list[str], starts: int
         loss_scale: float = 1.0) -> Fit:
     """Fit ``names`` to the drawbar pull and sinkage of ``case_names`` (see module docstring).
 
-    ``data``: cases in the form of validation/paper_table3.json (default: that file).
+    ``data``: cases in the form of wheelterrain/data/paper_table3.json (default: that file).
     ``initial``: the first start (e.g. the optimum of a nested model); the base preset's values
     for names it omits. The other starts are random over the plausible box.
     ``bounds``: replaces the plausible range of the parameters it names (diagnostics: what the
@@ -249,7 +249,7 @@ def preset_document(name: str, base_name: str, base: ParameterSet, result: Fit,
         "provenance": {
             "base_preset": base_name,
             "overrides": overrides,
-            "data": "validation/paper_table3.json (the paper's Table III experimental means)",
+            "data": "wheelterrain/data/paper_table3.json (the paper's Table III means)",
             "protocol": protocol,
             "fitted_on": result.cases,
             "fitted": {n: {"value": result.values[n], "plausible_range": list(result.bounds[n]),

@@ -1,0 +1,21 @@
+"""Rig data the package ships (read through :func:`path`), each file stating its source.
+
+- ``paper_table3.json``: the source paper's Table III means (experiment and the authors'
+  simulation), C1-C4.
+- ``ding2011_single_wheel.csv``: digitised, approximate single-wheel data of Ding et al. 2011
+  (J. Terramechanics 48:27-45), smooth and lugged wheel at 80 N, with that soil's parameters in
+  the header: a transfer check, never a fit target.
+
+validation/ links to both files, so the scripts there and the installed package read the same
+bytes.
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+from importlib.abc import Traversable
+
+
+def path(name: str) -> Traversable:
+    """The shipped data file ``name`` (works from an installed wheel as from a checkout)."""
+    return resources.files(__package__).joinpath(name)
