@@ -65,7 +65,7 @@ def main(argv: list[str] | None = None) -> None:
     n = args.points
 
     fns = contact.build()
-    p = presets.load("paper-table2").vector()
+    p = presets.load("paper-table2-arc").vector()
     rng = np.random.default_rng(0)
     z = rng.uniform(0.005, 0.045, n)
     slip = rng.uniform(0.0, 0.5, n)

@@ -115,7 +115,7 @@ def main() -> None:
     if not dirs:
         sys.exit(f"no FMUs in {args.fmu_dir}: run `wheelterrain build --flavor all "
                  f"--out {args.fmu_dir}`")
-    ps = presets.load("paper-table2")
+    ps = presets.load("paper-table2-arc")
     fn, p = contact.build().contact, ps.vector()
 
     def core(count):

@@ -26,7 +26,7 @@ def main() -> None:
     parser.add_argument("--horizon", type=int, default=30)
     parser.add_argument("--scenario", default="nominal", choices=sorted(closed_loop.SCENARIOS))
     args = parser.parse_args()
-    ps = presets.load(presets.REPRODUCE_PRESET)
+    ps = presets.load(presets.DEFAULT_PRESET)
     scenario = closed_loop.SCENARIOS[args.scenario]
     rows = []
     for solver, compiled in SETUPS:

@@ -27,7 +27,7 @@ def main() -> None:
     parser.add_argument("--fmu-dir", default="build")
     args = parser.parse_args()
 
-    soil = presets.load(presets.REPRODUCE_PRESET)  # the calibrated Rashid wheel on its soil
+    soil = presets.load(presets.DEFAULT_PRESET)  # the default Rashid wheel on its soil
     scenario = closed_loop.Scenario("script", "a constant slip reference", args.seconds,
                                     ((0.0, args.reference),))
     p_rig = closed_loop.rig_parameters(soil, scenario)  # the rig with rig.drive = speed command

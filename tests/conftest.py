@@ -12,7 +12,7 @@ from wheelterrain.parameters import ParameterSet
 
 @pytest.fixture(scope="session")
 def table2() -> ParameterSet:
-    return presets.load("paper-table2")
+    return presets.load("paper-table2-arc")
 
 
 @pytest.fixture(scope="session")

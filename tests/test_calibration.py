@@ -30,7 +30,7 @@ def synthetic(ps):
 
 
 def test_the_jacobian_is_the_derivative_of_the_residuals():
-    base = presets.load("paper-table2")
+    base = presets.load("paper-table2-arc")
     names = ["soil.phi", "soil.k_phi", "soil.n1", "model.shear_radius_factor"]
     cases = calibration.paper_cases()
     x = np.array([30 * DEG, 400.0, 0.8, 0.5])
@@ -47,9 +47,10 @@ def test_the_jacobian_is_the_derivative_of_the_residuals():
 
 
 def test_fit_recovers_known_parameters_from_model_data():
-    truth = presets.load("paper-table2").with_values({"soil.phi": 35 * DEG, "soil.k_phi": 600.0})
+    truth = presets.load("paper-table2-arc").with_values({"soil.phi": 35 * DEG,
+                                                         "soil.k_phi": 600.0})
     data = synthetic(truth)
-    result = calibration.fit(presets.load("paper-table2"), ["soil.phi", "soil.k_phi"],
+    result = calibration.fit(presets.load("paper-table2-arc"), ["soil.phi", "soil.k_phi"],
                              list(SLIPS), starts=3, data=data)
     assert result.values["soil.phi"] == pytest.approx(35 * DEG, rel=1e-6)
     assert result.values["soil.k_phi"] == pytest.approx(600.0, rel=1e-6)
@@ -60,7 +61,7 @@ def test_fit_recovers_known_parameters_from_model_data():
 
 
 def test_fit_to_the_paper_stays_in_the_plausible_ranges_and_flags_bounds():
-    result = calibration.fit(presets.load("paper-table2"), ["soil.phi", "soil.k_phi"], ["C2"],
+    result = calibration.fit(presets.load("paper-table2-arc"), ["soil.phi", "soil.k_phi"], ["C2"],
                              starts=3)
     for name, value in result.values.items():
         lo, hi, _ = calibration.PLAUSIBLE[name]
@@ -92,7 +93,8 @@ def test_written_preset_keeps_the_overrides_the_fit_ran_with(tmp_path):
     """A --set switch (here the soil-element shear) is part of the fitted model: the preset must
     reproduce the fit's residuals, not the base preset's model with the fitted values."""
     out = tmp_path / "fit.json"
-    run = CliRunner().invoke(main, ["calibrate", "--params", "soil.phi", "--cases", "C2",
+    run = CliRunner().invoke(main, ["calibrate", "--preset", "paper-table2-arc", "--params",
+                                    "soil.phi", "--cases", "C2",
                                     "--set", "model.shear_kinematics=1", "--set",
                                     "model.shear_radius_factor=0.5", "--starts", "1",
                                     "--out", str(out)])
@@ -119,11 +121,12 @@ def test_cli_refuses_bad_requests(args, needle):
 
 
 def test_profile_finds_the_true_value_and_brackets_it():
-    truth = presets.load("paper-table2").with_values({"soil.phi": 35 * DEG, "soil.k_phi": 600.0})
+    truth = presets.load("paper-table2-arc").with_values({"soil.phi": 35 * DEG,
+                                                         "soil.k_phi": 600.0})
     data = synthetic(truth)
     names = ["soil.phi", "soil.k_phi"]
     best = {"soil.phi": 35 * DEG, "soil.k_phi": 600.0}
-    points = calibration.profile(presets.load("paper-table2"), names, list(SLIPS), best,
+    points = calibration.profile(presets.load("paper-table2-arc"), names, list(SLIPS), best,
                                  "soil.phi", points=6, data=data)  # 25, 30, ..., 50 deg
     values = [v for v, _ in points]
     ssr = [s for _, s in points]
@@ -136,7 +139,7 @@ def test_profile_finds_the_true_value_and_brackets_it():
 def test_diagnostic_bounds_let_a_fit_leave_the_plausible_box():
     """Data made at K = 80 mm (beyond the plausible 40 mm): the plausible fit stops at the bound
     and flags it; with the bound widened for diagnosis the fit recovers the value."""
-    base = presets.load(presets.REPRODUCE_PRESET)
+    base = presets.load("rashid-calibrated")
     data = synthetic(base.with_values({"soil.shear_modulus": 0.08}))
     boxed = calibration.fit(base, ["soil.shear_modulus"], list(SLIPS), starts=1, data=data)
     assert boxed.values["soil.shear_modulus"] == pytest.approx(0.04)
@@ -149,7 +152,7 @@ def test_diagnostic_bounds_let_a_fit_leave_the_plausible_box():
 
 def test_a_fit_to_one_output_recovers_what_that_output_determines():
     """Sinkage data alone pin k_phi' (phi fixed at the truth); both outputs are reported."""
-    base = presets.load("paper-table2").with_values({"soil.phi": 35 * DEG})
+    base = presets.load("paper-table2-arc").with_values({"soil.phi": 35 * DEG})
     data = synthetic(base.with_values({"soil.k_phi": 600.0}))
     result = calibration.fit(base, ["soil.k_phi"], list(SLIPS), starts=2, data=data,
                              outputs=("sinkage",))
@@ -162,7 +165,7 @@ def test_a_fit_to_one_output_recovers_what_that_output_determines():
 def test_a_pull_only_fit_matches_the_pull_at_least_as_well_as_the_joint_fit():
     """Started from the joint optimum, the pull-only fit can only lower the pull's squares; the
     sinkage it leaves is reported, not fitted."""
-    base = presets.load(presets.REPRODUCE_PRESET)
+    base = presets.load("rashid-calibrated")
     names = ["soil.phi", "soil.k_phi", "soil.cohesion"]
     joint = calibration.fit(base, names, list(SLIPS), starts=1)
     pull = calibration.fit(base, names, list(SLIPS), starts=1, initial=joint.values,
@@ -179,7 +182,7 @@ def test_a_pull_only_fit_matches_the_pull_at_least_as_well_as_the_joint_fit():
 def test_least_absolute_loss_ignores_one_bad_case_that_least_squares_follows():
     """Pull data from the model at phi = 35 deg with C3 off by 5 N: the soft-L1 fit (scale far
     below the residuals, ~ least absolute error) keeps phi, least squares is pulled away."""
-    base = presets.load("paper-table2")
+    base = presets.load("paper-table2-arc")
     data = synthetic(base.with_values({"soil.phi": 35 * DEG}))
     data[2]["experiment"]["drawbar_pull"] += 5.0
     kwargs = {"starts": 1, "data": data, "outputs": ("drawbar_pull",),
@@ -197,5 +200,5 @@ def test_least_absolute_loss_ignores_one_bad_case_that_least_squares_follows():
 @pytest.mark.parametrize(("loss", "scale"), [("cauchy", 1.0), ("soft_l1", 0.0)])
 def test_an_unsupported_loss_is_refused(loss, scale):
     with pytest.raises(calibration.CalibrationError, match="give 'linear' or 'soft_l1'"):
-        calibration.fit(presets.load("paper-table2"), ["soil.phi"], ["C2"], loss=loss,
+        calibration.fit(presets.load("paper-table2-arc"), ["soil.phi"], ["C2"], loss=loss,
                         loss_scale=scale)

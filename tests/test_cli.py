@@ -57,11 +57,10 @@ def test_steady_json_holds_the_contract_keys_and_matches_the_library():
 
 
 def test_set_overrides_by_table_name_and_accepts_degrees():
-    a = json.loads(run("steady", "--slip", "0.2", "--load", "62", "--json",
-                       "--set", "soil.phi=30deg").output)
-    b = json.loads(run("steady", "--slip", "0.2", "--load", "62", "--json",
-                       "--set", f"soil.phi={math.radians(30)!r}").output)
-    base = json.loads(run("steady", "--slip", "0.2", "--load", "62", "--json").output)
+    t2 = ("--preset", "paper-table2", "--slip", "0.2", "--load", "62", "--json")  # phi 23 deg
+    a = json.loads(run("steady", *t2, "--set", "soil.phi=30deg").output)
+    b = json.loads(run("steady", *t2, "--set", f"soil.phi={math.radians(30)!r}").output)
+    base = json.loads(run("steady", *t2).output)
     assert a["drawbar_pull"] == pytest.approx(b["drawbar_pull"], rel=1e-12)
     assert a["drawbar_pull"] > base["drawbar_pull"]  # more friction, more pull
 

@@ -27,7 +27,7 @@ def test_build_then_reproduce_writes_the_contract(tmp_path):
     assert run.returncode == 0, run.stderr
     assert "mean absolute error vs experiment" in run.stdout
     data = json.loads((tmp_path / "r.json").read_text())
-    assert data["preset"] == presets.REPRODUCE_PRESET
+    assert data["preset"] == presets.DEFAULT_PRESET
     assert [c["case"] for c in data["cases"]] == ["C1", "C2", "C3", "C4"]
     ps = presets.load(data["preset"])
     for c in data["cases"]:

@@ -77,7 +77,7 @@ def test_model_description_is_modelica_friendly(fmus):
 
 @pytest.mark.parametrize(("slip", "phi"), [(0.0, 0.45), (0.2, 0.40), (0.43, 0.42)])
 def test_quasi_static_fmpy_cli_matches_steady(fmus, tmp_path, slip, phi):
-    ps = presets.load("paper-table2").with_values({"soil.phi": phi})
+    ps = presets.load(presets.DEFAULT_PRESET).with_values({"soil.phi": phi})
     omega = 0.6
     speed = omega * ps["wheel.radius"] * (1 - slip)
     out = tmp_path / "qs.csv"
@@ -97,7 +97,7 @@ def test_quasi_static_fmpy_cli_matches_steady(fmus, tmp_path, slip, phi):
 
 
 def test_dynamic_mode_matches_contact_forces(fmus):
-    ps = presets.load("paper-table2")
+    ps = presets.load(presets.DEFAULT_PRESET)
     t = terrain(fmus, sinkage=0.03, sinkage_rate=0.002, wheel_speed=0.6, carriage_speed=0.024)
     try:
         got = t.get("normal_force", "drawbar_pull", "torque", "slip", "wheel_angle")
@@ -112,7 +112,7 @@ def test_dynamic_mode_matches_contact_forces(fmus):
 def test_braking_and_driving_use_the_contact_models_slip(fmus, slip):
     """The FMU hands the contact model the traction slip of the true kinematics,
     V = (1 - i)*omega*R, braking included (V > omega*R): not a skid ratio it would misread."""
-    ps = presets.load("paper-table2")
+    ps = presets.load(presets.DEFAULT_PRESET)
     omega = 0.6
     speed = omega * ps["wheel.radius"] * (1 - slip)
     t = terrain(fmus, sinkage=0.02, wheel_speed=omega, carriage_speed=speed)
@@ -232,7 +232,7 @@ def test_bad_parameter_is_refused_with_a_logged_reason(fmus, name, value, needle
             t.fmu.doStep(0.0, 1e-3)
         assert info.value.status in (2, 3)  # fmi2Discard or fmi2Error, never fatal
         assert any(needle in m and "valid range" in m for m in t.errors()), t.log
-        t.set({name: presets.load("paper-table2")[name]})  # recovers once valid again
+        t.set({name: presets.load(presets.DEFAULT_PRESET)[name]})  # recovers once valid again
         t.fmu.doStep(0.0, 1e-3)
     finally:
         t.close()

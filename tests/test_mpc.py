@@ -13,7 +13,7 @@ from wheelterrain import closed_loop, cosim, model, mpc, native, presets, rig
 from wheelterrain.cli import main
 from wheelterrain.parameters import NAMES, TABLE
 
-PS = presets.load(presets.REPRODUCE_PRESET)
+PS = presets.load(presets.DEFAULT_PRESET)
 PT = np.array([PS[name] for name in NAMES])
 
 
@@ -158,7 +158,7 @@ def test_cli_rejects_a_bad_interval_with_exit_code_2(tmp_path):
 def test_in_process_plant_refuses_a_locked_wheel_with_the_fmus_sentence():
     """A wheel stopped under a moving carriage is outside the model's domain: the in-process
     plant says so in the words both FMU flavours use, naming both speeds."""
-    ps = presets.load(presets.REPRODUCE_PRESET)
+    ps = presets.load(presets.DEFAULT_PRESET)
     scenario = closed_loop.SCENARIOS["nominal"]
     plant = closed_loop.CasadiPlant(ps, closed_loop.rig_parameters(ps, scenario))
     z, z_rate, _, integral, _ = plant.x

@@ -13,7 +13,7 @@ def test_compiled_contact_equals_the_vm(tmp_path):
     fn = contact.build().contact
     compiled = native.CompiledFunction(native.compile_function(fn, tmp_path), fn)
     rng = np.random.default_rng(7)
-    base = presets.load("paper-table2")
+    base = presets.load("paper-table2-arc")
     for _ in range(200):
         ps = base.with_values({"soil.phi": rng.uniform(0.2, 0.7),
                                "soil.n1": rng.uniform(0.0, 1.5),
@@ -39,7 +39,7 @@ def test_compiled_fmu_functions_equal_the_vm(tmp_path, which):
     fn = fmu_model.terrain_functions()[which]
     compiled = native.CompiledFunction(native.compile_function(fn, tmp_path), fn)
     rng = np.random.default_rng(11)
-    p = list(presets.load("paper-table2").vector())
+    p = list(presets.load("paper-table2-arc").vector())
     for _ in range(30):
         u = [rng.uniform(0, 0.04), rng.uniform(-0.05, 0.05), rng.uniform(0.1, 1.0),
              rng.uniform(0.0, 0.04), rng.uniform(1.0, 100.0)]

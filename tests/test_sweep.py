@@ -55,7 +55,7 @@ def _check(rows, ps):
 
 @pytest.mark.parametrize("workers", [1, 2])
 def test_sweep_matches_the_core_model(fmu, workers):
-    ps = presets.load("paper-table2")
+    ps = presets.load("paper-table2-arc")
     rows = sweeper.run(fmu, sweeper.base_values(ps), AXES, "paper", workers=workers, chunk=3)
     assert any(r["status"] == "infeasible" for r in rows)  # 200 N is beyond capacity
     _check(rows, ps)
@@ -63,7 +63,7 @@ def test_sweep_matches_the_core_model(fmu, workers):
 
 def test_sweep_on_a_local_dask_cluster(fmu):
     pytest.importorskip("dask.distributed")
-    ps = presets.load("paper-table2")
+    ps = presets.load("paper-table2-arc")
     rows = sweeper.run(fmu, sweeper.base_values(ps), AXES, "paper", dask_address="local",
                        chunk=3)
     _check(rows, ps)
@@ -95,7 +95,7 @@ def test_a_thousand_point_sweep_is_identical_on_a_local_dask_cluster(fmu, tmp_pa
     with out.open() as f:
         pooled = list(csv.DictReader(f))
     assert len(pooled) == 1000
-    ps = presets.load("paper-table2")
+    ps = presets.load(presets.DEFAULT_PRESET)  # the CLI's default
     axes = {"slip": sweeper.parse_axis("slip", "0:0.75:40"),
             "load": sweeper.parse_axis("load", "10:100:25")}
     on_dask = sweeper.run(fmu, sweeper.base_values(ps), axes, "paper", dask_address="local")
@@ -111,7 +111,7 @@ def test_paper_findings_hold_in_an_fmu_sweep_with_the_calibrated_preset(fmu):
     """Drawbar pull grows with slip, the normal force stays at the load, sinkage grows with
     slip: through the FMU, with rashid-calibrated (untuned, the pull falls with slip; see
     tests/test_sensitivity.py)."""
-    ps = presets.load(presets.REPRODUCE_PRESET)
+    ps = presets.load("rashid-calibrated")
     axes = {"slip": sweeper.parse_axis("slip", "0:0.75:7"), "load": [62.0]}
     rows = sweeper.run(fmu, sweeper.base_values(ps), axes, "paper", workers=1)
     assert all(r["status"] == "ok" for r in rows)

@@ -43,7 +43,7 @@ def test_calibration_protocols_report_held_out_errors_of_the_fitted_values(tmp_p
     report = json.loads(out_file.read_text())["protocols"]
     assert report[0]["protocol"] == "paper protocol (fit C2)"
     assert len(report) == 6  # C2-only, four leave-one-out fits, all cases
-    base = presets.load("paper-table2")
+    base = presets.load(presets.DEFAULT_PRESET)  # the script's default
     for p in report:
         for name, value in p["values"].items():
             lo, hi, _ = calibration.PLAUSIBLE[name]

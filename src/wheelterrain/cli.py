@@ -196,10 +196,10 @@ def build(out: str, flavor: str) -> None:
 
 
 @main.command(epilog=EPILOG)
-@click.option("--preset", default=presets.REPRODUCE_PRESET, show_default=True,
+@click.option("--preset", default=presets.DEFAULT_PRESET, show_default=True,
               metavar="NAME|FILE.json",
-              help="Parameter preset (the calibrated one by default; paper-table2 gives the "
-              "paper's tuned soil untuned here).")
+              help="Parameter preset (paper-table2 gives the paper's own model and values, "
+              "nothing fitted, and adds the comparison with the paper's simulation).")
 @set_option
 @click.option("--fmu-dir", default="build", show_default=True,
               type=click.Path(file_okay=False), help="Where `wheelterrain build` wrote the FMUs.")
@@ -244,6 +244,10 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_file
     click.echo(f"C1-C4 co-simulation, preset {name}, step {step:g} s, {stop:g} s per case "
                f"(wall time {sum(r.wall_time for r in results):.1f} s)")
     click.echo(cosim.format_table(rows, mae))
+    fitted_on = presets.read(preset)["provenance"].get("fitted_on") if not assignments else None
+    if fitted_on:
+        click.echo(f"in-sample: {preset} was fitted on {', '.join(fitted_on)}; its held-out "
+                   "errors are printed by `wheelterrain validate`")
     experiment = {row["case"]: row["experiment"] for row in paper["cases"]}
     for r in results:
         cosim.write_csv(out_dir / f"{r.case}.csv", r)
@@ -457,7 +461,7 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
 @click.option("--plant", type=click.Choice(["fmu", "casadi"]), default="fmu", show_default=True,
               help="fmu: SingleWheelRig.fmu + WheelTerrain.fmu through fmpy; casadi: the same "
               "Functions in process.")
-@click.option("--preset", default=presets.REPRODUCE_PRESET, show_default=True,
+@click.option("--preset", default=presets.DEFAULT_PRESET, show_default=True,
               metavar="NAME|FILE.json", help="Soil and wheel of plant and model.")
 @click.option("--solver", type=click.Choice(["sqpmethod", "ipopt"]), default="sqpmethod",
               show_default=True, help="sqpmethod uses the qrqp QP solver.")
@@ -521,6 +525,35 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool, hor
         text = f"{value:.4g}" if isinstance(value, float) else str(value)
         click.echo(f"  {key:34} {text}")
     click.echo(f"wrote {out_dir}/{scenario}.png, {out_dir}/{scenario}.csv")
+
+
+@main.command(epilog=EPILOG)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@click.option("--starts", default=4, show_default=True, type=click.IntRange(1, 64),
+              help="Starting points of each fit (the unfitted preset, then random).")
+def validate(as_json: bool, starts: int) -> None:
+    """Prediction protocols: every shipped preset held out, beside a straight line.
+
+    \b
+    Rows (drawbar-pull MAE [N], sinkage MAE [m]; held-out unless marked in-sample):
+      line              y = a + b*s in the paper's slip: the baseline to beat
+      PRESET all-case   the preset as shipped on C1-C4 (in-sample if fitted on them)
+      PRESET c2-only    the paper's protocol: phi and n0 fitted on C2, judged on C1, C3, C4
+      PRESET leave-one-out  the preset's own free parameters refitted without each case
+      PRESET transfer   Ding et al. 2011's wheels and soil (80 N), the preset's model form,
+                        that soil's own values, nothing refitted
+    Folds start from the preset as it was before its own fit, so no held-out case reaches a
+    fit. Takes about a minute.
+    """
+    from . import prediction
+
+    total = 3 + 5 * len(presets.available())
+    with click.progressbar(length=total, label="prediction protocols", file=sys.stderr) as bar:
+        result = prediction.run(progress=lambda _: bar.update(1), starts=starts)
+    if as_json:
+        click.echo(json.dumps(result, indent=2, allow_nan=False))
+        return
+    click.echo(prediction.format_table(result))
 
 
 if __name__ == "__main__":  # pragma: no cover

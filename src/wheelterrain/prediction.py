@@ -1,0 +1,251 @@
+"""Prediction protocols: how well a model predicts data it was not fitted on.
+
+Four rig cases cannot tell a good model from a flexible one by in-sample error, so every model
+is judged held out and beside a baseline (shared protocol of the project's README):
+
+- ``all-case``: fitted on C1-C4 and judged on them (in-sample; with nothing free it is a pure
+  prediction);
+- ``leave-one-out``: for each case, fitted on the other three and judged on the one left out;
+- ``c2-only``: the source paper's protocol, fitted on C2 alone and judged on C1, C3, C4, with at
+  most the two parameters the paper names as most influential (phi and the sinkage exponent);
+- ``transfer``: another wheel on another soil (Ding et al. 2011), with that soil's own measured
+  parameters and the model form of the preset, nothing refitted.
+
+The baseline is a straight line in the paper's slip, ``y = a + b*s``, fitted the same way (two
+parameters; on C2 alone only its constant ``a`` can be fitted). Model fits are those of
+:func:`wheelterrain.calibration.fit` on the quasi-static steady state, inside the plausible
+ranges. A held-out case's data never reach its fit: the fold is given the other cases' rows
+only (tests/test_prediction.py corrupts the held-out row and checks that the fit is unchanged).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import calibration, data, model, presets
+from .errors import WheelTerrainError
+from .parameters import DEG, ParameterSet
+
+CASES = ("C1", "C2", "C3", "C4")
+PAPER_FREE = ("soil.phi", "soil.n0")
+"""The paper's two most influential parameters (phi, the sinkage exponent): its protocol's
+free set, and the leave-one-out free set of presets that fitted nothing."""
+OUTPUTS = ("drawbar_pull", "sinkage")
+LOAD = 62.0  # N, the rig's normal force in every case (validation data)
+
+DING_FILE = "ding2011_single_wheel.csv"
+DING_LOAD = 80.0  # N, the vertical load of every Ding et al. 2011 run
+DING_SOURCE = ("Ding, Gao, Deng, Tao 2011, J. Terramechanics 48(1):27-45, Table 2 and figures "
+               "(digitised, approximate)")
+_DING_BEKKER = {"n": 1.10, "k_c": 15.6e3, "k_phi": 2407.4e3, "cohesion": 250.0,
+                "phi_deg": 31.9, "density": 1605.0, "shear_modulus": 0.011}
+"""The soil of Ding et al. 2011 (their Table 2, as in the data file's header): Bekker form
+p = (k_c/b + k_phi)*z**n with k_c in N/m^(n+1), k_phi in N/m^(n+2); cohesion Pa; bulk density
+kg/m3; Janosi K m."""
+GRAVITY = 9.81  # m/s2: the data were taken on Earth
+SOIL_KEYS = ("soil.cohesion", "soil.phi", "soil.k_c", "soil.k_phi", "soil.n0", "soil.gamma",
+             "soil.shear_modulus")
+"""What a transfer takes from the other soil; everything else (the model form: contact form,
+n1, radius factors, exit ratio, shear law and kinematics) stays the preset's."""
+
+
+def ding_soil(width: float) -> dict[str, float]:
+    """Ding et al. 2011's soil in the table's Reece form, for a wheel of ``width`` b [m].
+
+    Bekker's p = (k_c/b + k_phi)*z**n equals Reece's p = (c*k_c' + gamma*b*k_phi')*(z/b)**n
+    term by term when k_c' = k_c*b**(n-1)/c and k_phi' = k_phi*b**(n-1)/gamma (Reece 1965;
+    Wong, *Theory of Ground Vehicles*, ch. 2): exact at the wheel's own width, which is the
+    same for both of Ding's wheels. gamma = density*g.
+    """
+    s = _DING_BEKKER
+    gamma = s["density"] * GRAVITY
+    scale = width ** (s["n"] - 1)
+    return {"soil.cohesion": s["cohesion"], "soil.phi": s["phi_deg"] * DEG,
+            "soil.k_c": s["k_c"] * scale / s["cohesion"], "soil.k_phi": s["k_phi"] * scale / gamma,
+            "soil.n0": s["n"], "soil.gamma": gamma, "soil.shear_modulus": s["shear_modulus"]}
+
+
+def ding_rows() -> list[dict]:
+    """The Ding et al. 2011 rows (SI units, traction slip), from the shipped data file."""
+    text = data.path(DING_FILE).read_text(encoding="utf-8")
+    lines = [line for line in text.splitlines() if line and not line.startswith("#")]
+    return [{k: (v if k == "case" else float(v)) for k, v in row.items()}
+            for row in csv.DictReader(io.StringIO("\n".join(lines)))]
+
+
+def transfer_errors(ps: ParameterSet, wheel: str) -> dict:
+    """Mean absolute errors of ``ps``'s model form on Ding's ``wheel`` ("smooth" or "lug10"),
+    with that soil's and wheel's own values and the grouser ripple off (the data are means)."""
+    rows = [r for r in ding_rows() if r["case"].startswith(wheel + "_")]
+    if not rows:
+        raise ValueError(f"no Ding 2011 rows for wheel {wheel!r}")
+    first = rows[0]
+    values = {**ding_soil(first["wheel_width_m"]), "wheel.radius": first["wheel_radius_m"],
+              "wheel.width": first["wheel_width_m"], "grouser.height": first["grouser_height_m"],
+              "grouser.count": first["grouser_count"], "ripple.k_g": 0.0, "ripple.k_0": 0.0}
+    other = ps.with_values(values)
+    err = {"drawbar_pull": [], "sinkage": [], "torque": []}
+    for r in rows:
+        out = model.steady_state(other, DING_LOAD, r["slip"])
+        err["drawbar_pull"].append(out["drawbar_pull"] - r["drawbar_pull_n"])
+        err["sinkage"].append(out["sinkage"] - r["sinkage_m"])
+        err["torque"].append(out["torque"] - r["torque_nm"])
+    return {"cases": [r["case"] for r in rows],
+            **{f"{k}_mae": float(np.mean(np.abs(v))) for k, v in err.items()},
+            "errors": {k: [float(x) for x in v] for k, v in err.items()}}
+
+
+# --- the straight-line baseline --------------------------------------------------------------
+
+def _line_predict(train: Sequence[dict], test: Sequence[dict], key: str) -> list[float]:
+    """``y = a + b*s`` fitted to ``train`` by least squares (a constant if it has one case),
+    evaluated at ``test``'s slips."""
+    s = np.array([c["slip_paper"] for c in train])
+    y = np.array([c["experiment"][key] for c in train])
+    coef = np.polyfit(s, y, 1) if len(train) > 1 else np.array([0.0, y[0]])
+    return [float(np.polyval(coef, c["slip_paper"])) for c in test]
+
+
+# --- protocols -------------------------------------------------------------------------------
+
+@dataclass
+class Row:
+    """One line of the prediction table."""
+
+    model: str
+    protocol: str
+    free: list[str]
+    errors: dict[str, dict[str, float]]  # judged case -> output -> model minus data (N, m)
+    in_sample: bool
+    fitted: list[dict[str, float]]  # the fitted values of each fold
+    data: str = "paper Table III, experiment"
+
+    def as_dict(self) -> dict:
+        mae = {k: float(np.mean([abs(e[k]) for e in self.errors.values()])) for k in OUTPUTS}
+        return {"model": self.model, "protocol": self.protocol, "free": self.free,
+                "drawbar_pull_mae": mae["drawbar_pull"], "sinkage_mae": mae["sinkage"],
+                "in_sample": self.in_sample, "judged_on": list(self.errors), "data": self.data,
+                "errors": self.errors, "fitted": self.fitted}
+
+
+def _folds(protocol: str) -> list[tuple[list[str], list[str]]]:
+    """(fitted on, judged on) per fold."""
+    if protocol == "all-case":
+        return [(list(CASES), list(CASES))]
+    if protocol == "leave-one-out":
+        return [([c for c in CASES if c != out], [out]) for out in CASES]
+    if protocol == "c2-only":
+        return [(["C2"], ["C1", "C3", "C4"])]
+    raise ValueError(f"unknown protocol {protocol!r}; valid: all-case, leave-one-out, c2-only")
+
+
+def _rows_of(cases: Sequence[dict], names: Sequence[str]) -> list[dict]:
+    by_name = {c["case"]: c for c in cases}
+    return [by_name[n] for n in names]
+
+
+def line_row(protocol: str, cases: Sequence[dict]) -> Row:
+    errors: dict[str, dict[str, float]] = {}
+    for train, test in _folds(protocol):
+        tr, te = _rows_of(cases, train), _rows_of(cases, test)
+        for key in OUTPUTS:
+            for c, y in zip(te, _line_predict(tr, te, key), strict=True):
+                errors.setdefault(c["case"], {})[key] = y - c["experiment"][key]
+    free = ["a"] if protocol == "c2-only" else ["a", "b"]
+    return Row("line", protocol, free, errors, protocol == "all-case", [])
+
+
+def model_row(label: str, base: ParameterSet, free: Sequence[str], protocol: str,
+              cases: Sequence[dict], starts: int = 4) -> Row:
+    """``base`` with ``free`` fitted per fold of ``protocol`` (none free: evaluated as it is).
+    Each fold's fit sees only its training rows of ``cases``."""
+    errors: dict[str, dict[str, float]] = {}
+    fitted: list[dict[str, float]] = []
+    for train, test in _folds(protocol):
+        ps = base
+        if free:
+            result = calibration.fit(base, list(free), train, starts=starts, load=LOAD,
+                                     data=_rows_of(cases, train))
+            ps = base.with_values(result.values)
+            fitted.append(result.values)
+        for c in _rows_of(cases, test):
+            out = model.steady_state(ps, LOAD, c["slip_paper"], "paper")
+            errors[c["case"]] = {k: out[k] - c["experiment"][k] for k in OUTPUTS}
+    return Row(label, protocol, list(free), errors, bool(free) and protocol == "all-case",
+               fitted)
+
+
+def preset_free(name: str) -> list[str]:
+    """The parameters a preset's own fit freed (its provenance), else the paper's pair."""
+    fitted = presets.read(name)["provenance"].get("fitted")
+    return list(fitted) if fitted else list(PAPER_FREE)
+
+
+def unfitted(name: str) -> ParameterSet:
+    """A preset as it was before its own fit: its base preset with the overrides the fit ran
+    with (the model form), none of the fitted values. A held-out fold starts from here, so no
+    value (and no starting point) fitted on all four cases reaches a fold that must not see
+    one of them. A preset that fitted nothing is returned as it is."""
+    provenance = presets.read(name)["provenance"]
+    if not provenance.get("fitted"):
+        return presets.load(name)
+    return presets.load(provenance["base_preset"]).with_values(provenance.get("overrides", {}))
+
+
+def run(progress: Callable[[str], None] | None = None, starts: int = 4) -> dict:
+    """Every row of ``wheelterrain validate``: the line, each shipped preset as it is, the
+    paper's protocol per preset, leave-one-out per preset, and the Ding 2011 transfer."""
+    cases = calibration.paper_cases()
+    rows: list[dict] = []
+
+    def add(row: Row) -> None:
+        rows.append(row.as_dict())
+        if progress:
+            progress(f"{row.model} {row.protocol}")
+
+    for protocol in ("all-case", "leave-one-out", "c2-only"):
+        add(line_row(protocol, cases))
+    for name in presets.available():
+        ps = presets.load(name)
+        fitted = presets.read(name)["provenance"].get("fitted")
+        free = preset_free(name)
+        # as shipped: in-sample where its values were fitted to these cases, else a prediction
+        as_is = model_row(name, ps, [], "all-case", cases)
+        as_is.in_sample = bool(fitted)
+        as_is.free = list(fitted) if fitted else []
+        add(as_is)
+        start = unfitted(name)
+        add(model_row(name, start, PAPER_FREE, "c2-only", cases, starts))
+        add(model_row(name, start, free, "leave-one-out", cases, starts))
+    for name in presets.available():
+        ps = presets.load(name)
+        for wheel, label in (("smooth", "ding2011-smooth"), ("lug10", "ding2011-lugged")):
+            try:
+                t = transfer_errors(ps, wheel)
+            except WheelTerrainError as exc:  # reported, not hidden
+                t = {"drawbar_pull_mae": None, "sinkage_mae": None, "error": str(exc)}
+            rows.append({"model": name, "protocol": "transfer", "free": [], "in_sample": False,
+                         "data": f"{label} ({DING_SOURCE})", **t})
+            if progress:
+                progress(f"{name} transfer {label}")
+    return {"rows": rows, "load": LOAD, "transfer_load": DING_LOAD,
+            "units": {"drawbar_pull_mae": "N", "sinkage_mae": "m", "torque_mae": "N.m"}}
+
+
+def format_table(result: dict) -> str:
+    """The rows of :func:`run` as a text table, held-out and in-sample labelled."""
+    head = (f"{'model':18} {'protocol':14} {'free':>4} | {'pull MAE [N]':>12} "
+            f"{'sinkage MAE [mm]':>16} | judged on")
+    lines = [head, "-" * len(head)]
+    for r in result["rows"]:
+        label = "in-sample" if r["in_sample"] else "held-out"
+        data_name = r["data"].split(" (")[0] if r["protocol"] == "transfer" else label
+        lines.append(f"{r['model']:18} {r['protocol']:14} {len(r['free']):4d} | "
+                     f"{r['drawbar_pull_mae']:12.2f} {1e3 * r['sinkage_mae']:16.2f} | "
+                     f"{data_name}")
+    return "\n".join(lines)
