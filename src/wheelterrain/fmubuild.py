@@ -61,11 +61,13 @@ class BuildError(RuntimeError):
 
 
 def source_dir() -> Path:
-    path = REPO_DIR / "fmu_src"
-    if not (path / SOURCES["WheelTerrain"]).is_file():
-        raise BuildError(f"slave scripts not found in {path}: `wheelterrain build` runs from a "
-                         "source checkout (pip install -e .)")
-    return path
+    """fmu_src/: inside the installed package (wheelterrain/fmu_src), else the checkout's."""
+    for path in (PACKAGE_DIR / "fmu_src", REPO_DIR / "fmu_src"):
+        if (path / SOURCES["WheelTerrain"]).is_file():
+            return path
+    raise BuildError(f"slave scripts not found in {PACKAGE_DIR / 'fmu_src'} or "
+                     f"{REPO_DIR / 'fmu_src'}: the installation is incomplete (reinstall "
+                     "wheelterrain)")
 
 
 def build(out: Path, models: tuple[str, ...] = tuple(SOURCES),

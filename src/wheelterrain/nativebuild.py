@@ -26,11 +26,10 @@ from xml.etree import ElementTree as ET
 import casadi as ca
 
 from . import fmu_model, native, rig
-from .fmubuild import REPO_DIR, VARIABLES, BuildError
+from .fmubuild import VARIABLES, BuildError, source_dir
 from .fmubuild import build as build_pythonfmu
 from .parameters import TABLE
 
-WRAPPER = REPO_DIR / "fmu_src" / "native" / "fmi2_native.c"
 SOURCES = ("fmi2_native.c", "model_vars.h", "model_hooks.c", "casadi_functions.c",
            "fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 
@@ -285,7 +284,7 @@ def build(out: Path, models: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig"
             hooks = _terrain_hooks(vr) if model == "WheelTerrain" else _rig_hooks(vr)
             (src / "model_hooks.c").write_text(hooks)
             _casadi_source(model, src)
-            shutil.copyfile(WRAPPER, src / "fmi2_native.c")
+            shutil.copyfile(source_dir() / "native" / "fmi2_native.c", src / "fmi2_native.c")
             for header in ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"):
                 shutil.copyfile(headers / header, src / header)
             library = tmp / model / f"{model}.so"
