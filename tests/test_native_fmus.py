@@ -224,7 +224,10 @@ def test_state_round_trip_and_serialization(flavours):
 
 
 def test_ecos_runs_the_ssp_and_gives_the_fmpy_means(flavours, tmp_path):
-    pytest.importorskip("ecospy")
+    try:  # ecospy's import also fails with OSError where libtbb12 is missing: skip, say why
+        import ecospy  # noqa: F401
+    except (ImportError, OSError) as err:
+        pytest.skip(f"ecos (PyPI ecospy, needs Debian's libtbb12) cannot be loaded: {err}")
     ps = presets.load("paper-table2-arc")
     stop, step = 11.0, 1e-3
     root = flavours["root"] / "native"

@@ -6,6 +6,7 @@ the model cannot represent (e.g. a load the wheel cannot carry); 4 a numerical f
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import sys
@@ -52,6 +53,77 @@ def _json_number(x: float) -> float | None:
     return x if math.isfinite(x) else None
 
 
+def json_option(what: str):
+    """``--json [FILE]``, the same in every subcommand: ``what`` as one JSON document, to FILE,
+    or to standard output (instead of the text) when no FILE is given."""
+    return click.option(
+        "--json", "json_target", is_flag=False, flag_value="-", default=None, metavar="[FILE]",
+        help=f"{what} as JSON: to FILE (the text is still printed), or alone to standard "
+             "output instead of the text. FILE's folder must exist.")
+
+
+def _usage_error(message: str) -> None:
+    click.echo(f"error: {message}", err=True)
+    sys.exit(EXIT_USAGE)
+
+
+def _check_file_target(target: str | None, option: str = "--json") -> None:
+    """Refuse, before any work, a file the command could not write at the end: its folder
+    missing or not writable, or the path a folder. '-' (standard output) and None pass."""
+    import os
+    from pathlib import Path
+
+    if target in (None, "-"):
+        return
+    path = Path(target)
+    folder = path.parent
+    if path.is_dir():
+        _usage_error(f"{option} {target} is a folder; give a file name")
+    if not folder.is_dir():
+        _usage_error(f"{option} {target}: folder {folder} does not exist (it is not created)")
+    if not os.access(folder, os.W_OK):
+        _usage_error(f"{option} {target}: folder {folder} is not writable")
+
+
+def _check_out_dir(out: str, option: str = "--out") -> None:
+    """Refuse, before any work, an output folder the command could not create or write."""
+    import os
+    from pathlib import Path
+
+    path = Path(out)
+    if path.exists() and not path.is_dir():
+        _usage_error(f"{option} {out} is a file, not a folder")
+    existing = path
+    while not existing.exists():  # the folder is created; its first existing ancestor decides
+        existing = existing.parent
+    if not existing.is_dir() or not os.access(existing, os.W_OK | os.X_OK):
+        _usage_error(f"{option} {out}: {existing} is not a writable folder")
+
+
+def _finite(value):
+    """``value`` with every non-finite float as None (JSON has no NaN or infinity)."""
+    if isinstance(value, float):
+        return _json_number(value)
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite(v) for v in value]
+    return value
+
+
+def _emit_json(target: str | None, document) -> None:
+    """Write ``document`` as JSON to ``target`` ('-': standard output)."""
+    from pathlib import Path
+
+    from .cosim import write_atomic
+
+    text = json.dumps(_finite(document), indent=2, allow_nan=False) + "\n"
+    if target == "-":
+        click.echo(text, nl=False)
+    else:
+        write_atomic(Path(target), text)
+
+
 @click.group(epilog=EPILOG)
 @click.version_option(__version__, prog_name="wheelterrain")
 def main() -> None:
@@ -76,13 +148,14 @@ set_option = click.option(
 @main.command(epilog=EPILOG)
 @preset_option
 @set_option
-@click.option("--json", "as_json", is_flag=True, help="Print a JSON list of parameter objects.")
-def params(preset: str, assignments: tuple[str, ...], as_json: bool) -> None:
+@json_option("A list of parameter objects")
+def params(preset: str, assignments: tuple[str, ...], json_target: str | None) -> None:
     """List every parameter: name, unit, value, valid range, description, source.
 
     The value column is the preset's (after any --set). JSON rows carry name, unit, value, default,
     min, max, kind, description and source.
     """
+    _check_file_target(json_target)
     ps = _load(preset, assignments)
     doc = presets.read(preset)
     fitted = doc.get("provenance", {}).get("fitted", {})
@@ -90,9 +163,10 @@ def params(preset: str, assignments: tuple[str, ...], as_json: bool) -> None:
     for row in rows:
         if row["name"] in fitted:
             row["fitted"] = fitted[row["name"]]  # value, plausible range and its source, ...
-    if as_json:
-        click.echo(json.dumps(rows, indent=2))
-        return
+    if json_target:
+        _emit_json(json_target, rows)
+        if json_target == "-":
+            return
     click.echo(f"preset {doc.get('name', preset)}: {doc.get('description', '')}\n")
     click.echo(f"{'name':30} {'value':>12} {'unit':6} {'range':>24}  description")
     for p in TABLE:
@@ -127,25 +201,28 @@ def params(preset: str, assignments: tuple[str, ...], as_json: bool) -> None:
               help="traction: i = (wR - V)/(wR). paper: s = (wR - V)/V as in the source paper "
                    "(C1-C4 are s = 0, 0.25, 0.5, 0.75); i = s/(1 + s).")
 @click.option("--load", required=True, type=float, help="Vertical load on the wheel [N], >= 0.")
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
+@json_option("One object (the contract's keys, with `preset`)")
 def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definition: str,
-           load: float, as_json: bool) -> None:
+           load: float, json_target: str | None) -> None:
     """Quasi-static operating point: solve the sinkage that carries LOAD at SLIP.
 
     Prints sinkage [m], drawbar_pull [N], normal_force [N], torque [N.m], both slips, the entry,
     exit and max-stress angles [rad], gross thrust, compaction resistance, contact length and mean
     pressure. Values are grouser-period means (ripple-free) at zero sinkage rate.
     """
+    _check_file_target(json_target)
     ps = _load(preset, assignments)
     try:
         result = model.steady_state(ps, load, slip, slip_definition)
     except WheelTerrainError as err:
         _fail(err)
     result = {"preset": preset, **result}
-    if as_json:
-        out = {k: (_json_number(v) if isinstance(v, float) else v) for k, v in result.items()}
-        click.echo(json.dumps(out, indent=2))
-        return
+    if json_target:
+        _emit_json(json_target, {k: (_json_number(v) if isinstance(v, float) else v)
+                                 for k, v in result.items()})
+        if json_target == "-":
+            return
+    click.echo(f"{'preset':22} {preset}")
     units = {"sinkage": "m", "drawbar_pull": "N", "normal_force": "N", "torque": "N.m",
              "gross_thrust": "N", "compaction_resistance": "N", "entry_angle": "rad",
              "exit_angle": "rad", "max_stress_angle": "rad", "contact_length": "m",
@@ -203,8 +280,8 @@ def build(out: str, flavor: str) -> None:
 @set_option
 @click.option("--fmu-dir", default="build", show_default=True,
               type=click.Path(file_okay=False), help="Where `wheelterrain build` wrote the FMUs.")
-@click.option("--json", "json_file", type=click.Path(dir_okay=False),
-              help="Also write the results as JSON to this file.")
+@json_option("The results (preset, the four cases' means beside the experiment and the "
+             "paper's simulation, mean absolute errors)")
 @click.option("--out", default="validation/output", show_default=True,
               type=click.Path(file_okay=False),
               help="Directory for the time-series CSVs, the PNG plots and the SSP files.")
@@ -212,7 +289,7 @@ def build(out: str, flavor: str) -> None:
               help="Communication step [s].")
 @click.option("--stop", default=30.0, show_default=True, type=click.FloatRange(12.0, 3600.0),
               help="Simulated time per case [s] (averages start after 10 s).")
-def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_file: str | None,
+def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_target: str | None,
               out: str, step: float, stop: float) -> None:
     """Reproduce the paper's C1-C4 by co-simulating the two FMUs with fmpy.
 
@@ -227,6 +304,8 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_file
 
     from . import cosim, plots, ssp
 
+    _check_file_target(json_target)
+    _check_out_dir(out)
     ps = _load(preset, assignments)
     out_dir = Path(out)
     paper = cosim.table3()
@@ -241,13 +320,15 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_file
     rows = cosim.comparison(results)
     mae = cosim.mean_absolute_errors(rows)
     name = preset if not assignments else f"{preset} with {' '.join(assignments)}"
-    click.echo(f"C1-C4 co-simulation, preset {name}, step {step:g} s, {stop:g} s per case "
-               f"(wall time {sum(r.wall_time for r in results):.1f} s)")
-    click.echo(cosim.format_table(rows, mae))
     fitted_on = presets.read(preset)["provenance"].get("fitted_on") if not assignments else None
+    text = json_target != "-"  # --json alone: the JSON document replaces the text
+    say = click.echo if text else (lambda *a, **k: None)
+    say(f"C1-C4 co-simulation, preset {name}, step {step:g} s, {stop:g} s per case "
+        f"(wall time {sum(r.wall_time for r in results):.1f} s)")
+    say(cosim.format_table(rows, mae))
     if fitted_on:
-        click.echo(f"in-sample: {preset} was fitted on {', '.join(fitted_on)}; its held-out "
-                   "errors are printed by `wheelterrain validate`")
+        say(f"in-sample: {preset} was fitted on {', '.join(fitted_on)}; its held-out "
+            "errors are printed by `wheelterrain validate`")
     experiment = {row["case"]: row["experiment"] for row in paper["cases"]}
     for r in results:
         cosim.write_csv(out_dir / f"{r.case}.csv", r)
@@ -255,9 +336,10 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_file
         ssp.write(out_dir / f"{r.case}.ssp", Path(fmu_dir), r.case, ps, r.slip_paper,
                   paper["load_N"], paper["wheel_speed_m_per_s"], stop, step)
     plots.means_bar_chart(rows, out_dir / "means.png", preset)
-    click.echo(f"wrote {out_dir}/C1..C4.csv, C1..C4.png, means.png, C1..C4.ssp")
-    if json_file:
+    say(f"wrote {out_dir}/C1..C4.csv, C1..C4.png, means.png, C1..C4.ssp")
+    if json_target:
         payload = {"preset": preset, "set": list(assignments), "step": step, "stop": stop,
+                   "in_sample": bool(fitted_on),
                    "averaging_windows": {r.case: list(r.window) for r in results},
                    "cases": [{"case": row["case"], "slip_paper": row["slip_paper"],
                               "drawbar_pull": row["drawbar_pull"],
@@ -269,7 +351,7 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_file
                              for row in rows],
                    "mean_absolute_error": mae,
                    "wall_time_s": sum(r.wall_time for r in results)}
-        cosim.write_atomic(Path(json_file), json.dumps(payload, indent=2) + "\n")
+        _emit_json(json_target, payload)
 
 
 @main.command(epilog=EPILOG)
@@ -295,10 +377,10 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_file
               help="The measured quantities the fit matches. drawbar_pull alone asks how "
               "closely the model's pull-slip curve can follow the rig's at all, whatever the "
               "sinkage does (both are reported either way).")
-@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+@json_option("The fit (values, ranges, residuals, held-out errors, profiles)")
 def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, starts: int,
               seed: int, out_file: str | None, name: str, protocol: str | None,
-              profile_points: int, outputs: str, as_json: bool) -> None:
+              profile_points: int, outputs: str, json_target: str | None) -> None:
     """Fit parameters to the rig's C1-C4 drawbar pull and sinkage by least squares.
 
     \b
@@ -314,6 +396,8 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
     from . import calibration
     from .cosim import write_atomic
 
+    _check_file_target(json_target)
+    _check_file_target(out_file, "--out")
     base = _load(preset, assignments)
     names = [n.strip() for n in free.split(",") if n.strip()]
     case_names = [c.strip() for c in cases.split(",") if c.strip()]
@@ -342,9 +426,9 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
         "starts": result.starts, "spread_of_best_starts": result.spread,
         "profiles": profiles,
     }
-    if as_json:
-        click.echo(json.dumps(payload, indent=2))
-    else:
+    if json_target:
+        _emit_json(json_target, payload)
+    if json_target != "-":
         click.echo(f"fit of {', '.join(names)} to the {' and '.join(result.outputs)} of "
                    f"{', '.join(case_names)} ({result.starts} starts, base preset {preset})")
         for n in names:
@@ -422,6 +506,9 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
     from . import plots
     from . import sweep as sweeper
 
+    _check_out_dir(str(Path(out).parent), "--out")
+    if Path(out).is_dir():
+        _usage_error(f"--out {out} is a folder; give the CSV's file name")
     ps = _load(preset, assignments)
     try:
         axes = {"slip": sweeper.parse_axis("slip", slip),
@@ -451,7 +538,7 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
     png = Path(out).with_suffix(".png")
     plots.sweep_curves(rows, x, group, png, f"WheelTerrain.fmu sweep, preset {preset} "
                        f"(slip: {slip_definition} definition)")
-    click.echo(f"wrote {out} ({total} points, {bad} infeasible) and {png}")
+    click.echo(f"preset {preset}: wrote {out} ({total} points, {bad} infeasible) and {png}")
 
 
 @main.command(epilog=EPILOG)
@@ -475,9 +562,9 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
               type=click.Path(file_okay=False), help="Where `wheelterrain build` put the FMUs.")
 @click.option("--out", default="validation/output/mpc", show_default=True,
               type=click.Path(file_okay=False), help="Directory for the plot and the CSV.")
-@click.option("--json", "as_json", is_flag=True, help="Print the figures as one JSON object.")
+@json_option("The figures (slip_rms_error, solve times, the plant, the preset, ...)")
 def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool, horizon: int,
-        interval: float, fmu_dir: str, out: str, as_json: bool) -> None:
+        interval: float, fmu_dir: str, out: str, json_target: str | None) -> None:
     """Slip-control NMPC in closed loop: the CasADi twin drives the wheel on the rig.
 
     \b
@@ -497,6 +584,8 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool, hor
     from . import closed_loop, cosim, plots
     from . import mpc as mpc_module
 
+    _check_file_target(json_target)
+    _check_out_dir(out)
     ps = _load(preset, ())
     the_scenario = closed_loop.SCENARIOS[scenario]
     settings = mpc_module.Settings(horizon=horizon, interval=interval, solver=solver,
@@ -513,14 +602,15 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool, hor
     except mpc_module.PlantError as err:
         click.echo(f"error: {err}", err=True)
         sys.exit(EXIT_NUMERICAL)
-    figures = result.figures(the_scenario)
+    figures = {**result.figures(the_scenario), "preset": preset}
     out_dir = Path(out)
     plots.closed_loop(result, the_scenario, out_dir / f"{scenario}.png")
     cosim.write_series(out_dir / f"{scenario}.csv", result.series, every=5)
-    if as_json:
-        click.echo(json.dumps(figures, indent=2))
-        return
-    click.echo(f"NMPC '{scenario}' ({the_scenario.description})")
+    if json_target:
+        _emit_json(json_target, figures)
+        if json_target == "-":
+            return
+    click.echo(f"NMPC '{scenario}' ({the_scenario.description}), preset {preset}")
     for key, value in figures.items():
         text = f"{value:.4g}" if isinstance(value, float) else str(value)
         click.echo(f"  {key:34} {text}")
@@ -528,10 +618,10 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool, hor
 
 
 @main.command(epilog=EPILOG)
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@json_option('One object {"rows": [...]} (the README\'s contract)')
 @click.option("--starts", default=4, show_default=True, type=click.IntRange(1, 64),
               help="Starting points of each fit (the unfitted preset, then random).")
-def validate(as_json: bool, starts: int) -> None:
+def validate(json_target: str | None, starts: int) -> None:
     """Prediction protocols: every shipped preset held out, beside a straight line.
 
     \b
@@ -547,14 +637,38 @@ def validate(as_json: bool, starts: int) -> None:
     """
     from . import prediction
 
+    _check_file_target(json_target)
     total = 3 + 5 * len(presets.available())
     with click.progressbar(length=total, label="prediction protocols", file=sys.stderr) as bar:
         result = prediction.run(progress=lambda _: bar.update(1), starts=starts)
-    if as_json:
-        click.echo(json.dumps(result, indent=2, allow_nan=False))
-        return
+    if json_target:
+        _emit_json(json_target, result)
+        if json_target == "-":
+            return
     click.echo(prediction.format_table(result))
 
 
+def entry() -> None:
+    """The console script: ``main`` with a clear line, not a traceback, when standard output
+    cannot be written (a full disk, a closed pipe)."""
+    import os
+
+    try:
+        code = main(standalone_mode=False)
+    except click.exceptions.Abort:
+        click.echo("aborted", err=True)
+        sys.exit(1)
+    except click.ClickException as err:
+        err.show()
+        sys.exit(err.exit_code)
+    except OSError as err:
+        with contextlib.suppress(OSError):
+            click.echo(f"error: cannot write the output: {err.strerror or err}", err=True)
+        with contextlib.suppress(OSError):  # nothing more reaches the broken stream at exit
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        sys.exit(EXIT_USAGE)
+    sys.exit(code if isinstance(code, int) else 0)
+
+
 if __name__ == "__main__":  # pragma: no cover
-    main()
+    entry()

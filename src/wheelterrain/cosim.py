@@ -319,12 +319,19 @@ def format_table(rows: list[dict], mae: dict[str, float]) -> str:
     return "\n".join(lines)
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def write_atomic(path: Path, text: str) -> None:
     """Write ``text`` to ``path`` through a temporary file: never a half-written result."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
     try:
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp's 0600 -> the user's normal permissions
         with os.fdopen(fd, "w") as f:
             f.write(text)
         os.replace(tmp, path)

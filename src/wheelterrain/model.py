@@ -34,7 +34,8 @@ def _finite(name: str, value: float, lo: float = -math.inf, hi: float = math.inf
         number = float(value)
     except (TypeError, ValueError):
         raise InputError(name, value, "is not a number") from None
-    valid = f"valid range [{lo:g}, {hi:g}]"
+    valid = (f"valid range {'(' if math.isinf(lo) else '['}{lo:g}, "
+             f"{hi:g}{')' if math.isinf(hi) else ']'}")
     if not math.isfinite(number):
         raise InputError(name, value, f"must be finite; {valid}")
     if not lo <= number <= hi:

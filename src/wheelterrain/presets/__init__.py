@@ -30,7 +30,10 @@ def read(name_or_path: str) -> dict:
     """The raw preset document (name, description, provenance, values)."""
     path = Path(name_or_path)
     if name_or_path.endswith(".json") and path.is_file():
-        text = path.read_text(encoding="utf-8")
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as err:
+            raise ParameterError("--preset", name_or_path, f"cannot be read: {err}") from None
     elif name_or_path in available():
         text = resources.files(__package__).joinpath(f"{name_or_path}.json").read_text("utf-8")
     else:
@@ -38,8 +41,13 @@ def read(name_or_path: str) -> dict:
             "--preset", name_or_path,
             f"is neither a preset ({', '.join(available())}) nor a preset .json file",
         )
-    doc = json.loads(text)
-    if not isinstance(doc.get("values"), dict):
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as err:
+        raise ParameterError("--preset", name_or_path,
+                             f"is not valid JSON ({err.msg} at line {err.lineno}, column "
+                             f"{err.colno})") from None
+    if not isinstance(doc, dict) or not isinstance(doc.get("values"), dict):
         raise ParameterError("--preset", name_or_path, "has no 'values' object")
     return doc
 

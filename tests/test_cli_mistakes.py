@@ -1,0 +1,95 @@
+"""A user's mistake gets one line naming what was wrong and exit 2, never a traceback, and is
+found before any long run starts; files the CLI writes get the user's normal permissions."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+from click.testing import CliRunner
+
+from wheelterrain.cli import main
+from wheelterrain.cosim import write_atomic
+
+
+def _one_line_exit_2(result, needle: str) -> None:
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.output.splitlines() if line.strip()]
+    assert len(lines) == 1, result.output
+    assert needle in lines[0]
+    assert "Traceback" not in result.output
+
+
+def test_malformed_preset_json(tmp_path):
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    result = CliRunner().invoke(main, ["steady", "--preset", str(bad), "--slip", "0.2",
+                                       "--load", "62"])
+    _one_line_exit_2(result, "is not valid JSON")
+
+
+@pytest.mark.parametrize("command", [
+    ["steady", "--slip", "0.2", "--load", "62"],
+    ["params"],
+    ["reproduce", "--fmu-dir", "nowhere"],
+    ["mpc", "--fmu-dir", "nowhere"],
+    ["validate"],
+], ids=["steady", "params", "reproduce", "mpc", "validate"])
+def test_json_into_a_missing_folder_is_refused_before_the_run(tmp_path, command):
+    target = tmp_path / "missing" / "x.json"
+    result = CliRunner().invoke(main, [*command, "--json", str(target)])
+    _one_line_exit_2(result, "does not exist (it is not created)")
+    assert not target.parent.exists()
+
+
+def test_json_onto_a_folder_is_refused(tmp_path):
+    result = CliRunner().invoke(main, ["params", "--json", str(tmp_path)])
+    _one_line_exit_2(result, "is a folder")
+
+
+@pytest.mark.parametrize("command", [["reproduce"], ["mpc"], ["sweep"]])
+def test_an_out_folder_that_cannot_be_made_is_refused_before_the_run(tmp_path, command):
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    out = blocker / "sub" / ("x.csv" if command == ["sweep"] else "dir")
+    result = CliRunner().invoke(main, [*command, "--out", str(out)])
+    _one_line_exit_2(result, "is not a writable folder")
+
+
+def test_infinite_load_names_a_half_open_range():
+    result = CliRunner().invoke(main, ["steady", "--slip", "0.2", "--load", "inf"])
+    _one_line_exit_2(result, "must be finite; valid range [0, inf)")
+
+
+def test_a_full_standard_output_is_one_line_not_a_traceback():
+    with open("/dev/full", "w") as full:
+        run = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "params"], stdout=full,
+                             stderr=subprocess.PIPE, text=True, check=False)
+    assert run.returncode == 2
+    assert run.stderr.strip().splitlines() == [
+        "error: cannot write the output: No space left on device"]
+
+
+def test_json_without_a_file_prints_the_document_and_with_one_writes_it(tmp_path):
+    printed = CliRunner().invoke(main, ["steady", "--slip", "0.2", "--load", "62", "--json"])
+    assert printed.exit_code == 0
+    doc = json.loads(printed.stdout)
+    target = tmp_path / "s.json"
+    written = CliRunner().invoke(main, ["steady", "--slip", "0.2", "--load", "62", "--json",
+                                        str(target)])
+    assert written.exit_code == 0
+    assert json.loads(target.read_text()) == doc
+    assert "drawbar_pull" in written.stdout  # the text is still printed beside the file
+    assert doc["preset"] in written.stdout  # and it names the preset
+
+
+def test_written_files_get_the_users_normal_permissions(tmp_path):
+    mask = os.umask(0o022)
+    try:
+        write_atomic(tmp_path / "r.csv", "a,b\n")
+    finally:
+        os.umask(mask)
+    assert (tmp_path / "r.csv").stat().st_mode & 0o777 == 0o644
