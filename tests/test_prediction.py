@@ -29,6 +29,7 @@ def test_validate_prints_every_contract_row(validate_json):
         assert {"model", "protocol", "free", "drawbar_pull_mae", "sinkage_mae",
                 "in_sample"} <= set(r)
         assert r["protocol"] in PROTOCOLS
+        assert "error" not in r, r["error"]
         assert r["drawbar_pull_mae"] >= 0
         assert r["sinkage_mae"] >= 0
     have = {(r["model"], r["protocol"]) for r in rows}
@@ -148,3 +149,19 @@ def test_transfer_uses_the_other_wheel_and_soil_with_the_presets_model_form():
     assert result["errors"]["drawbar_pull"][1] == pytest.approx(
         first["drawbar_pull"] - lug[1]["drawbar_pull_n"], rel=1e-12)
     assert result["cases"] == [r["case"] for r in lug]
+
+
+def test_a_fold_no_start_can_fit_is_reported_not_guessed():
+    """rashid-calibrated's unfitted start cannot carry 62 N at C4 in the arc form with the
+    soil-element shear: one start alone fails, and the row says so instead of a figure."""
+    cases = calibration.paper_cases()
+    base = prediction.unfitted("rashid-calibrated")
+    with pytest.raises(calibration.CalibrationError, match="none of the 1 starts"):
+        calibration.fit(base, prediction.preset_free("rashid-calibrated"), ["C2", "C3", "C4"],
+                        starts=1)
+    row = prediction.model_row("rashid-calibrated", base,
+                               prediction.preset_free("rashid-calibrated"), "leave-one-out",
+                               cases, starts=1).as_dict()
+    assert row["drawbar_pull_mae"] is None
+    assert "failed" in row["error"]
+    assert "failed" in prediction.format_table({"rows": [row]})

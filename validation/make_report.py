@@ -137,9 +137,10 @@ def prediction_section(starts: int, out: list[str]) -> None:
         if r["protocol"] == "transfer":
             continue
         label = "**in-sample**" if r["in_sample"] else "held-out"
+        figures = (f"failed | {r['error']}" if r.get("error") else
+                   f"{r['drawbar_pull_mae']:.2f} N | {1e3 * r['sinkage_mae']:.2f} mm")
         out.append(f"| {r['model']} | {r['protocol']} | {', '.join(r['free']) or 'none'} | "
-                   f"{r['drawbar_pull_mae']:.2f} N | {1e3 * r['sinkage_mae']:.2f} mm | "
-                   f"{label} |")
+                   f"{figures} | {label} |")
     out += ["", "Transfer to Ding et al. 2011 (digitised, approximate; HIT single-wheel rig, "
             "R = 157 mm, b = 165 mm, 80 N, slips 0-0.6): that soil's own parameters converted "
             "to the Reece form at the wheel's width (exact there), each preset's model form "

@@ -182,10 +182,21 @@ def fit(base: ParameterSet, names: list[str], case_names: list[str], starts: int
                             bounds=(lo, hi), x_scale="jac", max_nfev=200, loss=loss,
                             f_scale=loss_scale)
         results.append(sol)
-    best = min(results, key=lambda s: s.cost)
+    best, r, J = None, None, None
+    for sol in sorted(results, key=lambda s: s.cost):  # the best start that ended feasible
+        try:
+            r, J = _residuals_and_jacobian(sol.x, names, base, cases, load, outputs=outputs)
+        except WheelTerrainError:
+            continue
+        best = sol
+        break
+    if best is None:
+        raise CalibrationError(
+            f"none of the {len(candidates)} starts reached parameters at which the wheel "
+            f"carries {load:g} N in every fitted case ({', '.join(case_names)}); give more "
+            "starts or a base preset that carries the load")
     near = [s for s in results if s.cost <= best.cost * (1 + 1e-3) + 1e-12]
     spread = {n: float(np.ptp([s.x[k] for s in near])) for k, n in enumerate(names)}
-    r, J = _residuals_and_jacobian(best.x, names, base, cases, load, outputs=outputs)
     m, p = len(r), len(names)
     errors, corr = None, None
     if m > p and loss == "linear":

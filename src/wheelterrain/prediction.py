@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import calibration, data, model, presets
-from .errors import WheelTerrainError
+from .errors import CalibrationError, WheelTerrainError
 from .parameters import DEG, ParameterSet
 
 CASES = ("C1", "C2", "C3", "C4")
@@ -124,13 +124,18 @@ class Row:
     in_sample: bool
     fitted: list[dict[str, float]]  # the fitted values of each fold
     data: str = "paper Table III, experiment"
+    error: str | None = None  # why the row has no figures (a fold's fit failed)
 
     def as_dict(self) -> dict:
-        mae = {k: float(np.mean([abs(e[k]) for e in self.errors.values()])) for k in OUTPUTS}
-        return {"model": self.model, "protocol": self.protocol, "free": self.free,
-                "drawbar_pull_mae": mae["drawbar_pull"], "sinkage_mae": mae["sinkage"],
-                "in_sample": self.in_sample, "judged_on": list(self.errors), "data": self.data,
-                "errors": self.errors, "fitted": self.fitted}
+        mae = {k: (float(np.mean([abs(e[k]) for e in self.errors.values()]))
+                   if self.error is None else None) for k in OUTPUTS}
+        row = {"model": self.model, "protocol": self.protocol, "free": self.free,
+               "drawbar_pull_mae": mae["drawbar_pull"], "sinkage_mae": mae["sinkage"],
+               "in_sample": self.in_sample, "judged_on": list(self.errors), "data": self.data,
+               "errors": self.errors, "fitted": self.fitted}
+        if self.error is not None:
+            row["error"] = self.error
+        return row
 
 
 def _folds(protocol: str) -> list[tuple[list[str], list[str]]]:
@@ -169,8 +174,12 @@ def model_row(label: str, base: ParameterSet, free: Sequence[str], protocol: str
     for train, test in _folds(protocol):
         ps = base
         if free:
-            result = calibration.fit(base, list(free), train, starts=starts, load=LOAD,
-                                     data=_rows_of(cases, train))
+            try:
+                result = calibration.fit(base, list(free), train, starts=starts, load=LOAD,
+                                         data=_rows_of(cases, train))
+            except CalibrationError as err:  # reported in the row, never hidden or guessed
+                return Row(label, protocol, list(free), {}, False, fitted,
+                           error=f"fit on {', '.join(train)} failed: {err}")
             ps = base.with_values(result.values)
             fitted.append(result.values)
         for c in _rows_of(cases, test):
@@ -245,7 +254,10 @@ def format_table(result: dict) -> str:
     for r in result["rows"]:
         label = "in-sample" if r["in_sample"] else "held-out"
         data_name = r["data"].split(" (")[0] if r["protocol"] == "transfer" else label
-        lines.append(f"{r['model']:18} {r['protocol']:14} {len(r['free']):4d} | "
-                     f"{r['drawbar_pull_mae']:12.2f} {1e3 * r['sinkage_mae']:16.2f} | "
-                     f"{data_name}")
+        if r.get("error"):
+            figures = f"{'failed':>12} {'':16} | {r['error']}"
+        else:
+            figures = (f"{r['drawbar_pull_mae']:12.2f} {1e3 * r['sinkage_mae']:16.2f} | "
+                       f"{data_name}")
+        lines.append(f"{r['model']:18} {r['protocol']:14} {len(r['free']):4d} | {figures}")
     return "\n".join(lines)
