@@ -42,6 +42,9 @@ def test_build_then_reproduce_writes_the_contract(tmp_path):
         assert abs(c["sinkage"] - q["sinkage"]) < 3e-3 * q["sinkage"]
     for name in ("C1.csv", "C4.png", "means.png", "C3.ssp"):
         assert (tmp_path / "out" / name).stat().st_size > 0
+    header = (tmp_path / "out" / "C1.csv").read_text().splitlines()[0].split(",")
+    assert header[:4] == ["time [s]", "sinkage [m]", "normal_force [N]", "drawbar_pull [N]"]
+    assert "motor_torque [N.m]" in header
 
 
 def test_reproduce_without_fmus_says_how_to_build(tmp_path):

@@ -75,8 +75,12 @@ def test_cli_writes_csv_and_plot(fmu, tmp_path):
                                     "--load", "62", "--workers", "1", "--out", str(out)])
     assert run.exit_code == 0, run.output
     with out.open() as f:
-        rows = list(csv.DictReader(f))
-    assert [float(r["slip"]) for r in rows] == pytest.approx([0, 0.25, 0.5])
+        reader = csv.DictReader(f)
+        rows = list(reader)
+    # the header carries the units; a status column has none
+    assert {"slip [1]", "load [N]", "drawbar_pull [N]", "contact_sinkage [m]", "torque [N.m]",
+            "status"} <= set(reader.fieldnames)
+    assert [float(r["slip [1]"]) for r in rows] == pytest.approx([0, 0.25, 0.5])
     assert out.with_suffix(".png").stat().st_size > 0
     bad = CliRunner().invoke(main, ["sweep", "--fmu", str(fmu), "--grid", "soil.phi=2"])
     assert bad.exit_code == 2
@@ -92,8 +96,8 @@ def test_a_thousand_point_sweep_is_identical_on_a_local_dask_cluster(fmu, tmp_pa
                                     "--load", "10:100:25", "--workers", "2", "--out", str(out)])
     assert run.exit_code == 0, run.output
     assert "sweeping 1000 points" in run.output
-    with out.open() as f:
-        pooled = list(csv.DictReader(f))
+    with out.open() as f:  # headers carry units: "drawbar_pull [N]"
+        pooled = [{k.split(" [")[0]: v for k, v in row.items()} for row in csv.DictReader(f)]
     assert len(pooled) == 1000
     ps = presets.load(presets.DEFAULT_PRESET)  # the CLI's default
     axes = {"slip": sweeper.parse_axis("slip", "0:0.75:40"),

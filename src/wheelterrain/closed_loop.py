@@ -35,6 +35,10 @@ PLANT_STEP = cosim.STEP  # s, the co-simulation's communication step
 RECORD = ("time", "slip", "slip_reference", "command", "wheel_speed", "motor_torque",
           "sinkage", "drawbar_pull", "normal_force", "soil_torque", "phi_estimate",
           "k_phi_estimate", "phi_true", "k_phi_true", "carriage_speed")
+RECORD_UNITS = {"slip_reference": "1", "command": "rad/s", "soil_torque": "N.m",
+                "phi_estimate": "rad", "k_phi_estimate": "1", "phi_true": "rad",
+                "k_phi_true": "1"}
+"""Units of the recorded columns that are not FMU variables (the rest: slaves.variable_units)."""
 ESTIMATED = ("soil.phi", "soil.k_phi")
 
 

@@ -344,9 +344,25 @@ def write_csv(path: Path, result: CaseResult, every: int = 10) -> None:
     write_series(path, {name: result.series[name] for name in ("time", *RECORD)}, every)
 
 
-def write_series(path: Path, series: dict[str, np.ndarray], every: int = 1) -> None:
-    """Equal-length columns ``series`` as CSV, every ``every``-th row, written atomically."""
+def csv_header(names, units: dict[str, str] | None = None) -> str:
+    """A CSV header whose columns carry their units, ``drawbar_pull [N]`` (a column without a
+    unit, e.g. a status, stays bare). ``units`` defaults to the FMU variables' units; a column
+    with no declared unit is refused rather than written unlabelled."""
+    if units is None:
+        from .slaves import variable_units
+
+        units = variable_units()
+    missing = [n for n in names if n not in units]
+    if missing:
+        raise ValueError(f"no unit declared for column(s) {', '.join(missing)}")
+    return ",".join(f"{n} [{units[n]}]" if units[n] else n for n in names)
+
+
+def write_series(path: Path, series: dict[str, np.ndarray], every: int = 1,
+                 units: dict[str, str] | None = None) -> None:
+    """Equal-length columns ``series`` as CSV, every ``every``-th row, written atomically; the
+    header carries the units (:func:`csv_header`)."""
     names = list(series)
     data = np.column_stack([series[n] for n in names])[::every]
-    lines = [",".join(names)] + [",".join(f"{x:.10g}" for x in row) for row in data]
+    lines = [csv_header(names, units)] + [",".join(f"{x:.10g}" for x in row) for row in data]
     write_atomic(path, "\n".join(lines) + "\n")

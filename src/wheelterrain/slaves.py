@@ -136,6 +136,15 @@ def terrain_variables() -> list[Var]:
     return variables
 
 
+def variable_units() -> dict[str, str]:
+    """The unit (Modelica.Units.SI string) of every variable of both FMUs by name, parameters
+    included, plus the master's ``time`` [s]: the units result files carry in their headers."""
+    units = {"time": "s"}
+    for v in (*terrain_variables(), *rig_variables()):
+        units.setdefault(v.name, v.unit)
+    return units
+
+
 def rig_variables() -> list[Var]:
     variables = [_parameter_var(p, p.default) for p in rig.RIG_TABLE]
     variables += [

@@ -217,12 +217,14 @@ def _run_dask(fmu, base, chunks, slip_definition, address, results, progress) ->
 
 
 def write_csv(path: Path, rows: list[dict]) -> None:
-    from .cosim import write_atomic
+    from .cosim import csv_header, write_atomic
+    from .slaves import variable_units
 
     if not rows:
         raise ValueError("no rows to write")
     keys = list(rows[0])
-    lines = [",".join(keys)]
+    units = {**variable_units(), "slip": "1", "slip_traction": "1", "load": "N", "status": ""}
+    lines = [csv_header(keys, units)]
     for row in rows:
         lines.append(",".join(row[k] if isinstance(row[k], str) else f"{row[k]:.12g}"
                               for k in keys))
