@@ -27,7 +27,8 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from wheelterrain import contact, presets
+from wheelterrain import presets
+from wheelterrain.model import contact
 
 ROOT = Path(__file__).resolve().parents[1]
 

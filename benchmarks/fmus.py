@@ -26,7 +26,9 @@ from pathlib import Path
 
 from fmpy import extract
 
-from wheelterrain import contact, cosim, presets
+from wheelterrain import presets
+from wheelterrain.cosim import master as cosim
+from wheelterrain.model import contact
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from fmu_support import Instance
@@ -87,7 +89,7 @@ def step_figures(fmu_dir: Path, label: str, n: int, k: int) -> None:
 
 
 def c1_c4_ecos(fmu_dir: Path, ps) -> float:
-    from wheelterrain import ssp
+    from wheelterrain.cosim import ssp
 
     paper = cosim.table3()
     start = time.perf_counter()

@@ -15,7 +15,9 @@ from __future__ import annotations
 import argparse
 import statistics
 
-from wheelterrain import closed_loop, mpc, native, presets
+from wheelterrain import presets
+from wheelterrain.control import closed_loop, mpc
+from wheelterrain.fmu import compiled as native
 
 SETUPS = (("ipopt", False), ("sqpmethod", False), ("ipopt", True), ("sqpmethod", True))
 

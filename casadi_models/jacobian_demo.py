@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from wheelterrain import model, presets
+from wheelterrain.model.slip import traction_from_paper
 from wheelterrain.parameters import NAMES
-from wheelterrain.slip import traction_from_paper
 
 
 def main() -> None:

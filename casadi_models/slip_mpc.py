@@ -2,7 +2,7 @@
 
     python casadi_models/slip_mpc.py [--plant casadi|fmu] [--reference 0.25] [--seconds 3]
 
-Builds the controller (wheelterrain.mpc: the FMUs' own terrain Function closed by the rig's
+Builds the controller (wheelterrain.control.mpc: the FMUs' own terrain Function closed by the rig's
 equations, backward Euler over 30 x 20 ms, Gauss-Newton SQP with qrqp), then runs it in closed
 loop against the in-process plant (or the two FMUs, after `wheelterrain build`), printing slip,
 command and solve time as it goes. Swap in your own rig parameters, limits or objective.
@@ -15,7 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelterrain import closed_loop, mpc, presets, rig
+from wheelterrain import presets
+from wheelterrain.control import closed_loop, mpc
+from wheelterrain.model import rig
 from wheelterrain.parameters import NAMES
 
 

@@ -1,13 +1,13 @@
 """pythonfmu slave of SingleWheelRig.fmu: the paper's single-wheel test rig.
 
-Thin on purpose: the variables, checks and state live in wheelterrain.slaves, the rig's
-equations in wheelterrain.rig (bundled in the FMU's resources/). Unique module name (pythonfmu
+Thin on purpose: the variables, checks and state live in wheelterrain.fmu.slaves, the rig's
+equations in wheelterrain.model.rig (bundled in the FMU's resources/). Unique module name (pythonfmu
 issue #228).
 """
 
 from pythonfmu import DefaultExperiment, Fmi2Slave
 
-from wheelterrain.slaves import RigCore
+from wheelterrain.fmu.slaves import RigCore
 
 
 class SingleWheelRig(Fmi2Slave):

@@ -1,13 +1,13 @@
 """pythonfmu slave of WheelTerrain.fmu: the wheel-soil contact forces of the wheelterrain model.
 
-Thin on purpose: the variables, checks and state live in wheelterrain.slaves, the physics in
-wheelterrain.contact (bundled in the FMU's resources/). The module name is unique to this FMU
+Thin on purpose: the variables, checks and state live in wheelterrain.fmu.slaves, the physics in
+wheelterrain.model.contact (bundled in the FMU's resources/). The module name is unique to this FMU
 (pythonfmu issue #228: two FMUs whose slave modules share a name cannot share a process).
 """
 
 from pythonfmu import DefaultExperiment, Fmi2Slave
 
-from wheelterrain.slaves import TerrainCore
+from wheelterrain.fmu.slaves import TerrainCore
 
 
 class WheelTerrain(Fmi2Slave):

@@ -6,7 +6,8 @@ import math
 
 import pytest
 
-from wheelterrain import fmubuild, presets
+from wheelterrain import presets
+from wheelterrain.fmu import build_pythonfmu as fmubuild
 from wheelterrain.parameters import ParameterSet
 
 

@@ -12,7 +12,7 @@ from fmpy.fmi2 import (
     fmi2StepFinishedTYPE,
 )
 
-from wheelterrain.cosim import set_values
+from wheelterrain.cosim.master import set_values
 
 
 class Instance:

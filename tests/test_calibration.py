@@ -10,10 +10,11 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from wheelterrain import calibration, model, presets
+from wheelterrain import model, presets
 from wheelterrain.cli import main
+from wheelterrain.fit import calibration
+from wheelterrain.model.slip import traction_from_paper
 from wheelterrain.parameters import DEG
-from wheelterrain.slip import traction_from_paper
 
 SLIPS = {"C1": 0.0, "C2": 0.25, "C3": 0.5, "C4": 0.75}
 

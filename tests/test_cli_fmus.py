@@ -8,7 +8,7 @@ import subprocess
 import sys
 
 from wheelterrain import model, presets
-from wheelterrain.slip import traction_from_paper
+from wheelterrain.model.slip import traction_from_paper
 
 
 def wt(*args, cwd):

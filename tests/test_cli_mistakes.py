@@ -12,7 +12,7 @@ import pytest
 from click.testing import CliRunner
 
 from wheelterrain.cli import main
-from wheelterrain.cosim import write_atomic
+from wheelterrain.cosim.master import write_atomic
 
 
 def _one_line_exit_2(result, needle: str) -> None:

@@ -20,8 +20,10 @@ import numpy as np
 import pytest
 from fmpy import extract
 
-from wheelterrain import cosim, model, presets, ssp
-from wheelterrain.slip import traction_from_paper
+from wheelterrain import model, presets
+from wheelterrain.cosim import master as cosim
+from wheelterrain.cosim import ssp
+from wheelterrain.model.slip import traction_from_paper
 
 LOAD, RIM = 62.0, 0.03
 CASES = [("C1", 0.0), ("C2", 0.25), ("C3", 0.5), ("C4", 0.75)]

@@ -8,7 +8,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from wheelterrain import contact, model
+from wheelterrain import model
+from wheelterrain.model import contact
 from wheelterrain.parameters import INDEX
 
 

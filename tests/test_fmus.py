@@ -261,7 +261,7 @@ def test_bad_rig_parameter_is_refused(fmus):
 
 
 def test_wheelterrain_ships_and_uses_the_compiled_model(fmus):
-    from wheelterrain import native
+    from wheelterrain.fmu import compiled as native
 
     if native.compiler() is None:
         pytest.skip("no C compiler: the FMU is built for the CasADi VM")
@@ -275,8 +275,8 @@ def test_wheelterrain_ships_and_uses_the_compiled_model(fmus):
 @pytest.mark.parametrize(("drive", "carriage"), [(1, 0), (2, 1)])
 def test_rig_command_inputs_and_free_carriage_follow_rig_step(fmus, drive, carriage):
     """The controller's test bench: rig.drive / rig.carriage switch the FMU to the command inputs
-    and the free carriage, step for step as wheelterrain.rig.step."""
-    from wheelterrain import rig as rig_model
+    and the free carriage, step for step as wheelterrain.model.rig.step."""
+    from wheelterrain.model import rig as rig_model
 
     values = {"rig.drive": drive, "rig.carriage": carriage, "rig.towing_force": 2.0}
     r = rig(fmus, f"modes{drive}{carriage}", **values)

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wheelterrain import contact, model
+from wheelterrain import model
+from wheelterrain.model import contact
 from wheelterrain.parameters import NAMES, TABLE
 
 STEP = 1e-6

@@ -1,11 +1,13 @@
-"""The compiled-C route (wheelterrain.native) gives the CasADi VM's numbers."""
+"""The compiled-C route (wheelterrain.fmu.compiled) gives the CasADi VM's numbers."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from wheelterrain import contact, native, presets
+from wheelterrain import presets
+from wheelterrain.fmu import compiled as native
+from wheelterrain.model import contact
 
 
 @pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
@@ -34,7 +36,7 @@ def test_missing_compiler_is_a_clear_error(tmp_path, monkeypatch):
 @pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
 @pytest.mark.parametrize("which", [0, 1])
 def test_compiled_fmu_functions_equal_the_vm(tmp_path, which):
-    from wheelterrain import fmu_model
+    from wheelterrain.fmu import functions as fmu_model
 
     fn = fmu_model.terrain_functions()[which]
     compiled = native.CompiledFunction(native.compile_function(fn, tmp_path), fn)

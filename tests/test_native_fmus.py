@@ -18,7 +18,12 @@ from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
 
 from fmu_support import Instance
-from wheelterrain import cosim, fmubuild, native, nativebuild, presets, ssp
+from wheelterrain import presets
+from wheelterrain.cosim import master as cosim
+from wheelterrain.cosim import ssp
+from wheelterrain.fmu import build_native as nativebuild
+from wheelterrain.fmu import build_pythonfmu as fmubuild
+from wheelterrain.fmu import compiled as native
 
 pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
 NAMES = ("WheelTerrain", "SingleWheelRig")

@@ -8,8 +8,8 @@ import pytest
 
 from wheelterrain import presets
 from wheelterrain.errors import InputError, ParameterError
+from wheelterrain.model.slip import paper_from_traction, to_traction, traction_from_paper
 from wheelterrain.parameters import TABLE, ParameterSet, parse_assignments
-from wheelterrain.slip import paper_from_traction, to_traction, traction_from_paper
 
 
 def test_every_row_is_complete_and_its_default_valid():

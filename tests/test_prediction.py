@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from wheelterrain import calibration, model, prediction, presets
+from wheelterrain import model, presets
 from wheelterrain.cli import main
+from wheelterrain.fit import calibration, prediction
 
 PROTOCOLS = {"all-case", "leave-one-out", "c2-only", "transfer"}
 

@@ -1,5 +1,6 @@
-"""The rig's equations (wheelterrain.rig): one set of expressions on floats (the pythonfmu slave),
-traced to CasADi (the native FMU, the MPC's prediction model), in every drive and carriage mode."""
+"""The rig's equations (wheelterrain.model.rig): one set of expressions on floats (the pythonfmu
+slave), traced to CasADi (the native FMU, the MPC's prediction model), in every drive and
+carriage mode."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from wheelterrain import rig
+from wheelterrain.model import rig
 
 MODES = list(itertools.product((rig.DRIVE_PAPER, rig.DRIVE_SPEED, rig.DRIVE_TORQUE),
                                (rig.CARRIAGE_KINEMATIC, rig.CARRIAGE_FREE)))

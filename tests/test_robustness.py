@@ -13,8 +13,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from wheelterrain import contact, model, presets
+from wheelterrain import model, presets
 from wheelterrain.errors import LoadTooLargeError
+from wheelterrain.model import contact
 from wheelterrain.parameters import TABLE, ParameterSet
 
 

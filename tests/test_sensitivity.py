@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from wheelterrain import model, presets, sensitivity
-from wheelterrain.slip import traction_from_paper
+from wheelterrain import model, presets
+from wheelterrain.fit import sensitivity
+from wheelterrain.model.slip import traction_from_paper
 
 
 def test_elasticities_equal_finite_differences():
@@ -78,7 +79,7 @@ def test_paper_trends_hold_with_the_calibrated_preset():
 
 
 def test_calibrated_preset_values_lie_in_their_plausible_ranges():
-    from wheelterrain import calibration
+    from wheelterrain.fit import calibration
 
     doc = presets.read("rashid-calibrated")
     ps = presets.load("rashid-calibrated")

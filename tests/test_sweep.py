@@ -10,11 +10,11 @@ import pytest
 from click.testing import CliRunner
 
 from wheelterrain import model, presets
-from wheelterrain import sweep as sweeper
 from wheelterrain.cli import main
+from wheelterrain.cosim import sweep as sweeper
 from wheelterrain.errors import ParameterError
+from wheelterrain.model.slip import traction_from_paper
 from wheelterrain.parameters import DEG
-from wheelterrain.slip import traction_from_paper
 
 
 @pytest.fixture(scope="module")

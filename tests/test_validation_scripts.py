@@ -34,7 +34,7 @@ def test_quasistatic_c1_c4_prints_and_writes_the_library_values(tmp_path):
 
 
 def test_calibration_protocols_report_held_out_errors_of_the_fitted_values(tmp_path):
-    from wheelterrain import calibration
+    from wheelterrain.fit import calibration
 
     out_file = tmp_path / "protocols.json"
     subprocess.run([sys.executable, str(ROOT / "validation" / "calibration_protocols.py"),

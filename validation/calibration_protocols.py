@@ -19,8 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelterrain import calibration, presets
-from wheelterrain.cosim import write_atomic
+from wheelterrain import presets
+from wheelterrain.cosim.master import write_atomic
+from wheelterrain.fit import calibration
 from wheelterrain.parameters import DEG
 
 CASES = ["C1", "C2", "C3", "C4"]

@@ -27,8 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelterrain import calibration, presets
-from wheelterrain.cosim import write_atomic
+from wheelterrain import presets
+from wheelterrain.cosim.master import write_atomic
+from wheelterrain.fit import calibration
 
 SOIL = ["soil.phi", "soil.k_phi", "soil.n0", "soil.cohesion", "soil.shear_modulus"]
 CLASSICAL = {"soil.n1": 0.0, "model.contact_radius_factor": 0.0,

@@ -9,7 +9,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from wheelterrain import cosim, presets, sensitivity
+from wheelterrain import presets
+from wheelterrain.cosim import master as cosim
+from wheelterrain.fit import sensitivity
 
 
 def main() -> None:

@@ -4,7 +4,7 @@
  * One translation unit per FMU: this file includes two files that `wheelterrain build --flavor
  * native` generates for WheelTerrain or SingleWheelRig: model_vars.h (the variable table, the
  * GUID, and the C that CasADi generates from the very Functions the Python flavour calls,
- * wheelterrain.fmu_model) and model_hooks.c (model_work, model_reset, model_initialize,
+ * wheelterrain.fmu.functions) and model_hooks.c (model_work, model_reset, model_initialize,
  * model_refresh, model_step: copying values in and out of those Functions). No arithmetic of the
  * model is written by hand.
  *

@@ -14,8 +14,8 @@ import sys
 import click
 import numpy as np
 
-from . import __version__, model, presets
-from .errors import (
+from wheelterrain import __version__, model, presets
+from wheelterrain.errors import (
     CalibrationError,
     FMUError,
     InputError,
@@ -23,7 +23,7 @@ from .errors import (
     ParameterError,
     WheelTerrainError,
 )
-from .parameters import DEG, TABLE, parse_assignments
+from wheelterrain.parameters import DEG, TABLE, parse_assignments
 
 EXIT_USAGE, EXIT_INFEASIBLE, EXIT_NUMERICAL = 2, 3, 4
 
@@ -115,7 +115,7 @@ def _emit_json(target: str | None, document) -> None:
     """Write ``document`` as JSON to ``target`` ('-': standard output)."""
     from pathlib import Path
 
-    from .cosim import write_atomic
+    from wheelterrain.cosim.master import write_atomic
 
     text = json.dumps(_finite(document), indent=2, allow_nan=False) + "\n"
     if target == "-":
@@ -255,9 +255,9 @@ def build(out: str, flavor: str) -> None:
     """
     from pathlib import Path
 
-    from .fmubuild import BuildError
-    from .fmubuild import build as build_pythonfmu
-    from .nativebuild import build as build_native
+    from wheelterrain.fmu.build_native import build as build_native
+    from wheelterrain.fmu.build_pythonfmu import BuildError
+    from wheelterrain.fmu.build_pythonfmu import build as build_pythonfmu
 
     try:
         paths = []
@@ -302,7 +302,9 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_targ
     """
     from pathlib import Path
 
-    from . import cosim, plots, ssp
+    from wheelterrain import plots
+    from wheelterrain.cosim import master as cosim
+    from wheelterrain.cosim import ssp
 
     _check_file_target(json_target)
     _check_out_dir(out)
@@ -393,8 +395,8 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
     """
     from pathlib import Path
 
-    from . import calibration
-    from .cosim import write_atomic
+    from wheelterrain.cosim.master import write_atomic
+    from wheelterrain.fit import calibration
 
     _check_file_target(json_target)
     _check_file_target(out_file, "--out")
@@ -503,8 +505,8 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
     """
     from pathlib import Path
 
-    from . import plots
-    from . import sweep as sweeper
+    from wheelterrain import plots
+    from wheelterrain.cosim import sweep as sweeper
 
     _check_out_dir(str(Path(out).parent), "--out")
     if Path(out).is_dir():
@@ -581,8 +583,10 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool, hor
     """
     from pathlib import Path
 
-    from . import closed_loop, cosim, plots
-    from . import mpc as mpc_module
+    from wheelterrain import plots
+    from wheelterrain.control import closed_loop
+    from wheelterrain.control import mpc as mpc_module
+    from wheelterrain.cosim import master as cosim
 
     _check_file_target(json_target)
     _check_out_dir(out)
@@ -605,7 +609,7 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool, hor
     figures = {**result.figures(the_scenario), "preset": preset}
     out_dir = Path(out)
     plots.closed_loop(result, the_scenario, out_dir / f"{scenario}.png")
-    from .slaves import variable_units
+    from wheelterrain.fmu.slaves import variable_units
 
     cosim.write_series(out_dir / f"{scenario}.csv", result.series, every=5,
                        units={**variable_units(), **closed_loop.RECORD_UNITS})
@@ -638,7 +642,7 @@ def validate(json_target: str | None, starts: int) -> None:
     Folds start from the preset as it was before its own fit, so no held-out case reaches a
     fit. Takes about a minute.
     """
-    from . import prediction
+    from wheelterrain.fit import prediction
 
     _check_file_target(json_target)
     total = 3 + 5 * len(presets.available())

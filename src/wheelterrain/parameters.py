@@ -20,7 +20,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from .errors import ParameterError
+from wheelterrain.errors import ParameterError
 
 DEG = math.pi / 180.0
 

@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from .cosim import CaseResult
+from wheelterrain.cosim.master import CaseResult
 
 
 def _save(fig, path: Path) -> None:

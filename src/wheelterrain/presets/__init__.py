@@ -12,8 +12,8 @@ import json
 from importlib import resources
 from pathlib import Path
 
-from ..errors import ParameterError
-from ..parameters import ParameterSet, parse_assignments
+from wheelterrain.errors import ParameterError
+from wheelterrain.parameters import ParameterSet, parse_assignments
 
 DEFAULT_PRESET = "rashid-patch"
 """The one default of every subcommand and face: chosen by held-out and transfer error, not

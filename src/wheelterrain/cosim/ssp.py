@@ -15,9 +15,9 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
-from . import rig
-from .cosim import rig_parameters
-from .parameters import TABLE, ParameterSet
+from wheelterrain.cosim.master import rig_parameters
+from wheelterrain.model import rig
+from wheelterrain.parameters import TABLE, ParameterSet
 
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
       "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",

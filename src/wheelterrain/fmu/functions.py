@@ -1,9 +1,10 @@
 """What each FMU computes per step, as CasADi Functions shared by both FMU flavours.
 
-The pythonfmu slaves (:mod:`wheelterrain.slaves`) and the native C wrapper (fmu_src/native/) call
-the same Functions: the pythonfmu flavour through the CasADi VM or the same generated C, the
-native flavour through the generated C only. So the two flavours agree by construction, and the
-glue in each wrapper is bookkeeping (values, modes, messages), not arithmetic.
+The pythonfmu slaves (:mod:`wheelterrain.fmu.slaves`) and the native C wrapper
+(fmu_src/native/) call the same Functions: the pythonfmu flavour through the CasADi VM or the
+same generated C, the native flavour through the generated C only. So the two flavours agree by
+construction, and the glue in each wrapper is bookkeeping (values, modes, messages), not
+arithmetic.
 
 WheelTerrain
     ``terrain_dynamic(u, angle, p) -> (y, status, info)`` and
@@ -14,8 +15,8 @@ WheelTerrain
     STATUS_UNCONVERGED (the solve's convergence check failed). On a status other than OK the
     wrappers keep their previous outputs and refuse the next step with the reason.
 SingleWheelRig
-    ``rig_step`` (:func:`wheelterrain.rig.build`) and ``rig_outputs(x, u, p, motor_torque) -> y``
-    with y = RIG_OUTPUTS.
+    ``rig_step`` (:func:`wheelterrain.model.rig.build`) and
+    ``rig_outputs(x, u, p, motor_torque) -> y`` with y = RIG_OUTPUTS.
 """
 
 from __future__ import annotations
@@ -24,10 +25,10 @@ from functools import lru_cache
 
 import casadi as ca
 
-from . import contact, rig
-from .model import RESIDUAL_TOLERANCE, STEP_TOLERANCE
-from .parameters import NAMES
-from .slip import reference_radius
+from wheelterrain.model import contact, rig
+from wheelterrain.model.api import RESIDUAL_TOLERANCE, STEP_TOLERANCE
+from wheelterrain.model.slip import reference_radius
+from wheelterrain.parameters import NAMES
 
 SPEED_FLOOR = 1e-9  # m/s: below this the wheel and the carriage are both at rest (slip 0)
 TERRAIN_INPUTS = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "load")
@@ -70,7 +71,7 @@ def slips(wheel_speed, carriage_speed, slip_radius):
     """(traction slip, paper's slip, forward) from the wheel's and the carriage's speeds.
 
     Traction slip i = (omega*R - V)/(omega*R), exactly the slip the contact model takes
-    (:mod:`wheelterrain.slip`), so the forces are those of the true kinematics V/omega =
+    (:mod:`wheelterrain.model.slip`), so the forces are those of the true kinematics V/omega =
     (1 - i)*R. Its domain [-1, 1] runs from a rim turning at half the carriage speed (braking,
     -1) to spinning in place (1); a slower rim (down to a locked wheel, i -> -inf) is outside
     it. A rim speed below SPEED_FLOOR counts as SPEED_FLOOR, so a locked wheel under a moving

@@ -27,10 +27,10 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import least_squares
 
-from . import __version__, model
-from .errors import CalibrationError, WheelTerrainError
-from .parameters import DEG, INDEX, NAMES, ParameterSet
-from .slip import traction_from_paper
+from wheelterrain import __version__, model
+from wheelterrain.errors import CalibrationError, WheelTerrainError
+from wheelterrain.model.slip import traction_from_paper
+from wheelterrain.parameters import DEG, INDEX, NAMES, ParameterSet
 
 SCALES = {"drawbar_pull": 1.0, "sinkage": 1e-3}  # N, m: one unit of residual each
 OUTPUTS = ("drawbar_pull", "sinkage")  # what a fit can be asked to match, in residual order
@@ -76,7 +76,7 @@ class Fit:
 
 
 def paper_cases() -> list[dict]:
-    from .cosim import table3
+    from wheelterrain.cosim.master import table3
 
     return table3()["cases"]
 
@@ -245,7 +245,7 @@ def preset_document(name: str, base_name: str, base: ParameterSet, result: Fit,
                     protocol: str) -> dict:
     """A preset file: the base preset's values, the overrides the fit ran with (``base``'s values
     that differ from the base preset's, e.g. ``--set``), the fitted ones, and the provenance."""
-    from . import presets
+    from wheelterrain import presets
 
     base_doc = presets.read(base_name)
     stock = presets.load(base_name)

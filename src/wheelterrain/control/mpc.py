@@ -3,7 +3,7 @@
 Prediction model
     The WheelTerrain FMU's Function ``terrain_dynamic`` (the full contact model, grouser ripple
     included, at the wheel's sinkage, sinkage rate, speeds and angle) closed by the rig's
-    equations :func:`wheelterrain.rig.rates` in the same drive and carriage mode as the plant.
+    equations :func:`wheelterrain.model.rig.rates` in the same drive and carriage mode as the plant.
     States (STATES): sinkage, sinkage rate, wheel speed, the speed loop's integral, carriage
     speed, wheel angle. No surrogate: the prediction differs from the co-simulated plant only by
     its discretisation.
@@ -44,8 +44,10 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from . import fmu_model, native, rig
-from .parameters import NAMES
+from wheelterrain.fmu import compiled as native
+from wheelterrain.fmu import functions as fmu_model
+from wheelterrain.model import rig
+from wheelterrain.parameters import NAMES
 
 STATES = (*rig.STATES, "wheel_angle")
 OUTPUTS = ("slip", "drawbar_pull", "normal_force", "soil_torque", "motor_torque", "power")

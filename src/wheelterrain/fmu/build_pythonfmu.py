@@ -3,7 +3,7 @@ modelDescription.xml what a Modelica-minded FMI importer expects.
 
 pythonfmu 0.7 writes no units, types, ranges or dependencies (shared/spec/fmi-notes.md). After its
 build, :func:`finish_model_description` rewrites modelDescription.xml inside the FMU from the
-same :class:`wheelterrain.slaves.Var` lists the slaves register:
+same :class:`wheelterrain.fmu.slaves.Var` lists the slaves register:
 
 - UnitDefinitions with SI base-unit exponents, display units deg (angles) and mm (sinkage);
 - TypeDefinitions: one SimpleType per quantity, named after its Modelica.Units.SI type where
@@ -26,9 +26,11 @@ from pathlib import Path
 from xml.dom import minidom
 from xml.etree import ElementTree as ET
 
-from . import fmu_model, native, slaves
+from wheelterrain.fmu import compiled as native
+from wheelterrain.fmu import functions as fmu_model
+from wheelterrain.fmu import slaves
 
-PACKAGE_DIR = Path(__file__).resolve().parent
+PACKAGE_DIR = Path(__file__).resolve().parents[1]  # the wheelterrain package, bundled whole
 REPO_DIR = PACKAGE_DIR.parents[1]
 SOURCES = {"WheelTerrain": "wheelterrain_slave_terrain.py",
            "SingleWheelRig": "wheelterrain_slave_rig.py"}
@@ -74,7 +76,7 @@ def build(out: Path, models: tuple[str, ...] = tuple(SOURCES),
           compiled: bool = True) -> list[Path]:
     """Build the pythonfmu FMUs into ``out``; returns their paths.
 
-    ``compiled``: also generate WheelTerrain's Functions (:mod:`wheelterrain.fmu_model`) as C,
+    ``compiled``: also generate WheelTerrain's Functions (:mod:`wheelterrain.fmu.functions`) as C,
     compile them and ship the libraries in its bundled package (``_compiled/*.so``), which the
     slave then calls instead of the CasADi VM. Without a C compiler the FMU is built without
     them (same results, slower); a compiler that fails is an error.

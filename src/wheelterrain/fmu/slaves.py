@@ -2,12 +2,13 @@
 
 The scripts only declare ``class WheelTerrain(Fmi2Slave)`` / ``class SingleWheelRig(Fmi2Slave)``
 (pythonfmu finds the class by that literal pattern) and delegate here. No physics lives here
-either: forces come from :mod:`wheelterrain.contact`, the rig from :mod:`wheelterrain.rig`.
+either: forces come from :mod:`wheelterrain.model.contact`, the rig from
+:mod:`wheelterrain.model.rig`.
 
 What this layer adds around pythonfmu (shared/spec/fmi-notes.md):
 - every variable is declared once in a :class:`Var` list that both the slave and the
-  modelDescription post-processor (:mod:`wheelterrain.fmubuild`) read, so names, units, ranges
-  and descriptions cannot drift apart;
+  modelDescription post-processor (:mod:`wheelterrain.fmu.build_pythonfmu`) read, so names,
+  units, ranges and descriptions cannot drift apart;
 - bad parameters and inputs never raise into pythonfmu (an exception there is fmi2Fatal): the
   setter stores the value, logs an error naming the variable and its valid range, and the next
   doStep refuses with a logged reason (pythonfmu maps a refused step to fmi2Discard);
@@ -24,9 +25,12 @@ from pathlib import Path
 
 import numpy as np
 
-from . import fmu_model, native, presets, rig
-from .errors import ParameterError
-from .parameters import BY_NAME, TABLE, Parameter
+from wheelterrain import presets
+from wheelterrain.errors import ParameterError
+from wheelterrain.fmu import compiled as native
+from wheelterrain.fmu import functions as fmu_model
+from wheelterrain.model import rig
+from wheelterrain.parameters import BY_NAME, TABLE, Parameter
 
 
 def compiled_or_vm(fn, resources: str | None = None):
@@ -35,7 +39,7 @@ def compiled_or_vm(fn, resources: str | None = None):
     call instead of ~70), else the CasADi VM. A library is used only if its fingerprint matches
     ``fn`` in this process (a Python host may have imported its own wheelterrain first)."""
     places = [Path(resources) / "wheelterrain" / "_compiled"] if resources else []
-    places.append(Path(__file__).resolve().parent / "_compiled")
+    places.append(Path(__file__).resolve().parents[1] / "_compiled")  # the package root's
     for place in places:
         library = place / f"{fn.name()}.so"
         if library.is_file():

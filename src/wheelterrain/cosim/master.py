@@ -28,10 +28,11 @@ from pathlib import Path
 
 import numpy as np
 
-from . import data, rig
-from .errors import FMUError
-from .parameters import TABLE, ParameterSet
-from .slip import reference_radius
+from wheelterrain import data
+from wheelterrain.errors import FMUError
+from wheelterrain.model import rig
+from wheelterrain.model.slip import reference_radius
+from wheelterrain.parameters import TABLE, ParameterSet
 
 STOP_TIME = 30.0  # s, per case (the paper's runs are ~30 s)
 STEP = 1e-3  # s, communication step
@@ -349,7 +350,7 @@ def csv_header(names, units: dict[str, str] | None = None) -> str:
     unit, e.g. a status, stays bare). ``units`` defaults to the FMU variables' units; a column
     with no declared unit is refused rather than written unlabelled."""
     if units is None:
-        from .slaves import variable_units
+        from wheelterrain.fmu.slaves import variable_units
 
         units = variable_units()
     missing = [n for n in names if n not in units]

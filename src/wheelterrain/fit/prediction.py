@@ -13,7 +13,7 @@ is judged held out and beside a baseline (shared protocol of the project's READM
 
 The baseline is a straight line in the paper's slip, ``y = a + b*s``, fitted the same way (two
 parameters; on C2 alone only its constant ``a`` can be fitted). Model fits are those of
-:func:`wheelterrain.calibration.fit` on the quasi-static steady state, inside the plausible
+:func:`wheelterrain.fit.calibration.fit` on the quasi-static steady state, inside the plausible
 ranges. A held-out case's data never reach its fit: the fold is given the other cases' rows
 only (tests/test_prediction.py corrupts the held-out row and checks that the fit is unchanged).
 """
@@ -27,9 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import calibration, data, model, presets
-from .errors import CalibrationError, WheelTerrainError
-from .parameters import DEG, ParameterSet
+from wheelterrain import data, model, presets
+from wheelterrain.errors import CalibrationError, WheelTerrainError
+from wheelterrain.fit import calibration
+from wheelterrain.parameters import DEG, ParameterSet
 
 CASES = ("C1", "C2", "C3", "C4")
 PAPER_FREE = ("soil.phi", "soil.n0")

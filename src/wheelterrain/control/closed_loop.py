@@ -4,8 +4,8 @@ process; scenarios, online soil estimation and the figures issue 5 asks for.
 Plants
     :class:`FMUPlant` co-simulates SingleWheelRig.fmu (rig.drive = 1: the speed loop tracks the
     MPC's command) and WheelTerrain.fmu through fmpy with the master of
-    :mod:`wheelterrain.cosim` (Gauss-Seidel, 1 ms). :class:`CasadiPlant` runs the very same
-    Functions (``terrain_dynamic``, :func:`wheelterrain.rig.step`) in process with the same
+    :mod:`wheelterrain.cosim.master` (Gauss-Seidel, 1 ms). :class:`CasadiPlant` runs the very same
+    Functions (``terrain_dynamic``, :func:`wheelterrain.model.rig.step`) in process with the same
     coupling. When the models agree the two trajectories agree to rounding; when they do not,
     the harness is wrong (shared/spec/mpc-notes.md: a forgotten input update hid that way).
 
@@ -28,8 +28,12 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from . import cosim, fmu_model, model, mpc, rig
-from .parameters import INDEX, NAMES, TABLE, ParameterSet
+from wheelterrain import model
+from wheelterrain.control import mpc
+from wheelterrain.cosim import master as cosim
+from wheelterrain.fmu import functions as fmu_model
+from wheelterrain.model import rig
+from wheelterrain.parameters import INDEX, NAMES, TABLE, ParameterSet
 
 PLANT_STEP = cosim.STEP  # s, the co-simulation's communication step
 RECORD = ("time", "slip", "slip_reference", "command", "wheel_speed", "motor_torque",

@@ -9,8 +9,8 @@ Conventions
   travel. Entry angle theta_f = arccos(1 - z/R_c) > 0; exit angle
   theta_r = -arccos(1 - lambda*z/R_c) <= 0 (lambda = ``model.exit_ratio``; 0 gives the Wong-Reece
   theta_r = 0).
-- ``slip`` is the traction slip i = (omega*R_ref - V)/(omega*R_ref) (see :mod:`wheelterrain.slip`
-  for the paper's s = i/(1 - i)). Positive when driving.
+- ``slip`` is the traction slip i = (omega*R_ref - V)/(omega*R_ref) (see
+  :mod:`wheelterrain.model.slip` for the paper's s = i/(1 - i)). Positive when driving.
 - Forces are those of the soil on the wheel: normal force up, drawbar pull forward, torque the
   resistive torque the motor has to supply.
 
@@ -80,8 +80,8 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from .parameters import INDEX, NAMES
-from .slip import reference_radius
+from wheelterrain.model.slip import reference_radius
+from wheelterrain.parameters import INDEX, NAMES
 
 DEFAULT_NODES = (16, 10)  # per panel: up to the shear reversal, after it
 GRADING = 3

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 
-from .errors import InputError
+from wheelterrain.errors import InputError
 
 TRACTION_RANGE = (-1.0, 1.0)
 """Valid traction slip: from a wheel turning at half the carriage speed (-1) to spinning (1)."""

@@ -1,8 +1,8 @@
 """The validated Python face of the model: plain numbers in, named results out.
 
 These functions check every input and parameter, call the CasADi Functions of
-:mod:`wheelterrain.contact`, and turn the solver's diagnostics into clear errors, so a caller never
-receives a wrong number silently.
+:mod:`wheelterrain.model.contact`, and turn the solver's diagnostics into clear errors, so a
+caller never receives a wrong number silently.
 """
 
 from __future__ import annotations
@@ -12,10 +12,10 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from . import contact as _contact
-from .errors import InputError, LoadTooLargeError, SolveError
-from .parameters import ParameterSet
-from .slip import paper_from_traction, to_traction
+from wheelterrain.errors import InputError, LoadTooLargeError, SolveError
+from wheelterrain.model import contact as _contact
+from wheelterrain.model.slip import paper_from_traction, to_traction
+from wheelterrain.parameters import ParameterSet
 
 RESIDUAL_TOLERANCE = 1e-9
 """Largest accepted relative normal-force residual of the sinkage solve (it reaches ~1e-15)."""

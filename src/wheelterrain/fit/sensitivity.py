@@ -14,10 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from . import calibration, model
-from . import sweep as sweeper
-from .parameters import INDEX, ParameterSet
-from .slip import traction_from_paper
+from wheelterrain import model
+from wheelterrain.cosim import sweep as sweeper
+from wheelterrain.fit import calibration
+from wheelterrain.model.slip import traction_from_paper
+from wheelterrain.parameters import INDEX, ParameterSet
 
 SOIL = ("soil.phi", "soil.cohesion", "soil.k_phi", "soil.k_c", "soil.n0", "soil.n1",
         "soil.shear_modulus")

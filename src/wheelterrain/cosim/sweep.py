@@ -22,9 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import ParameterError
-from .parameters import BY_NAME, DEG, TABLE
-from .slip import reference_radius, traction_from_paper
+from wheelterrain.errors import ParameterError
+from wheelterrain.model.slip import reference_radius, traction_from_paper
+from wheelterrain.parameters import BY_NAME, DEG, TABLE
 
 OUTPUTS = ("contact_sinkage", "normal_force", "drawbar_pull", "torque", "slip", "slip_paper",
            "entry_angle", "contact_length")
@@ -121,7 +121,7 @@ def run_points(fmu: str, base: dict[str, float], points: list[dict[str, float]],
     """Evaluate ``points`` (each: slip, load and parameter values) in this process."""
     from fmpy.fmi1 import FMICallException
 
-    from .cosim import set_values
+    from wheelterrain.cosim.master import set_values
 
     w = _worker_instance(fmu)
     rows = []
@@ -217,8 +217,8 @@ def _run_dask(fmu, base, chunks, slip_definition, address, results, progress) ->
 
 
 def write_csv(path: Path, rows: list[dict]) -> None:
-    from .cosim import csv_header, write_atomic
-    from .slaves import variable_units
+    from wheelterrain.cosim.master import csv_header, write_atomic
+    from wheelterrain.fmu.slaves import variable_units
 
     if not rows:
         raise ValueError("no rows to write")

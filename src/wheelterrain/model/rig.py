@@ -40,7 +40,7 @@ from types import MappingProxyType
 
 import casadi as ca
 
-from .parameters import DEG, Parameter
+from wheelterrain.parameters import DEG, Parameter
 
 STANDARD_GRAVITY = 9.80665  # m/s2
 
@@ -79,7 +79,7 @@ RIG_TABLE: tuple[Parameter, ...] = (
               "1 = speed loop to the input wheel_speed_command; 2 = the input "
               "motor_torque_command applied directly (no speed loop).",
               "Design: 0 reproduces the paper; 1 and 2 are for external controllers "
-              "(wheelterrain.mpc)", kind="enum",
+              "(wheelterrain.control.mpc)", kind="enum",
               choices=MappingProxyType({0: "paper-speed-loop", 1: "speed-command",
                                         2: "torque-command"})),
     Parameter("rig.carriage", "1", 0, 0, 1,

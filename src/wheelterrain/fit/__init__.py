@@ -1,0 +1,3 @@
+"""Fitting and judging the model against rig data: calibration (:mod:`.calibration`),
+sensitivity (:mod:`.sensitivity`) and the prediction protocols of ``wheelterrain validate``
+(:mod:`.prediction`)."""
