@@ -9,6 +9,7 @@ import math
 import shutil
 import subprocess
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -336,3 +337,16 @@ def test_a_c_host_loads_the_native_binary_without_python(flavours, tmp_path):
         assert t.get("drawbar_pull") == pytest.approx(dp, rel=1e-14)
         t.close()
     assert dp_a != dp_b
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_shipped_sources_compile_with_every_warning_as_an_error(flavours, name, tmp_path):
+    """The wrapper and the model hooks are real C (fmu_src/native/), read and compiled as C:
+    sources/ builds with -Wall -Wextra -Werror (only CasADi's generated functions have their
+    unused-parameter warning silenced, around their include)."""
+    sources = Path(flavours["unzip"][("native", name)]) / "sources"
+    run = subprocess.run([native.compiler(), "-std=c99", "-Wall", "-Wextra", "-Werror",
+                          "-pedantic-errors", "-O2", "-fPIC", "-shared", "-I", str(sources),
+                          str(sources / "fmi2_native.c"), "-o", str(tmp_path / "lib.so"),
+                          "-lm"], capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr[-3000:]

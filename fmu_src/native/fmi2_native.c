@@ -1,12 +1,13 @@
 /*
  * FMI 2.0 co-simulation wrapper of the native wheelterrain FMUs.
  *
- * One translation unit per FMU: this file includes two files that `wheelterrain build --flavor
- * native` generates for WheelTerrain or SingleWheelRig: model_vars.h (the variable table, the
- * GUID, and the C that CasADi generates from the very Functions the Python flavour calls,
- * wheelterrain.fmu.functions) and model_hooks.c (model_work, model_reset, model_initialize,
- * model_refresh, model_step: copying values in and out of those Functions). No arithmetic of the
- * model is written by hand.
+ * One translation unit per FMU: this file includes model_vars.h, which `wheelterrain build
+ * --flavor native` generates for WheelTerrain or SingleWheelRig (the variable table, the GUID,
+ * the sizes and value references the hooks use, and the C that CasADi generates from the very
+ * Functions the Python flavour calls, wheelterrain.fmu.functions), and model_hooks.c, the
+ * model's hooks (terrain_hooks.c or rig_hooks.c beside this file: model_work, model_reset,
+ * model_initialize, model_refresh, model_step, copying values in and out of those Functions).
+ * No arithmetic of the model is written by hand.
  *
  * What this wrapper adds: the FMI 2 call-sequence state machine, the GUID check, logging
  * categories (errors are always reported, whether logging is on or not), checks of every set

@@ -1,0 +1,63 @@
+/* SingleWheelRig's model hooks for fmi2_native.c (copied into the FMU as
+ * sources/model_hooks.c).
+ *
+ * Values in and out of the CasADi Functions rig_step / rig_outputs / rig_initial
+ * (wheelterrain.model.rig, wheelterrain.fmu.functions). States 0..N_X-1 are the rig's states
+ * (wheelterrain.model.rig.STATES); state N_X holds the motor torque of the last step. Sizes and
+ * value references come from the generated model_vars.h: IN_VRS, OUT_VRS, P_VRS, N_X, N_U, N_P,
+ * N_OUT. */
+
+static void model_work(casadi_int *sz_arg, casadi_int *sz_res, casadi_int *sz_iw,
+                       casadi_int *sz_w) {
+    cover(rig_step_work, sz_arg, sz_res, sz_iw, sz_w);
+    cover(rig_outputs_work, sz_arg, sz_res, sz_iw, sz_w);
+    cover(rig_initial_work, sz_arg, sz_res, sz_iw, sz_w);
+}
+
+static void load_params(Instance *c, casadi_real *p) {
+    for (int k = 0; k < N_P; k++) p[k] = c->b.v[P_VRS[k]];
+}
+
+static void model_initialize(Instance *c) {
+    casadi_real p[N_P];
+    load_params(c, p);
+    c->arg[0] = p;
+    c->res[0] = c->b.s;
+    rig_initial(c->arg, c->res, c->iw, c->w, 0);
+    c->b.s[N_X] = 0.0;
+}
+
+static void model_reset(Instance *c) { model_initialize(c); }
+
+static int model_refresh(Instance *c, char *message) {
+    casadi_real u[N_U], p[N_P], y[N_OUT];
+    int k;
+    (void)message;
+    for (k = 0; k < N_U; k++) u[k] = c->b.v[IN_VRS[k]];
+    load_params(c, p);
+    c->arg[0] = c->b.s;
+    c->arg[1] = u;
+    c->arg[2] = p;
+    c->arg[3] = &c->b.s[N_X];
+    c->res[0] = y;
+    rig_outputs(c->arg, c->res, c->iw, c->w, 0);
+    for (k = 0; k < N_OUT; k++) c->b.v[OUT_VRS[k]] = y[k];
+    return 0;
+}
+
+static void model_step(Instance *c, double t, double h) {
+    casadi_real u[N_U], p[N_P], x_next[N_X], torque;
+    int k;
+    (void)t;
+    for (k = 0; k < N_U; k++) u[k] = c->b.v[IN_VRS[k]];
+    load_params(c, p);
+    c->arg[0] = c->b.s;
+    c->arg[1] = u;
+    c->arg[2] = p;
+    c->arg[3] = &h;
+    c->res[0] = x_next;
+    c->res[1] = &torque;
+    rig_step(c->arg, c->res, c->iw, c->w, 0);
+    for (k = 0; k < N_X; k++) c->b.s[k] = x_next[k];
+    c->b.s[N_X] = torque;
+}

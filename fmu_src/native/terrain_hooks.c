@@ -1,0 +1,59 @@
+/* WheelTerrain's model hooks for fmi2_native.c (copied into the FMU as sources/model_hooks.c).
+ *
+ * Values in and out of the CasADi Functions terrain_dynamic / terrain_quasi_static
+ * (wheelterrain.fmu.functions); the wheel angle (state 0) is integrated from wheel_speed, so the
+ * grouser ripple follows the wheel's rotation. Everything model-specific that is a list of names
+ * (value references, sizes, status codes and their messages) comes from the generated
+ * model_vars.h, itself generated from the one variables table: IN_VRS, OUT_VRS, P_VRS, N_IN,
+ * N_OUT, N_P, VR_*, STATUS_*, MESSAGE_*. */
+
+static void model_work(casadi_int *sz_arg, casadi_int *sz_res, casadi_int *sz_iw,
+                       casadi_int *sz_w) {
+    cover(terrain_dynamic_work, sz_arg, sz_res, sz_iw, sz_w);
+    cover(terrain_quasi_static_work, sz_arg, sz_res, sz_iw, sz_w);
+}
+
+static void model_reset(Instance *c) { c->b.s[0] = 0.0; }
+
+static void model_initialize(Instance *c) { (void)c; }
+
+static int model_refresh(Instance *c, char *message) {
+    casadi_real u[N_IN], p[N_P], y[N_OUT], status = 0.0, info = 0.0, angle = c->b.s[0];
+    int k;
+    for (k = 0; k < N_IN; k++) u[k] = c->b.v[IN_VRS[k]];
+    for (k = 0; k < N_P; k++) p[k] = c->b.v[P_VRS[k]];
+    c->res[0] = y;
+    c->res[1] = &status;
+    c->res[2] = &info;
+    if (c->b.v[VR_QUASI_STATIC] != 0.0) {
+        c->arg[0] = u;
+        c->arg[1] = p;
+        if (terrain_quasi_static(c->arg, c->res, c->iw, c->w, 0)) status = -1.0;
+    } else {
+        c->arg[0] = u;
+        c->arg[1] = &angle;
+        c->arg[2] = p;
+        if (terrain_dynamic(c->arg, c->res, c->iw, c->w, 0)) status = -1.0;
+    }
+    if (status == STATUS_SLIP) {
+        snprintf(message, MAX_MESSAGE, MESSAGE_SLIP, c->b.v[VR_WHEEL_SPEED],
+                 c->b.v[VR_CARRIAGE_SPEED], info);
+        return 1;
+    }
+    if (status == STATUS_LOAD) {
+        snprintf(message, MAX_MESSAGE, MESSAGE_LOAD, c->b.v[VR_LOAD], info, info);
+        return 1;
+    }
+    if (status != STATUS_OK) {
+        snprintf(message, MAX_MESSAGE, MESSAGE_UNCONVERGED, c->b.v[VR_LOAD]);
+        return 1;
+    }
+    for (k = 0; k < N_OUT; k++) c->b.v[OUT_VRS[k]] = y[k];
+    c->b.v[VR_WHEEL_ANGLE] = c->b.s[0];
+    return 0;
+}
+
+static void model_step(Instance *c, double t, double h) {
+    (void)t;
+    c->b.s[0] += c->b.v[VR_WHEEL_SPEED] * h;
+}
