@@ -609,7 +609,7 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool, hor
     figures = {**result.figures(the_scenario), "preset": preset}
     out_dir = Path(out)
     plots.closed_loop(result, the_scenario, out_dir / f"{scenario}.png")
-    from wheelterrain.fmu.slaves import variable_units
+    from wheelterrain.fmu.variables import units as variable_units
 
     cosim.write_series(out_dir / f"{scenario}.csv", result.series, every=5,
                        units={**variable_units(), **closed_loop.RECORD_UNITS})

@@ -32,6 +32,7 @@ from wheelterrain import model
 from wheelterrain.control import mpc
 from wheelterrain.cosim import master as cosim
 from wheelterrain.fmu import functions as fmu_model
+from wheelterrain.fmu import variables
 from wheelterrain.model import rig
 from wheelterrain.parameters import INDEX, NAMES, TABLE, ParameterSet
 
@@ -146,8 +147,9 @@ class CasadiPlant:
         self.p_rig.update(values)
 
     def _forces(self) -> np.ndarray:
-        z, z_rate, omega, _, speed = self.x
-        u = [z, z_rate, omega, speed, self.p_rig["rig.load"]]
+        """The terrain's outputs (TERRAIN_OUTPUTS) at the rig's state, its inputs by name."""
+        given = {**dict(zip(rig.STATES, self.x, strict=True)), "load": self.p_rig["rig.load"]}
+        u = [given[n] for n in fmu_model.TERRAIN_INPUTS]
         y, status, info = self.terrain(u, self.angle, self.p)
         if int(status) != fmu_model.STATUS_OK:
             raise mpc.PlantError("the in-process plant refused the step: "
@@ -160,7 +162,9 @@ class CasadiPlant:
     def advance(self, command: float, steps: int, record: Callable) -> None:
         for _ in range(steps):
             y = self._forces()
-            forces = (y[0], y[1], y[2], command, 0.0)
+            given = {**dict(zip(fmu_model.TERRAIN_OUTPUTS, y, strict=True)),
+                     "wheel_speed_command": command, "motor_torque_command": 0.0}
+            forces = tuple(given[n] for n in variables.RIG_INPUTS)
             record(self.x, self.angle, y, self.motor_torque)
             omega = self.x[2]  # WheelTerrain advances its angle with the speed it was given
             self.x, self.motor_torque = rig.step(self.x, forces, self.p_rig, PLANT_STEP)
@@ -179,10 +183,15 @@ class FMUPlant:
         paths = cosim.fmu_paths(fmu_dir)
         self.unzipped = {name: extract(str(p)) for name, p in paths.items()}
         self.terrain, self.rig = cosim.start_pair(paths, self.unzipped, ps, p_rig)
-        self.pair = cosim.Coupling(
-            self.terrain, self.rig, rig_extra=("speed_error_integral", "motor_torque"),
-            terrain_extra=(*fmu_model.TERRAIN_OUTPUTS[len(rig.FORCE_INPUTS):], "wheel_angle"),
-            commands=("wheel_speed_command",))
+        rig_extra = ("speed_error_integral", "motor_torque")
+        terrain_extra = (*(n for n in fmu_model.TERRAIN_OUTPUTS
+                           if n not in variables.COUPLED_FORCES), "wheel_angle")
+        self.pair = cosim.Coupling(self.terrain, self.rig, rig_extra=rig_extra,
+                                   terrain_extra=terrain_extra,
+                                   commands=("wheel_speed_command",))
+        # what one exchange returns, by name (the Coupling's order)
+        self._rig_names = (*variables.COUPLED_STATES, *rig_extra)
+        self._terrain_names = (*variables.COUPLED_FORCES, *terrain_extra)
         self.t = 0.0
 
     def set_soil(self, values: dict[str, float]) -> None:
@@ -198,7 +207,10 @@ class FMUPlant:
     def advance(self, command: float, steps: int, record: Callable) -> None:
         for _ in range(steps):
             r, y = self.pair.exchange((command,))
-            record((r[0], r[1], r[2], r[4], r[3]), y[-1], y[:-1], r[5])
+            rv = dict(zip(self._rig_names, r, strict=True))
+            tv = dict(zip(self._terrain_names, y, strict=True))
+            record(tuple(rv[n] for n in rig.STATES), tv["wheel_angle"],
+                   [tv[n] for n in fmu_model.TERRAIN_OUTPUTS], rv["motor_torque"])
             try:
                 self.pair.step(self.t, PLANT_STEP)
             except Exception as err:  # fmpy raises FMICallException on fmi2Discard/Error
@@ -361,12 +373,22 @@ def _loop(scenario, ps, plant_name, settings, steps, p_rig, plant, progress, sta
     settle_steps = round(scenario.settle / PLANT_STEP)
 
     def record(x, angle, y, motor_torque):
-        t = (len(rows) - settle_steps) * PLANT_STEP
-        last.update(x=np.array([*x, angle]), forces=np.array(y[:2]))
-        rows.append((t, y[6], state["reference"], state["command"], x[2], motor_torque, x[0],
-                     y[1], y[0], y[2], p_model[INDEX["soil.phi"]],
-                     p_model[INDEX["soil.k_phi"]], p_true[INDEX["soil.phi"]],
-                     p_true[INDEX["soil.k_phi"]], x[4]))
+        """One plant sample: x the rig's states (rig.STATES), y the terrain's outputs
+        (TERRAIN_OUTPUTS); the row holds RECORD, by name."""
+        xs = dict(zip(rig.STATES, x, strict=True))
+        ys = dict(zip(fmu_model.TERRAIN_OUTPUTS, y, strict=True))
+        last.update(x=np.array([*x, angle]),
+                    forces=np.array([ys["normal_force"], ys["drawbar_pull"]]))
+        row = {"time": (len(rows) - settle_steps) * PLANT_STEP, "slip": ys["slip"],
+               "slip_reference": state["reference"], "command": state["command"],
+               "wheel_speed": xs["wheel_speed"], "motor_torque": motor_torque,
+               "sinkage": xs["sinkage"], "drawbar_pull": ys["drawbar_pull"],
+               "normal_force": ys["normal_force"], "soil_torque": ys["torque"],
+               "phi_estimate": p_model[INDEX["soil.phi"]],
+               "k_phi_estimate": p_model[INDEX["soil.k_phi"]],
+               "phi_true": p_true[INDEX["soil.phi"]], "k_phi_true": p_true[INDEX["soil.k_phi"]],
+               "carriage_speed": xs["carriage_speed"]}
+        rows.append(tuple(row[name] for name in RECORD))
 
     # the wheel is set down on the soil and sinks in at the speed of the first reference (the
     # contact's entry angle has an infinite derivative at zero sinkage: no NLP starts there)

@@ -30,6 +30,7 @@ import numpy as np
 
 from wheelterrain import data
 from wheelterrain.errors import FMUError
+from wheelterrain.fmu.variables import COUPLED_FORCES, COUPLED_STATES
 from wheelterrain.model import rig
 from wheelterrain.model.slip import reference_radius
 from wheelterrain.parameters import TABLE, ParameterSet
@@ -153,14 +154,13 @@ def start_pair(paths: dict[str, Path], unzipped: dict[str, str], ps: ParameterSe
     return terrain, rig_fmu
 
 
-STATES = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")  # rig -> terrain
 
 
 class Coupling:
     """The FMU pair's coupling scheme, written once: Gauss-Seidel, rig first.
 
-    :meth:`exchange` reads the rig's wheel states (STATES), hands them to the terrain, reads the
-    terrain's forces (rig.FORCE_INPUTS) and hands them, with any ``commands``, to the rig;
+    :meth:`exchange` reads the rig's wheel states (COUPLED_STATES), hands them to the terrain,
+    reads the terrain's forces (COUPLED_FORCES) and hands them, with any ``commands``, to the rig;
     :meth:`step` then advances the rig and the terrain over the same interval. ``rig_extra`` and
     ``terrain_extra`` name further outputs read with the states and with the forces (what a
     caller records), ``commands`` further rig inputs set with the forces. Used by the C1-C4
@@ -170,14 +170,14 @@ class Coupling:
     def __init__(self, terrain: _Instance, rig_fmu: _Instance, rig_extra: tuple = (),
                  terrain_extra: tuple = (), commands: tuple = ()) -> None:
         self.terrain, self.rig = terrain, rig_fmu
-        self._rig_out = rig_fmu.refs((*STATES, *rig_extra))
-        self._ter_in = terrain.refs(STATES)
-        self._ter_out = terrain.refs((*rig.FORCE_INPUTS, *terrain_extra))
-        self._rig_in = rig_fmu.refs((*rig.FORCE_INPUTS, *commands))
-        self._states, self._forces = len(STATES), len(rig.FORCE_INPUTS)
+        self._rig_out = rig_fmu.refs((*COUPLED_STATES, *rig_extra))
+        self._ter_in = terrain.refs(COUPLED_STATES)
+        self._ter_out = terrain.refs((*COUPLED_FORCES, *terrain_extra))
+        self._rig_in = rig_fmu.refs((*COUPLED_FORCES, *commands))
+        self._states, self._forces = len(COUPLED_STATES), len(COUPLED_FORCES)
 
     def exchange(self, commands: tuple = ()) -> tuple[list[float], list[float]]:
-        """One exchange; returns (rig outputs: STATES + rig_extra, terrain outputs: forces +
+        """One exchange; returns (rig outputs: COUPLED_STATES + rig_extra, terrain outputs: forces +
         terrain_extra)."""
         x = self.rig.fmu.getReal(self._rig_out)
         self.terrain.fmu.setReal(self._ter_in, x[:self._states])
@@ -350,7 +350,7 @@ def csv_header(names, units: dict[str, str] | None = None) -> str:
     unit, e.g. a status, stays bare). ``units`` defaults to the FMU variables' units; a column
     with no declared unit is refused rather than written unlabelled."""
     if units is None:
-        from wheelterrain.fmu.slaves import variable_units
+        from wheelterrain.fmu.variables import units as variable_units
 
         units = variable_units()
     missing = [n for n in names if n not in units]

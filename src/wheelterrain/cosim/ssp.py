@@ -16,17 +16,16 @@ from pathlib import Path
 from xml.etree import ElementTree as ET
 
 from wheelterrain.cosim.master import rig_parameters
+from wheelterrain.fmu import variables
 from wheelterrain.model import rig
 from wheelterrain.parameters import TABLE, ParameterSet
 
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
       "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
       "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues"}
-STATES = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")
-FORCES = ("normal_force", "drawbar_pull", "torque")
-RIG_OUTPUTS = (*STATES, "motor_torque", "sensor.drawbar_pull", "sensor.normal_force",
-               "sensor.sinkage")
-TERRAIN_OUTPUTS = (*FORCES, "slip", "slip_paper", "contact_sinkage", "wheel_angle")
+STATES, FORCES = variables.COUPLED_STATES, variables.COUPLED_FORCES  # the connections
+RIG_OUTPUTS = variables.RIG_OUTPUTS  # every output of each FMU is a connector
+TERRAIN_OUTPUTS = tuple(v.name for v in variables.TERRAIN_IO if v.causality == "output")
 
 
 def _q(prefix: str, tag: str) -> str:

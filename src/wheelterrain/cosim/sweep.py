@@ -23,11 +23,11 @@ from pathlib import Path
 import numpy as np
 
 from wheelterrain.errors import ParameterError
+from wheelterrain.fmu.variables import TERRAIN_OUTPUTS
 from wheelterrain.model.slip import reference_radius, traction_from_paper
 from wheelterrain.parameters import BY_NAME, DEG, TABLE
 
-OUTPUTS = ("contact_sinkage", "normal_force", "drawbar_pull", "torque", "slip", "slip_paper",
-           "entry_angle", "contact_length")
+OUTPUTS = TERRAIN_OUTPUTS  # every output WheelTerrain.fmu computes, one column each
 COLUMNS = {"slip": "slip_traction"}  # the FMU's output 'slip' next to the grid's 'slip' axis
 WHEEL_SPEED = 0.6  # rad/s; only the ratio of the speeds matters in quasi-static mode
 
@@ -218,7 +218,7 @@ def _run_dask(fmu, base, chunks, slip_definition, address, results, progress) ->
 
 def write_csv(path: Path, rows: list[dict]) -> None:
     from wheelterrain.cosim.master import csv_header, write_atomic
-    from wheelterrain.fmu.slaves import variable_units
+    from wheelterrain.fmu.variables import units as variable_units
 
     if not rows:
         raise ValueError("no rows to write")

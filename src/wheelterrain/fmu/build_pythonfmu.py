@@ -3,7 +3,7 @@ modelDescription.xml what a Modelica-minded FMI importer expects.
 
 pythonfmu 0.7 writes no units, types, ranges or dependencies (shared/spec/fmi-notes.md). After its
 build, :func:`finish_model_description` rewrites modelDescription.xml inside the FMU from the
-same :class:`wheelterrain.fmu.slaves.Var` lists the slaves register:
+same :class:`wheelterrain.fmu.variables.Var` lists the slaves register:
 
 - UnitDefinitions with SI base-unit exponents, display units deg (angles) and mm (sinkage);
 - TypeDefinitions: one SimpleType per quantity, named after its Modelica.Units.SI type where
@@ -28,13 +28,14 @@ from xml.etree import ElementTree as ET
 
 from wheelterrain.fmu import compiled as native
 from wheelterrain.fmu import functions as fmu_model
-from wheelterrain.fmu import slaves
+from wheelterrain.fmu import variables
 
 PACKAGE_DIR = Path(__file__).resolve().parents[1]  # the wheelterrain package, bundled whole
 REPO_DIR = PACKAGE_DIR.parents[1]
 SOURCES = {"WheelTerrain": "wheelterrain_slave_terrain.py",
            "SingleWheelRig": "wheelterrain_slave_rig.py"}
-VARIABLES = {"WheelTerrain": slaves.terrain_variables, "SingleWheelRig": slaves.rig_variables}
+VARIABLES = {"WheelTerrain": variables.terrain_variables,
+             "SingleWheelRig": variables.rig_variables}
 
 # unit -> SI base-unit exponents (FMI 2 BaseUnit attributes)
 BASE_UNITS: dict[str, dict[str, int]] = {
@@ -109,7 +110,7 @@ def build(out: Path, models: tuple[str, ...] = tuple(SOURCES),
     return built
 
 
-def _type_name(v: slaves.Var) -> str:
+def _type_name(v: variables.Var) -> str:
     if v.type == "Boolean":
         return "wheelterrain.Switch"
     if v.type == "Integer":
@@ -145,7 +146,7 @@ def finish_model_description(fmu: Path, model: str) -> None:
 
     # units and types actually used
     units = sorted({v.unit for v in variables.values() if v.type == "Real"})
-    types: dict[str, slaves.Var] = {}
+    types: dict[str, variables.Var] = {}
     for v in variables.values():
         types.setdefault(_type_name(v), v)
 

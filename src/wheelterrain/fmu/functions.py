@@ -25,20 +25,17 @@ from functools import lru_cache
 
 import casadi as ca
 
+from wheelterrain.fmu.variables import RIG_INPUTS, RIG_OUTPUTS, TERRAIN_INPUTS, TERRAIN_OUTPUTS
 from wheelterrain.model import contact, rig
 from wheelterrain.model.api import RESIDUAL_TOLERANCE, STEP_TOLERANCE
 from wheelterrain.model.slip import reference_radius
 from wheelterrain.parameters import NAMES
 
+if RIG_INPUTS != rig.INPUTS:  # the FMU's inputs are the rig model's, in the same order
+    raise ImportError(f"SingleWheelRig's inputs {RIG_INPUTS} differ from the rig model's "
+                      f"{rig.INPUTS}")
+
 SPEED_FLOOR = 1e-9  # m/s: below this the wheel and the carriage are both at rest (slip 0)
-TERRAIN_INPUTS = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "load")
-TERRAIN_OUTPUTS = ("normal_force", "drawbar_pull", "torque", "gross_thrust",
-                   "compaction_resistance", "contact_sinkage", "slip", "slip_paper",
-                   "entry_angle", "exit_angle", "max_stress_angle", "contact_length",
-                   "mean_pressure", "ripple_amplitude")
-RIG_OUTPUTS = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "motor_torque",
-               "speed_error_integral", "sensor.drawbar_pull", "sensor.normal_force",
-               "sensor.sinkage", "sensor.slip_paper")
 STATUS_OK, STATUS_SLIP, STATUS_LOAD, STATUS_UNCONVERGED = 0, 1, 2, 3
 # What each status tells the user, as printf templates that both FMU flavours fill (the
 # pythonfmu slaves with %, the native wrapper with snprintf), so both print one sentence.
@@ -141,13 +138,19 @@ def terrain_functions() -> tuple[ca.Function, ca.Function]:
 
 
 def rig_outputs(x, u, p, motor_torque):
-    """RIG_OUTPUTS from the rig state x, the soil forces u, the rig parameters ``p[name]`` and
-    the motor torque; plain arithmetic on floats or CasADi symbols."""
-    z, z_rate, omega, e_int, carriage = x
-    normal_force, drawbar_pull = u[0], u[1]
-    slip_paper = paper_slip(omega, carriage, p["rig.slip_radius"])
-    return (z, z_rate, omega, carriage, motor_torque, e_int, drawbar_pull, normal_force, z,
-            slip_paper)
+    """RIG_OUTPUTS, in that order, from the rig state x (rig.STATES), the inputs u
+    (RIG_INPUTS), the rig parameters ``p[name]`` and the motor torque; plain arithmetic on
+    floats or CasADi symbols. Named, so an output reaches the right place whatever the order."""
+    state = dict(zip(rig.STATES, x, strict=True))
+    inputs = dict(zip(RIG_INPUTS, u, strict=True))
+    out = {"sinkage": state["sinkage"], "sinkage_rate": state["sinkage_rate"],
+           "wheel_speed": state["wheel_speed"], "carriage_speed": state["carriage_speed"],
+           "motor_torque": motor_torque, "speed_error_integral": state["speed_error_integral"],
+           "sensor.drawbar_pull": inputs["drawbar_pull"],
+           "sensor.normal_force": inputs["normal_force"], "sensor.sinkage": state["sinkage"],
+           "sensor.slip_paper": paper_slip(state["wheel_speed"], state["carriage_speed"],
+                                           p["rig.slip_radius"])}
+    return tuple(out[name] for name in RIG_OUTPUTS)
 
 
 @lru_cache(maxsize=1)

@@ -20,17 +20,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from wheelterrain import presets
 from wheelterrain.errors import ParameterError
 from wheelterrain.fmu import compiled as native
 from wheelterrain.fmu import functions as fmu_model
+from wheelterrain.fmu.variables import Var, rig_variables, terrain_variables
 from wheelterrain.model import rig
-from wheelterrain.parameters import BY_NAME, TABLE, Parameter
+from wheelterrain.parameters import BY_NAME, TABLE
 
 
 def compiled_or_vm(fn, resources: str | None = None):
@@ -53,139 +52,6 @@ def compiled_or_vm(fn, resources: str | None = None):
                 for x in fn(*args)]
 
     return vm, "CasADi VM"
-
-
-@dataclass(frozen=True)
-class Var:
-    """One FMU variable, as the slave registers it and as modelDescription.xml describes it."""
-
-    name: str
-    causality: str  # parameter | input | output
-    description: str
-    unit: str = "1"
-    quantity: str | None = None
-    display_unit: str | None = None
-    type: str = "Real"  # Real | Integer | Boolean
-    start: float | None = None
-    min: float | None = None
-    max: float | None = None
-    depends_on: tuple[str, ...] | None = None  # outputs: the inputs they depend on directly
-
-
-def _parameter_var(p: Parameter, start: float) -> Var:
-    kind = "Integer" if p.kind in ("integer", "enum") else "Real"
-    return Var(p.name, "parameter", f"{p.description} [{p.source}]", p.unit, p.quantity,
-               p.display_unit, kind, start, p.min, p.max)
-
-
-def _preset_values() -> dict[str, float]:
-    return dict(presets.load(presets.DEFAULT_PRESET))
-
-
-_ALL_IN = fmu_model.TERRAIN_INPUTS
-
-
-def terrain_variables() -> list[Var]:
-    start = _preset_values()
-    rim_speed = rig.defaults()["rig.rim_speed"]
-    omega = rim_speed / start["wheel.radius"]
-    variables = [_parameter_var(p, start[p.name]) for p in TABLE]
-    variables += [
-        Var("quasi_static", "parameter",
-            "true: solve the sinkage that carries the input 'load' (grouser-period mean, ripple "
-            "off, as `wheelterrain steady`); false: forces at the input sinkage and sinkage rate "
-            "(ripple on, contact damping on)", type="Boolean", start=False),
-        Var("sinkage", "input", "Sinkage of the wheel below the undisturbed soil surface, "
-            "measured to the contact circle (dynamic mode)", "m", "Length", "mm", start=0.02,
-            min=-1.0, max=1.0),
-        Var("sinkage_rate", "input", "Rate of sinkage, positive downward (dynamic mode)", "m/s",
-            "Velocity", start=0.0, min=-100.0, max=100.0),
-        Var("wheel_speed", "input", "Wheel angular velocity, positive when driving forward",
-            "rad/s", "AngularVelocity", start=omega, min=-1.0e3, max=1.0e3),
-        Var("carriage_speed", "input", "Forward speed of the wheel axle (carriage)", "m/s",
-            "Velocity", start=rim_speed, min=-100.0, max=100.0),
-        Var("load", "input", "Vertical load on the wheel (quasi-static mode)", "N", "Force",
-            start=62.0, min=0.0, max=1.0e5),
-    ]
-    forces = [
-        ("normal_force", "Normal (vertical) force of the soil on the wheel, up", "N", "Force"),
-        ("drawbar_pull", "Drawbar pull: net forward force of the soil on the wheel", "N",
-         "Force"),
-        ("torque", "Resistive torque of the soil about the axle (what the motor must supply)",
-         "N.m", "Torque"),
-        ("gross_thrust", "Gross thrust: forward part of the shear stress", "N", "Force"),
-        ("compaction_resistance", "Compaction resistance: backward part of the normal stress",
-         "N", "Force"),
-        ("contact_sinkage", "Sinkage the forces were evaluated at: the input in dynamic mode, "
-         "the solved one in quasi-static mode", "m", "Length"),
-        ("slip", "Traction slip i = (omega*R_ref - V)/(omega*R_ref) used by the model, "
-         "braking included (domain [-1, 1]: a rim at half the carriage speed to spinning)", "1",
-         None),
-        ("slip_paper", "Slip in the paper's definition s = (omega*R_ref - V)/V (0 with the "
-         "carriage at rest)", "1", None),
-        ("entry_angle", "Entry angle theta_f of the contact arc", "rad", "Angle"),
-        ("exit_angle", "Exit angle theta_r of the contact arc (<= 0)", "rad", "Angle"),
-        ("max_stress_angle", "Angle theta_m of the maximum normal stress", "rad", "Angle"),
-        ("contact_length", "Contact length R_c*(sin(theta_f) - sin(theta_r))", "m", "Length"),
-        ("mean_pressure", "Mean contact pressure of the ripple-free stress", "Pa", "Pressure"),
-        ("ripple_amplitude", "Amplitude A of the grouser stress ripple (0 in quasi-static mode)",
-         "Pa", "Pressure"),
-    ]
-    for name, text, unit, quantity in forces:
-        display = "deg" if unit == "rad" else ("mm" if name == "contact_sinkage" else None)
-        variables.append(Var(name, "output", text, unit, quantity, display, depends_on=_ALL_IN))
-    variables.append(Var("wheel_angle", "output",
-                         "Wheel rotation angle, integrated from wheel_speed (phase of the "
-                         "grouser ripple)", "rad", "Angle", "deg", depends_on=()))
-    return variables
-
-
-def variable_units() -> dict[str, str]:
-    """The unit (Modelica.Units.SI string) of every variable of both FMUs by name, parameters
-    included, plus the master's ``time`` [s]: the units result files carry in their headers."""
-    units = {"time": "s"}
-    for v in (*terrain_variables(), *rig_variables()):
-        units.setdefault(v.name, v.unit)
-    return units
-
-
-def rig_variables() -> list[Var]:
-    variables = [_parameter_var(p, p.default) for p in rig.RIG_TABLE]
-    variables += [
-        Var("normal_force", "input", "Normal force of the soil on the wheel (from WheelTerrain)",
-            "N", "Force", start=0.0, min=-1.0e6, max=1.0e6),
-        Var("drawbar_pull", "input", "Drawbar pull of the soil on the wheel (from WheelTerrain)",
-            "N", "Force", start=0.0, min=-1.0e6, max=1.0e6),
-        Var("torque", "input", "Resistive soil torque about the axle (from WheelTerrain)", "N.m",
-            "Torque", start=0.0, min=-1.0e6, max=1.0e6),
-        Var("wheel_speed_command", "input", "Speed the wheel's speed loop tracks when rig.drive "
-            "= 1 (speed-command)", "rad/s", "AngularVelocity", start=0.0, min=-1.0e3,
-            max=1.0e3),
-        Var("motor_torque_command", "input", "Torque the wheel motor applies when rig.drive = 2 "
-            "(torque-command)", "N.m", "Torque", start=0.0, min=-1.0e4, max=1.0e4),
-        Var("sinkage", "output", "Wheel sinkage (state of the vertical motion), positive down",
-            "m", "Length", "mm", depends_on=()),
-        Var("sinkage_rate", "output", "Sinkage rate, positive down", "m/s", "Velocity",
-            depends_on=()),
-        Var("wheel_speed", "output", "Wheel angular velocity (state of the speed loop)", "rad/s",
-            "AngularVelocity", depends_on=()),
-        Var("carriage_speed", "output", "Carriage speed: rim_speed/(1 + s) when kinematic, "
-            "the state of the free carriage's motion otherwise", "m/s", "Velocity",
-            depends_on=()),
-        Var("motor_torque", "output", "Torque the wheel motor applied over the last step (the "
-            "speed loop's, or the torque command)", "N.m", "Torque", depends_on=()),
-        Var("speed_error_integral", "output", "Integral of the speed loop's error (state of "
-            "its PI controller)", "rad", "Angle", depends_on=()),
-        Var("sensor.drawbar_pull", "output", "Drawbar pull the rig's force sensor reads", "N",
-            "Force", depends_on=("drawbar_pull",)),
-        Var("sensor.normal_force", "output", "Normal force the rig's force sensor reads", "N",
-            "Force", depends_on=("normal_force",)),
-        Var("sensor.sinkage", "output", "Sinkage the rig's potentiometer reads", "m", "Length",
-            "mm", depends_on=()),
-        Var("sensor.slip_paper", "output", "Slip in the paper's definition from the measured "
-            "wheel and carriage speeds", "1", depends_on=()),
-    ]
-    return variables
 
 
 # --------------------------------------------------------------------------------------------

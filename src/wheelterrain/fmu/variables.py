@@ -1,0 +1,195 @@
+"""The one table of the FMUs' variables: every input, output and FMU-only parameter of
+WheelTerrain.fmu and SingleWheelRig.fmu, with causality, unit, Modelica quantity, display unit,
+type, start, range, description and direct dependencies. The soil, wheel and rig parameters come
+from their own tables (:data:`wheelterrain.parameters.TABLE`, ``wheelterrain.model.rig.RIG_TABLE``).
+
+Every list of FMU variable names in the project is derived from here: the order of the values
+in and out of the per-step CasADi Functions (:data:`TERRAIN_INPUTS`, :data:`TERRAIN_OUTPUTS`,
+:data:`RIG_INPUTS`, :data:`RIG_OUTPUTS`), what the co-simulation master and the SSP files
+connect (:data:`COUPLED_STATES` rig -> terrain, :data:`COUPLED_FORCES` terrain -> rig: the
+names the two FMUs share), the pythonfmu registrations and the modelDescription post-processing
+(:func:`terrain_variables`, :func:`rig_variables`), the native wrapper's variable table, the
+sweep's columns and the units of every result file (:func:`units`).
+
+No CasADi at import (the sweep's workers read the names): the rig's parameter table is loaded
+only when a whole variable list is asked for.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+from wheelterrain.parameters import TABLE, Parameter
+
+
+@dataclass(frozen=True)
+class Var:
+    """One FMU variable, as the slave registers it and as modelDescription.xml describes it."""
+
+    name: str
+    causality: str  # parameter | input | output
+    description: str
+    unit: str = "1"
+    quantity: str | None = None
+    display_unit: str | None = None
+    type: str = "Real"  # Real | Integer | Boolean
+    start: float | None = None
+    min: float | None = None
+    max: float | None = None
+    depends_on: tuple[str, ...] | None = None  # outputs: the inputs they depend on directly
+    integrated: bool = False  # outputs: kept by the wrapper (a state), not a Function output
+
+
+def _outputs(rows: list[Var], inputs: tuple[str, ...]) -> list[Var]:
+    """Terrain outputs computed from the inputs: direct feedthrough of all of them."""
+    return [replace(v, depends_on=inputs) if v.depends_on is None else v for v in rows]
+
+
+_TERRAIN_INPUT_ROWS = [
+    Var("sinkage", "input", "Sinkage of the wheel below the undisturbed soil surface, "
+        "measured to the contact circle (dynamic mode)", "m", "Length", "mm", start=0.02,
+        min=-1.0, max=1.0),
+    Var("sinkage_rate", "input", "Rate of sinkage, positive downward (dynamic mode)", "m/s",
+        "Velocity", start=0.0, min=-100.0, max=100.0),
+    # start: the default preset's rim speed over its radius (terrain_variables)
+    Var("wheel_speed", "input", "Wheel angular velocity, positive when driving forward",
+        "rad/s", "AngularVelocity", min=-1.0e3, max=1.0e3),
+    # start: the rig's default rim speed (terrain_variables)
+    Var("carriage_speed", "input", "Forward speed of the wheel axle (carriage)", "m/s",
+        "Velocity", min=-100.0, max=100.0),
+    Var("load", "input", "Vertical load on the wheel (quasi-static mode)", "N", "Force",
+        start=62.0, min=0.0, max=1.0e5),
+]
+_TERRAIN_INPUTS = tuple(v.name for v in _TERRAIN_INPUT_ROWS)
+
+TERRAIN_IO: tuple[Var, ...] = (
+    Var("quasi_static", "parameter",
+        "true: solve the sinkage that carries the input 'load' (grouser-period mean, ripple "
+        "off, as `wheelterrain steady`); false: forces at the input sinkage and sinkage rate "
+        "(ripple on, contact damping on)", type="Boolean", start=False),
+    *_TERRAIN_INPUT_ROWS,
+    *_outputs([
+        Var("normal_force", "output", "Normal (vertical) force of the soil on the wheel, up",
+            "N", "Force"),
+        Var("drawbar_pull", "output", "Drawbar pull: net forward force of the soil on the "
+            "wheel", "N", "Force"),
+        Var("torque", "output", "Resistive torque of the soil about the axle (what the motor "
+            "must supply)", "N.m", "Torque"),
+        Var("gross_thrust", "output", "Gross thrust: forward part of the shear stress", "N",
+            "Force"),
+        Var("compaction_resistance", "output", "Compaction resistance: backward part of the "
+            "normal stress", "N", "Force"),
+        Var("contact_sinkage", "output", "Sinkage the forces were evaluated at: the input in "
+            "dynamic mode, the solved one in quasi-static mode", "m", "Length", "mm"),
+        Var("slip", "output", "Traction slip i = (omega*R_ref - V)/(omega*R_ref) used by the "
+            "model, braking included (domain [-1, 1]: a rim at half the carriage speed to "
+            "spinning)", "1"),
+        Var("slip_paper", "output", "Slip in the paper's definition s = (omega*R_ref - V)/V (0 "
+            "with the carriage at rest)", "1"),
+        Var("entry_angle", "output", "Entry angle theta_f of the contact arc", "rad", "Angle",
+            "deg"),
+        Var("exit_angle", "output", "Exit angle theta_r of the contact arc (<= 0)", "rad",
+            "Angle", "deg"),
+        Var("max_stress_angle", "output", "Angle theta_m of the maximum normal stress", "rad",
+            "Angle", "deg"),
+        Var("contact_length", "output", "Contact length R_c*(sin(theta_f) - sin(theta_r))",
+            "m", "Length"),
+        Var("mean_pressure", "output", "Mean contact pressure of the ripple-free stress", "Pa",
+            "Pressure"),
+        Var("ripple_amplitude", "output", "Amplitude A of the grouser stress ripple (0 in "
+            "quasi-static mode)", "Pa", "Pressure"),
+    ], _TERRAIN_INPUTS),
+    Var("wheel_angle", "output", "Wheel rotation angle, integrated from wheel_speed (phase of "
+        "the grouser ripple)", "rad", "Angle", "deg", depends_on=(), integrated=True),
+)
+
+RIG_IO: tuple[Var, ...] = (
+    Var("normal_force", "input", "Normal force of the soil on the wheel (from WheelTerrain)",
+        "N", "Force", start=0.0, min=-1.0e6, max=1.0e6),
+    Var("drawbar_pull", "input", "Drawbar pull of the soil on the wheel (from WheelTerrain)",
+        "N", "Force", start=0.0, min=-1.0e6, max=1.0e6),
+    Var("torque", "input", "Resistive soil torque about the axle (from WheelTerrain)", "N.m",
+        "Torque", start=0.0, min=-1.0e6, max=1.0e6),
+    Var("wheel_speed_command", "input", "Speed the wheel's speed loop tracks when rig.drive "
+        "= 1 (speed-command)", "rad/s", "AngularVelocity", start=0.0, min=-1.0e3, max=1.0e3),
+    Var("motor_torque_command", "input", "Torque the wheel motor applies when rig.drive = 2 "
+        "(torque-command)", "N.m", "Torque", start=0.0, min=-1.0e4, max=1.0e4),
+    Var("sinkage", "output", "Wheel sinkage (state of the vertical motion), positive down",
+        "m", "Length", "mm", depends_on=()),
+    Var("sinkage_rate", "output", "Sinkage rate, positive down", "m/s", "Velocity",
+        depends_on=()),
+    Var("wheel_speed", "output", "Wheel angular velocity (state of the speed loop)", "rad/s",
+        "AngularVelocity", depends_on=()),
+    Var("carriage_speed", "output", "Carriage speed: rim_speed/(1 + s) when kinematic, "
+        "the state of the free carriage's motion otherwise", "m/s", "Velocity",
+        depends_on=()),
+    Var("motor_torque", "output", "Torque the wheel motor applied over the last step (the "
+        "speed loop's, or the torque command)", "N.m", "Torque", depends_on=()),
+    Var("speed_error_integral", "output", "Integral of the speed loop's error (state of "
+        "its PI controller)", "rad", "Angle", depends_on=()),
+    Var("sensor.drawbar_pull", "output", "Drawbar pull the rig's force sensor reads", "N",
+        "Force", depends_on=("drawbar_pull",)),
+    Var("sensor.normal_force", "output", "Normal force the rig's force sensor reads", "N",
+        "Force", depends_on=("normal_force",)),
+    Var("sensor.sinkage", "output", "Sinkage the rig's potentiometer reads", "m", "Length",
+        "mm", depends_on=()),
+    Var("sensor.slip_paper", "output", "Slip in the paper's definition from the measured "
+        "wheel and carriage speeds", "1", depends_on=()),
+)
+
+
+def _names(rows: tuple[Var, ...], causality: str, computed: bool = False) -> tuple[str, ...]:
+    return tuple(v.name for v in rows
+                 if v.causality == causality and not (computed and v.integrated))
+
+
+TERRAIN_INPUTS = _names(TERRAIN_IO, "input")
+"""The order of the terrain Functions' ``u`` (terrain_dynamic, terrain_quasi_static)."""
+TERRAIN_OUTPUTS = _names(TERRAIN_IO, "output", computed=True)
+"""The order of the terrain Functions' ``y`` (the wrapper keeps wheel_angle itself)."""
+RIG_INPUTS = _names(RIG_IO, "input")
+"""The order of the rig Functions' ``u`` (equal to wheelterrain.model.rig.INPUTS)."""
+RIG_OUTPUTS = _names(RIG_IO, "output")
+"""The order of rig_outputs' ``y``."""
+COUPLED_STATES = tuple(n for n in TERRAIN_INPUTS if n in RIG_OUTPUTS)
+"""What the rig hands the terrain each exchange: the names both FMUs share, rig -> terrain."""
+COUPLED_FORCES = tuple(n for n in RIG_INPUTS if n in TERRAIN_OUTPUTS)
+"""What the terrain hands the rig: the names both FMUs share, terrain -> rig."""
+
+
+def parameter_var(p: Parameter, start: float) -> Var:
+    """A parameter table row as an FMU parameter."""
+    kind = "Integer" if p.kind in ("integer", "enum") else "Real"
+    return Var(p.name, "parameter", f"{p.description} [{p.source}]", p.unit, p.quantity,
+               p.display_unit, kind, start, p.min, p.max)
+
+
+def terrain_variables() -> list[Var]:
+    """WheelTerrain.fmu's variables in value-reference order: the parameter table (starts from
+    the default preset), then :data:`TERRAIN_IO` (wheel and carriage speeds start at the rig's
+    default rim speed)."""
+    from wheelterrain import presets
+    from wheelterrain.model import rig
+
+    start = dict(presets.load(presets.DEFAULT_PRESET))
+    rim_speed = rig.defaults()["rig.rim_speed"]
+    starts = {"wheel_speed": rim_speed / start["wheel.radius"], "carriage_speed": rim_speed}
+    return [*(parameter_var(p, start[p.name]) for p in TABLE),
+            *(replace(v, start=starts[v.name]) if v.name in starts else v for v in TERRAIN_IO)]
+
+
+def rig_variables() -> list[Var]:
+    """SingleWheelRig.fmu's variables in value-reference order: the rig's parameter table, then
+    :data:`RIG_IO`."""
+    from wheelterrain.model import rig
+
+    return [*(parameter_var(p, p.default) for p in rig.RIG_TABLE), *RIG_IO]
+
+
+def units() -> dict[str, str]:
+    """The unit (Modelica.Units.SI string) of every variable of both FMUs by name, parameters
+    included, plus the master's ``time`` [s]: the units result files carry in their headers."""
+    out = {"time": "s"}
+    for v in (*terrain_variables(), *rig_variables()):
+        out.setdefault(v.name, v.unit)
+    return out
