@@ -72,3 +72,17 @@ def test_slip_validation():
         to_traction(0.1, "wheel")
     with pytest.raises(InputError, match=r"valid range \[-1, 1\]"):
         to_traction(-1.2, "traction")
+
+
+def test_plausible_ranges_are_a_column_inside_the_validity_range():
+    """calibration.PLAUSIBLE is read from the table; each plausible range lies inside the
+    parameter's validity range and carries a source."""
+    from wheelterrain.fit import calibration
+    from wheelterrain.parameters import BY_NAME
+
+    assert calibration.PLAUSIBLE
+    for name, (lo, hi, source) in calibration.PLAUSIBLE.items():
+        p = BY_NAME[name]
+        assert p.plausible == (lo, hi, source)
+        assert p.min <= lo < hi <= p.max, name
+        assert source

@@ -82,3 +82,11 @@ def test_free_carriage_accelerates_with_the_net_force():
     assert balanced[4] == pytest.approx(x[4], abs=1e-15)
     pushed, _ = rig.step(x, (62.0, resistance + 2.0, 0.5, 0, 0), p, 1e-2)
     assert pushed[4] == pytest.approx(x[4] + 1e-2 * 2.0 / mass, rel=1e-12)
+
+
+def test_an_unknown_rig_parameter_is_named_with_its_close_matches():
+    from wheelterrain.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=r"rig\.lod = 62.0 is not a rig parameter; did you "
+                                             r"mean rig\.load"):
+        rig.check("rig.lod", 62.0)

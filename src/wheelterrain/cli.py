@@ -223,13 +223,15 @@ def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definiti
         if json_target == "-":
             return
     click.echo(f"{'preset':22} {preset}")
-    units = {"sinkage": "m", "drawbar_pull": "N", "normal_force": "N", "torque": "N.m",
-             "gross_thrust": "N", "compaction_resistance": "N", "entry_angle": "rad",
-             "exit_angle": "rad", "max_stress_angle": "rad", "contact_length": "m",
-             "mean_pressure": "Pa", "load": "N", "slip": "1 (traction)",
-             "slip_paper": "1 (paper)", "capacity": "N"}
-    for key, unit in units.items():
-        value = result[key]
+    from wheelterrain.fmu.variables import units as variable_units
+
+    shown = ("sinkage", "drawbar_pull", "normal_force", "torque", "gross_thrust",
+             "compaction_resistance", "entry_angle", "exit_angle", "max_stress_angle",
+             "contact_length", "mean_pressure", "load", "slip", "slip_paper", "capacity")
+    table = {**variable_units(), "capacity": "N"}  # units of the FMU variables' table
+    notes = {"slip": " (traction)", "slip_paper": " (paper)"}
+    for key in shown:
+        value, unit = result[key], table[key] + notes.get(key, "")
         extra = f"   ({value / DEG:.3f} deg)" if unit == "rad" else ""
         extra = f"   ({value * 1e3:.3f} mm)" if key == "sinkage" else extra
         click.echo(f"{key:22} {value:14.6g} {unit}{extra}")

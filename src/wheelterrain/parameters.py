@@ -44,6 +44,9 @@ class Parameter:
     quantity: str | None = None
     display_unit: str | None = None
     choices: Mapping[int, str] | None = None
+    plausible: tuple[float, float, str] | None = None
+    """(min, max, source): the physically plausible range calibration may use, narrower than
+    the validity range [min, max]; None for parameters that are not calibrated."""
 
     def check(self, value: float) -> float:
         """``value`` as float if valid for this parameter, else raise ParameterError."""
@@ -89,12 +92,17 @@ class Parameter:
             row["display_unit"] = self.display_unit
         if self.choices:
             row["choices"] = {str(k): v for k, v in self.choices.items()}
+        if self.plausible:
+            row["plausible"] = {"min": self.plausible[0], "max": self.plausible[1],
+                                "source": self.plausible[2]}
         return row
 
 
 _P = Parameter
 _PAPER = "Abubakar et al., Rashid rover wheel-terrain study"
 _TABLE2 = f"{_PAPER}, Table II (tuned)"
+_LUNAR = ("Lunar regolith and its simulants (Carrier, Olhoeft & Mendell, Lunar Sourcebook "
+          "1991, ch. 9)")
 
 TABLE: tuple[Parameter, ...] = (
     # --- wheel -------------------------------------------------------------------------------
@@ -104,7 +112,7 @@ TABLE: tuple[Parameter, ...] = (
     _P("wheel.width", "m", 0.075, 0.005, 1.0,
        "Wheel width b; also the plate width in the Reece pressure-sinkage law.",
        f"{_PAPER} prints 0.0075 m; read as 0.075 m because at 0.0075 m even a fully buried wheel "
-       "carries only ~15 N of the 62 N measured (shared/spec/paper-digest.md)", quantity="Length"),
+       "carries only ~15 N of the 62 N measured", quantity="Length"),
     _P("wheel.mass", "kg", 1.0, 0.01, 1000.0,
        "Mass of the wheel (used by the rig's vertical dynamics, not by the contact model).",
        f"{_PAPER}: 1 kg", quantity="Mass"),
@@ -123,33 +131,42 @@ TABLE: tuple[Parameter, ...] = (
     # --- soil --------------------------------------------------------------------------------
     _P("soil.cohesion", "Pa", 0.0, 0.0, 20000.0,
        "Cohesion c (Mohr-Coulomb shear strength and Reece pressure-sinkage).",
-       f"{_TABLE2}: 0 kPa", quantity="Pressure"),
+       f"{_TABLE2}: 0 kPa", quantity="Pressure",
+       plausible=(0.0, 3000.0, f"{_LUNAR}: 0.1-3 kPa")),
     _P("soil.phi", "rad", 23 * DEG, 0.0, 60 * DEG,
        "Internal friction angle phi (Mohr-Coulomb).",
-       f"{_TABLE2}: 23 deg (Table I: 28 deg)", quantity="Angle", display_unit="deg"),
+       f"{_TABLE2}: 23 deg (Table I: 28 deg)", quantity="Angle", display_unit="deg",
+       plausible=(25 * DEG, 50 * DEG, f"{_LUNAR}: friction angle 30-50 deg; Table I 28 deg")),
     _P("soil.k_c", "1", 0.63, 0.0, 2000.0,
        "Reece cohesive modulus k_c' (dimensionless); multiplies c, so it has no effect when c = 0.",
-       f"{_TABLE2}: 0.63 (Table I: 0)"),
+       f"{_TABLE2}: 0.63 (Table I: 0)",
+       plausible=(0.0, 100.0, "Reece k_c' (Wong: dry sand 0.99, sandy loam 2-4)")),
     _P("soil.k_phi", "1", 80.0, 10.0, 5000.0,
        "Reece frictional modulus k_phi' (dimensionless).",
        f"{_TABLE2}: 80; range after Wong, Theory of Ground Vehicles (Reece parameters of "
-       "measured soils span tens to a few thousand)"),
+       "measured soils span tens to a few thousand)",
+       plausible=(10.0, 2000.0, "Reece k_phi' of sands and simulants (Wong, Theory of Ground "
+                  "Vehicles: dry sand 1528; Table I/II 80)")),
     _P("soil.n0", "1", 1.1, 0.3, 2.0,
        "Sinkage exponent at zero slip, n0 in n = n0 + n1*|i|.",
-       f"{_TABLE2}: n = 1.1 (Table I: 1)"),
+       f"{_TABLE2}: n = 1.1 (Table I: 1)",
+       plausible=(0.5, 1.5, "Reece sinkage exponent of sands, 0.5-1.3 (Wong); Table II 1.1")),
     _P("soil.n1", "1", 0.0, 0.0, 2.0,
        "Slip-sinkage coefficient n1 in n = n0 + n1*|i| (i traction slip). 0 = classical model.",
        "Ding et al. 2011, J. Terramechanics 48 (slip-sinkage exponent); presets read the paper's "
-       "eta = 1.15 as n1 (shared/spec/model-notes.md)"),
+       "eta = 1.15 as n1 (it reproduces the measured sinkage trend)",
+       plausible=(0.0, 2.0, "Slip-sinkage coefficient (Ding et al. 2011 report n1 ~ 0.3-1 for "
+                  "lunar simulant; paper's eta 1.15)")),
     _P("soil.gamma", "N/m3", 15620.0, 5000.0, 30000.0,
        "Soil weight density gamma (Reece pressure-sinkage law).",
        f"{_TABLE2}: 15620 N/m3 (Table I: 13734)"),
     _P("soil.shear_modulus", "m", 0.036, 5e-4, 0.1,
        "Shear deformation modulus K (Janosi), and the peak-shear displacement K_w of Wong's hump "
        "form.",
-       f"{_TABLE2}: K = 0.036 m; equals Ishigami et al. 2007's K_x (shared/spec/model-notes.md). "
+       f"{_TABLE2}: K = 0.036 m; equals Ishigami et al. 2007's K_x at zero slip angle. "
        "Range after Wong, Theory of Ground Vehicles (measured K from below 1 mm to a few cm)",
-       quantity="Length"),
+       quantity="Length",
+       plausible=(0.002, 0.04, "Janosi K of sands, 2-40 mm (Wong; Table II 36 mm)")),
     _P("soil.residual_ratio", "1", 0.6, 0.1, 1.0,
        "Residual-to-peak shear ratio K_r of Wong's hump shear form (unused with Janosi shear).",
        "Wong, Theory of Ground Vehicles (hump-type shear, K_r typically 0.3-1); the paper gives "
@@ -160,7 +177,7 @@ TABLE: tuple[Parameter, ...] = (
     _P("soil.damping", "N.s/m", 800.0, 0.0, 1e5,
        "Vertical contact damping C_f: adds C_f * (sinkage rate) to the normal force while in "
        "contact. The quasi-static solve (zero rate) does not see it.",
-       f"{_TABLE2}: C_f = 800 N.s/m, read as the vertical damper (shared/spec/model-notes.md)",
+       f"{_TABLE2}: C_f = 800 N.s/m, read as the vertical damper of the wheel's contact",
        quantity="TranslationalDampingConstant"),
     # --- grouser ripple (Irani et al. 2011) --------------------------------------------------
     _P("ripple.k_g", "1", 0.0, 0.0, 1.0,
@@ -178,15 +195,18 @@ TABLE: tuple[Parameter, ...] = (
        "Max-stress angle coefficient a0 in theta_m = (a0 + a1*i)*theta_f. The lower bound keeps "
        "theta_m > 0 at slip -0.9 with the largest a1.",
        "Ishigami et al. 2007, J. Field Robotics 24(3): 0.40 for lunar simulant (Wong-Reece sand: "
-       "0.43)"),
+       "0.43)",
+       plausible=(0.32, 0.45, "Wong & Reece 1967; Ishigami et al. 2007: a0 0.3-0.45")),
     _P("model.a1", "1", 0.15, 0.0, 0.35,
        "Max-stress angle coefficient a1 in theta_m = (a0 + a1*i)*theta_f.",
-       "Ishigami et al. 2007: 0.15 for lunar simulant (Wong-Reece sand: 0.32)"),
+       "Ishigami et al. 2007: 0.15 for lunar simulant (Wong-Reece sand: 0.32)",
+       plausible=(0.0, 0.35, "Wong & Reece 1967; Ishigami et al. 2007: a1 up to 0.35")),
     _P("model.exit_ratio", "1", 0.0, 0.0, 1.0,
        "Exit-angle ratio lambda: theta_r = -arccos(1 - lambda*z/R_c). 0 = Wong-Reece "
        "(theta_r = 0); "
        "Ishigami 2007 uses about 0.9.",
-       "Wong & Reece 1967; Ishigami et al. 2007"),
+       "Wong & Reece 1967; Ishigami et al. 2007",
+       plausible=(0.0, 0.9, "Ishigami et al. 2007: lambda ~ 0.9; Wong-Reece 0")),
     _P("model.shear_model", "1", 0, 0, 1,
        "Shear-stress law: 0 = Janosi 1 - exp(-j/K); 1 = Wong's hump form (paper eq. 3).",
        "Janosi & Hanamoto 1961; Wong, Theory of Ground Vehicles", kind="enum",
@@ -194,15 +214,18 @@ TABLE: tuple[Parameter, ...] = (
     _P("model.contact_radius_factor", "1", 0.0, 0.0, 1.0,
        "Contact radius R_c = R + factor*h_g used for the geometry and the normal stress "
        "(0 = rim, 1 = grouser tips). Sinkage is measured to this circle.",
-       "grouser-tip effective radius (shared/spec/model-notes.md)"),
+       "grouser-tip effective radius (Wong, Theory of Ground Vehicles, lugged wheels)",
+       plausible=(0.0, 1.0, "Definition: rim (0) to grouser tips (1)")),
     _P("model.shear_radius_factor", "1", 0.0, 0.0, 1.0,
        "Shearing radius R_s = R + factor*h_g used in the shear displacement, the shear terms and "
        "the torque (lambda_s of Ding et al.).",
-       "Ding et al. 2011, J. Terramechanics 48"),
+       "Ding et al. 2011, J. Terramechanics 48",
+       plausible=(0.0, 1.0, "Definition: rim (0) to grouser tips (1)")),
     _P("model.slip_radius_factor", "1", 0.0, 0.0, 1.0,
        "Radius R_ref = R + factor*h_g to which the slip input is referenced: carriage speed "
        "V = (1 - i)*omega*R_ref. 0 = rim radius, as the rig defines slip from omega_r*R.",
-       f"{_PAPER}, eq. 4 (slip from omega_r*R)"),
+       f"{_PAPER}, eq. 4 (slip from omega_r*R)",
+       plausible=(0.0, 1.0, "Definition: rim (0) to grouser tips (1)")),
     _P("model.grouser_thrust", "1", 0, 0, 1,
        "Grouser thrust by passive earth pressure: 0 = off; 1 = the Rankine passive force on the "
        "buried part of each grouser face (depth below the surface as surcharge), mobilised "

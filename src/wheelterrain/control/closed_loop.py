@@ -7,7 +7,7 @@ Plants
     :mod:`wheelterrain.cosim.master` (Gauss-Seidel, 1 ms). :class:`CasadiPlant` runs the very same
     Functions (``terrain_dynamic``, :func:`wheelterrain.model.rig.step`) in process with the same
     coupling. When the models agree the two trajectories agree to rounding; when they do not,
-    the harness is wrong (shared/spec/mpc-notes.md: a forgotten input update hid that way).
+    the harness is wrong (a forgotten input update once hid that way).
 
 Estimator
     :class:`SoilEstimator`, an extended Kalman filter on (soil.phi, soil.k_phi) as random walks.

@@ -30,32 +30,16 @@ from scipy.optimize import least_squares
 from wheelterrain import __version__, model
 from wheelterrain.errors import CalibrationError, WheelTerrainError
 from wheelterrain.model.slip import traction_from_paper
-from wheelterrain.parameters import DEG, INDEX, NAMES, ParameterSet
+from wheelterrain.parameters import INDEX, NAMES, TABLE, ParameterSet
 
 SCALES = {"drawbar_pull": 1.0, "sinkage": 1e-3}  # N, m: one unit of residual each
 OUTPUTS = ("drawbar_pull", "sinkage")  # what a fit can be asked to match, in residual order
 RESIDUAL_UNITS = {"drawbar_pull": "drawbar pull [N]", "sinkage": "sinkage [mm]"}
 OUTPUT_ROW = {"sinkage": 0, "drawbar_pull": 2}  # rows of steady_jacobian's d_params
 
-_LUNAR = ("Lunar regolith and its simulants (Carrier, Olhoeft & Mendell, Lunar Sourcebook "
-          "1991, ch. 9)")
 PLAUSIBLE: dict[str, tuple[float, float, str]] = {
-    "soil.phi": (25 * DEG, 50 * DEG, f"{_LUNAR}: friction angle 30-50 deg; Table I 28 deg"),
-    "soil.cohesion": (0.0, 3000.0, f"{_LUNAR}: 0.1-3 kPa"),
-    "soil.k_phi": (10.0, 2000.0, "Reece k_phi' of sands and simulants (Wong, Theory of Ground "
-                   "Vehicles: dry sand 1528; Table I/II 80)"),
-    "soil.k_c": (0.0, 100.0, "Reece k_c' (Wong: dry sand 0.99, sandy loam 2-4)"),
-    "soil.n0": (0.5, 1.5, "Reece sinkage exponent of sands, 0.5-1.3 (Wong); Table II 1.1"),
-    "soil.n1": (0.0, 2.0, "Slip-sinkage coefficient (Ding et al. 2011 report n1 ~ 0.3-1 for "
-                "lunar simulant; paper's eta 1.15)"),
-    "soil.shear_modulus": (0.002, 0.04, "Janosi K of sands, 2-40 mm (Wong; Table II 36 mm)"),
-    "model.a0": (0.32, 0.45, "Wong & Reece / Ishigami: a0 0.3-0.45 (shared/spec/model-notes.md)"),
-    "model.a1": (0.0, 0.35, "Wong & Reece / Ishigami: a1 up to 0.35"),
-    "model.exit_ratio": (0.0, 0.9, "Ishigami et al. 2007: lambda ~ 0.9; Wong-Reece 0"),
-    "model.contact_radius_factor": (0.0, 1.0, "Definition: rim (0) to grouser tips (1)"),
-    "model.shear_radius_factor": (0.0, 1.0, "Definition: rim (0) to grouser tips (1)"),
-    "model.slip_radius_factor": (0.0, 1.0, "Definition: rim (0) to grouser tips (1)"),
-}
+    p.name: p.plausible for p in TABLE if p.plausible is not None}
+"""The plausible ranges (min, max, source): a column of the parameter table."""
 
 
 @dataclass

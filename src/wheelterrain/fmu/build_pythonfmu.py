@@ -1,7 +1,7 @@
 """Build WheelTerrain.fmu and SingleWheelRig.fmu with pythonfmu, then make their
 modelDescription.xml what a Modelica-minded FMI importer expects.
 
-pythonfmu 0.7 writes no units, types, ranges or dependencies (shared/spec/fmi-notes.md). After its
+pythonfmu 0.7 writes no units, types, ranges or dependencies (upstream issues #33, #193). After its
 build, :func:`finish_model_description` rewrites modelDescription.xml inside the FMU from the
 same :class:`wheelterrain.fmu.variables.Var` lists the slaves register:
 

@@ -5,7 +5,7 @@ The scripts only declare ``class WheelTerrain(Fmi2Slave)`` / ``class SingleWheel
 either: forces come from :mod:`wheelterrain.model.contact`, the rig from
 :mod:`wheelterrain.model.rig`.
 
-What this layer adds around pythonfmu (shared/spec/fmi-notes.md):
+What this layer adds around pythonfmu (its gaps: see fmu_src/README.md):
 - every variable is declared once in a :class:`Var` list that both the slave and the
   modelDescription post-processor (:mod:`wheelterrain.fmu.build_pythonfmu`) read, so names,
   units, ranges and descriptions cannot drift apart;

@@ -42,7 +42,7 @@ The shear-displacement kinematics (``model.shear_kinematics``) is documented at
 wheel-element kinematics, lambda = 0, no ripple) this is the
 classical Wong-Reece rigid wheel, exactly.
 
-Grouser ripple (Irani et al. 2011, as read in shared/spec/model-notes.md): the normal stress on the
+Grouser ripple (Irani et al. 2011, as this project reads it): the normal stress on the
 contact arc becomes max(sigma + A*sin(n_g*wheel_angle + Phi), 0), with
 A = k_g'*p_mean + k_0'*l_c*d_gamma, p_mean = Fz_static/(b*l_c) the mean contact pressure of the
 ripple-free stress and l_c = R_c*(sin(theta_f) - sin(theta_r)) the contact length. The phase follows

@@ -3,7 +3,7 @@
 Written once as plain arithmetic on numbers or CasADi symbols (:func:`step`), so the pythonfmu
 slave runs it on floats and the CasADi Function (:func:`build`) traces the very same expressions.
 
-The rig (shared/spec/paper-digest.md, "Test rig and experiments"):
+The rig (Abubakar et al., the Rashid wheel study, "Test rig and experiments"):
 
 - The **carriage** is position-controlled by its own motor: its speed is set from the commanded
   wheel rim speed and the commanded slip in the paper's definition s = (omega*R - V)/V, so
@@ -40,11 +40,12 @@ from types import MappingProxyType
 
 import casadi as ca
 
+from wheelterrain.errors import ParameterError
 from wheelterrain.parameters import DEG, Parameter
 
 STANDARD_GRAVITY = 9.80665  # m/s2
 
-_RIG = "The paper's single-wheel rig (shared/spec/paper-digest.md)"
+_RIG = "The paper's single-wheel rig (Abubakar et al., Rashid rover wheel-terrain study)"
 RIG_TABLE: tuple[Parameter, ...] = (
     Parameter("rig.load", "N", 62.0, 0.0, 1.0e5,
               "Vertical load the rig applies to the wheel axle (the paper's normal force).",
@@ -222,7 +223,15 @@ def defaults() -> dict[str, float]:
 
 
 def check(name: str, value: float) -> float:
-    """Validated value of rig parameter ``name`` (ParameterError naming the range otherwise)."""
+    """Validated value of rig parameter ``name`` (ParameterError naming the range otherwise, or
+    the close names of an unknown one)."""
+    if name not in RIG_INDEX:
+        import difflib
+
+        close = difflib.get_close_matches(name, RIG_NAMES, n=3)
+        hint = f"; did you mean {', '.join(close)}?" if close else ""
+        raise ParameterError(name, value, f"is not a rig parameter{hint} (valid: "
+                                          f"{', '.join(RIG_NAMES)})")
     return RIG_TABLE[RIG_INDEX[name]].check(value)
 
 
