@@ -207,10 +207,11 @@ def fit(base: ParameterSet, names: list[str], case_names: list[str], starts: int
                sum(s.success for s in results), spread, outputs)
 
 
-def errors_on(ps: ParameterSet, case_names: list[str], load: float = 62.0
-              ) -> dict[str, dict[str, float]]:
-    """Model minus experiment (drawbar pull N, sinkage m) on ``case_names``."""
-    cases = _case_rows(case_names)
+def errors_on(ps: ParameterSet, case_names: list[str], load: float = 62.0,
+              data: list[dict] | None = None) -> dict[str, dict[str, float]]:
+    """Model minus experiment (drawbar pull N, sinkage m) on ``case_names`` (rows of ``data``,
+    default the paper's Table III)."""
+    cases = _case_rows(case_names, data)
     out = predictions(ps, cases, load)
     return {c["case"]: {k: o[k] - c["experiment"][k] for k in ("drawbar_pull", "sinkage")}
             for c, o in zip(cases, out, strict=True)}

@@ -183,9 +183,7 @@ def model_row(label: str, base: ParameterSet, free: Sequence[str], protocol: str
                            error=f"fit on {', '.join(train)} failed: {err}")
             ps = base.with_values(result.values)
             fitted.append(result.values)
-        for c in _rows_of(cases, test):
-            out = model.steady_state(ps, LOAD, c["slip_paper"], "paper")
-            errors[c["case"]] = {k: out[k] - c["experiment"][k] for k in OUTPUTS}
+        errors.update(calibration.errors_on(ps, test, LOAD, data=list(cases)))
     return Row(label, protocol, list(free), errors, bool(free) and protocol == "all-case",
                fitted)
 
