@@ -23,7 +23,7 @@ from __future__ import annotations
 import csv
 import io
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -223,10 +223,8 @@ def run(progress: Callable[[str], None] | None = None, starts: int = 4) -> dict:
         fitted = presets.read(name)["provenance"].get("fitted")
         free = preset_free(name)
         # as shipped: in-sample where its values were fitted to these cases, else a prediction
-        as_is = model_row(name, ps, [], "all-case", cases)
-        as_is.in_sample = bool(fitted)
-        as_is.free = list(fitted) if fitted else []
-        add(as_is)
+        add(replace(model_row(name, ps, [], "all-case", cases), in_sample=bool(fitted),
+                    free=list(fitted or [])))
         start = unfitted(name)
         add(model_row(name, start, PAPER_FREE, "c2-only", cases, starts))
         add(model_row(name, start, free, "leave-one-out", cases, starts))

@@ -157,6 +157,13 @@ def _reversal_offset(theta_f, theta_r, d_front, d_rear, displacement) -> ca.SX:
 SPIN_FLOOR = 1e-9  # soil-element kinematics: 1 - i is floored here (j -> inf as i -> 1)
 
 
+def _speed_ratios(slip, Rs, Rref):
+    """(v, R_s/v): v = (1 - i)*R_ref, the carriage speed per wheel rad/s, and the shearing
+    radius over it with 1 - i floored at SPIN_FLOOR (the soil element's kinematics; j -> inf as
+    i -> 1). Both contact forms count their shear displacement from these."""
+    return (1 - slip) * Rref, Rs / (ca.fmax(1 - slip, SPIN_FLOOR) * Rref)
+
+
 class _Displacement:
     """Shear displacement j(theta) on the arc, x = theta_f - theta, under either kinematics
     (``model.shear_kinematics``):
@@ -179,8 +186,7 @@ class _Displacement:
 
     def __init__(self, theta_f, slip, P, Rc, Rs, Rref) -> None:
         self.theta_f, self.Rc, self.Rs = theta_f, Rc, Rs
-        self.v_ratio = (1 - slip) * Rref  # carriage speed / wheel angular speed
-        self.ratio = Rs / (ca.fmax(1 - slip, SPIN_FLOOR) * Rref)  # R_s/v, soil element
+        self.v_ratio, self.ratio = _speed_ratios(slip, Rs, Rref)
         self.soil = P["model.shear_kinematics"]
         self.cos_f, self.sin_f = ca.cos(theta_f), ca.sin(theta_f)  # once, not per node
 
@@ -422,9 +428,9 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
         normal = b * length * ca.fmax(pressure + amplitude * ca.sin(phase), 0)
     else:
         normal = normal_static
-    v = ca.fmax(1 - slip, SPIN_FLOOR) * Rref
+    v, soil_ratio = _speed_ratios(slip, Rs, Rref)
     kinematics = P["model.shear_kinematics"]
-    x = (1 - kinematics) * (1 - (1 - slip) * Rref / Rs) + kinematics * (Rs / v - 1)
+    x = (1 - kinematics) * (1 - v / Rs) + kinematics * (soil_ratio - 1)
     mobilised = patch_shear_mean(x * length / P["soil.shear_modulus"], P)
     thrust = (c * b * length + normal * ca.tan(P["soil.phi"])) * mobilised
     compaction = b * pressure * z / (n + 1)
