@@ -54,7 +54,7 @@ def test_json_onto_a_folder_is_refused(tmp_path):
 def test_an_out_folder_that_cannot_be_made_is_refused_before_the_run(tmp_path, command):
     blocker = tmp_path / "a-file"
     blocker.write_text("")
-    out = blocker / "sub" / ("x.csv" if command == ["sweep"] else "dir")
+    out = blocker / "sub" / "dir"
     result = CliRunner().invoke(main, [*command, "--out", str(out)])
     _one_line_exit_2(result, "is not a writable folder")
 

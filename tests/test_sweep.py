@@ -70,9 +70,10 @@ def test_sweep_on_a_local_dask_cluster(fmu):
 
 
 def test_cli_writes_csv_and_plot(fmu, tmp_path):
-    out = tmp_path / "s.csv"
+    folder = tmp_path / "made" / "here"  # --out is a folder, created if needed
+    out = folder / "sweep.csv"
     run = CliRunner().invoke(main, ["sweep", "--fmu", str(fmu), "--slip", "0:0.5:3",
-                                    "--load", "62", "--workers", "1", "--out", str(out)])
+                                    "--load", "62", "--workers", "1", "--out", str(folder)])
     assert run.exit_code == 0, run.output
     with out.open() as f:
         reader = csv.DictReader(f)

@@ -488,9 +488,9 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
 @click.option("--dask", "dask_address", metavar="ADDRESS|local",
               help="Run on a dask.distributed scheduler instead (or 'local' for a "
               "LocalCluster); workers need wheelterrain installed.")
-@click.option("--out", default="validation/output/sweep.csv", show_default=True,
-              type=click.Path(dir_okay=False), help="CSV to write (a PNG of the curves goes "
-              "next to it).")
+@click.option("--out", default="validation/output", show_default=True,
+              type=click.Path(), help="Folder for sweep.csv and sweep.png (created if needed). "
+              "The earlier form, a FILE.csv, still names the CSV (the PNG beside it).")
 def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_definition: str,
           load_grid: str, extra: tuple[str, ...], workers: int, dask_address: str | None,
           out: str) -> None:
@@ -510,9 +510,10 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
     from wheelterrain import plots
     from wheelterrain.cosim import sweep as sweeper
 
-    _check_out_dir(str(Path(out).parent), "--out")
-    if Path(out).is_dir():
-        _usage_error(f"--out {out} is a folder; give the CSV's file name")
+    csv_path = Path(out) if out.endswith(".csv") else Path(out) / "sweep.csv"
+    _check_out_dir(str(csv_path.parent), "--out")
+    if csv_path.is_dir():
+        _usage_error(f"--out {out} is a folder named like a CSV file")
     ps = _load(preset, assignments)
     try:
         axes = {"slip": sweeper.parse_axis("slip", slip),
@@ -535,14 +536,15 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
     except (FileNotFoundError, FMUError) as err:
         click.echo(f"error: {err}", err=True)
         sys.exit(EXIT_USAGE)
-    sweeper.write_csv(Path(out), rows)
+    sweeper.write_csv(csv_path, rows)
     bad = sum(r["status"] != "ok" for r in rows)
     x = "slip" if len(axes["slip"]) > 1 else max(axes, key=lambda k: len(axes[k]))
     group = [k for k in axes if k != x and len(axes[k]) > 1]
-    png = Path(out).with_suffix(".png")
+    png = csv_path.with_suffix(".png")
     plots.sweep_curves(rows, x, group, png, f"WheelTerrain.fmu sweep, preset {preset} "
                        f"(slip: {slip_definition} definition)")
-    click.echo(f"preset {preset}: wrote {out} ({total} points, {bad} infeasible) and {png}")
+    click.echo(f"preset {preset}: wrote {csv_path} ({total} points, {bad} infeasible) and "
+               f"{png}")
 
 
 @main.command(epilog=EPILOG)
