@@ -26,6 +26,7 @@ def validate_json():
 @pytest.mark.slow
 def test_validate_prints_every_contract_row(validate_json):
     rows = validate_json["rows"]
+    assert len(rows) == prediction.step_count()  # the progress bar's length
     for r in rows:
         assert {"model", "protocol", "free", "drawbar_pull_mae", "sinkage_mae",
                 "in_sample"} <= set(r)

@@ -7,6 +7,7 @@ the model cannot represent (e.g. a load the wheel cannot carry); 4 a numerical f
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import math
 import sys
@@ -26,6 +27,8 @@ from wheelterrain.errors import (
 from wheelterrain.parameters import DEG, TABLE, parse_assignments
 
 EXIT_USAGE, EXIT_INFEASIBLE, EXIT_NUMERICAL = 2, 3, 4
+OUTPUT_ERRORS = {errno.ENOSPC, errno.EPIPE, errno.EIO, getattr(errno, "EDQUOT", errno.ENOSPC)}
+"""Errors of writing output (a full disk or quota, a closed pipe): one line, not a traceback."""
 
 EPILOG = """\b
 Exit codes: 0 ok, 2 bad usage or parameter, 3 infeasible operating point, 4 numerical failure.
@@ -47,10 +50,6 @@ def _load(preset: str, assignments: tuple[str, ...]):
         return presets.load(preset).with_values(parse_assignments(assignments))
     except WheelTerrainError as err:
         _fail(err)
-
-
-def _json_number(x: float) -> float | None:
-    return x if math.isfinite(x) else None
 
 
 def json_option(what: str):
@@ -103,7 +102,7 @@ def _check_out_dir(out: str, option: str = "--out") -> None:
 def _finite(value):
     """``value`` with every non-finite float as None (JSON has no NaN or infinity)."""
     if isinstance(value, float):
-        return _json_number(value)
+        return value if math.isfinite(value) else None
     if isinstance(value, dict):
         return {k: _finite(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
@@ -111,17 +110,21 @@ def _finite(value):
     return value
 
 
-def _emit_json(target: str | None, document) -> None:
-    """Write ``document`` as JSON to ``target`` ('-': standard output)."""
+def _emit_json(target: str | None, document) -> bool:
+    """Write ``document`` as JSON to ``target`` ('-': standard output; None: nothing). True when
+    it went to standard output, where it replaces the text."""
     from pathlib import Path
 
     from wheelterrain.cosim.master import write_atomic
 
+    if target is None:
+        return False
     text = json.dumps(_finite(document), indent=2, allow_nan=False) + "\n"
     if target == "-":
         click.echo(text, nl=False)
-    else:
-        write_atomic(Path(target), text)
+        return True
+    write_atomic(Path(target), text)
+    return False
 
 
 @click.group(epilog=EPILOG)
@@ -163,10 +166,8 @@ def params(preset: str, assignments: tuple[str, ...], json_target: str | None) -
     for row in rows:
         if row["name"] in fitted:
             row["fitted"] = fitted[row["name"]]  # value, plausible range and its source, ...
-    if json_target:
-        _emit_json(json_target, rows)
-        if json_target == "-":
-            return
+    if _emit_json(json_target, rows):
+        return
     click.echo(f"preset {doc.get('name', preset)}: {doc.get('description', '')}\n")
     click.echo(f"{'name':30} {'value':>12} {'unit':6} {'range':>24}  description")
     for p in TABLE:
@@ -217,11 +218,8 @@ def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definiti
     except WheelTerrainError as err:
         _fail(err)
     result = {"preset": preset, **result}
-    if json_target:
-        _emit_json(json_target, {k: (_json_number(v) if isinstance(v, float) else v)
-                                 for k, v in result.items()})
-        if json_target == "-":
-            return
+    if _emit_json(json_target, result):
+        return
     click.echo(f"{'preset':22} {preset}")
     from wheelterrain.fmu.variables import units as variable_units
 
@@ -341,7 +339,7 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_targ
                   paper["load_N"], paper["wheel_speed_m_per_s"], stop, step)
     plots.means_bar_chart(rows, out_dir / "means.png", preset)
     say(f"wrote {out_dir}/C1..C4.csv, C1..C4.png, means.png, C1..C4.ssp")
-    if json_target:
+    if json_target:  # the JSON document: replacing the text, or beside it in a file
         payload = {"preset": preset, "set": list(assignments), "step": step, "stop": stop,
                    "in_sample": bool(fitted_on),
                    "averaging_windows": {r.case: list(r.window) for r in results},
@@ -430,9 +428,7 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
         "starts": result.starts, "spread_of_best_starts": result.spread,
         "profiles": profiles,
     }
-    if json_target:
-        _emit_json(json_target, payload)
-    if json_target != "-":
+    if not _emit_json(json_target, payload):
         click.echo(f"fit of {', '.join(names)} to the {' and '.join(result.outputs)} of "
                    f"{', '.join(case_names)} ({result.starts} starts, base preset {preset})")
         for n in names:
@@ -613,14 +609,10 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool, hor
     figures = {**result.figures(the_scenario), "preset": preset}
     out_dir = Path(out)
     plots.closed_loop(result, the_scenario, out_dir / f"{scenario}.png")
-    from wheelterrain.fmu.variables import units as variable_units
-
     cosim.write_series(out_dir / f"{scenario}.csv", result.series, every=5,
-                       units={**variable_units(), **closed_loop.RECORD_UNITS})
-    if json_target:
-        _emit_json(json_target, figures)
-        if json_target == "-":
-            return
+                       units=closed_loop.record_units())
+    if _emit_json(json_target, figures):
+        return
     click.echo(f"NMPC '{scenario}' ({the_scenario.description}), preset {preset}")
     for key, value in figures.items():
         text = f"{value:.4g}" if isinstance(value, float) else str(value)
@@ -649,13 +641,11 @@ def validate(json_target: str | None, starts: int) -> None:
     from wheelterrain.fit import prediction
 
     _check_file_target(json_target)
-    total = 3 + 5 * len(presets.available())
-    with click.progressbar(length=total, label="prediction protocols", file=sys.stderr) as bar:
+    with click.progressbar(length=prediction.step_count(), label="prediction protocols",
+                           file=sys.stderr) as bar:
         result = prediction.run(progress=lambda _: bar.update(1), starts=starts)
-    if json_target:
-        _emit_json(json_target, result)
-        if json_target == "-":
-            return
+    if _emit_json(json_target, result):
+        return
     click.echo(prediction.format_table(result))
 
 
@@ -673,6 +663,8 @@ def entry() -> None:
         err.show()
         sys.exit(err.exit_code)
     except OSError as err:
+        if err.errno not in OUTPUT_ERRORS:
+            raise
         with contextlib.suppress(OSError):
             click.echo(f"error: cannot write the output: {err.strerror or err}", err=True)
         with contextlib.suppress(OSError):  # nothing more reaches the broken stream at exit

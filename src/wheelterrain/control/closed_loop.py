@@ -43,7 +43,12 @@ RECORD = ("time", "slip", "slip_reference", "command", "wheel_speed", "motor_tor
 RECORD_UNITS = {"slip_reference": "1", "command": "rad/s", "soil_torque": "N.m",
                 "phi_estimate": "rad", "k_phi_estimate": "1", "phi_true": "rad",
                 "k_phi_true": "1"}
-"""Units of the recorded columns that are not FMU variables (the rest: slaves.variable_units)."""
+"""Units of the recorded columns that are not FMU variables (the rest: variables.units)."""
+
+
+def record_units() -> dict[str, str]:
+    """The unit of every RECORD column (the result CSV's header)."""
+    return {**variables.units(), **RECORD_UNITS}
 ESTIMATED = ("soil.phi", "soil.k_phi")
 
 

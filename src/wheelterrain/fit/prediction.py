@@ -205,6 +205,12 @@ def unfitted(name: str) -> ParameterSet:
     return presets.load(provenance["base_preset"]).with_values(provenance.get("overrides", {}))
 
 
+def step_count() -> int:
+    """How many rows :func:`run` reports progress for: the line's three protocols, and per
+    shipped preset three protocols and two transfer wheels."""
+    return 3 + 5 * len(presets.available())
+
+
 def run(progress: Callable[[str], None] | None = None, starts: int = 4) -> dict:
     """Every row of ``wheelterrain validate``: the line, each shipped preset as it is, the
     paper's protocol per preset, leave-one-out per preset, and the Ding 2011 transfer."""

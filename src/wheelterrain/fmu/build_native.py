@@ -57,7 +57,7 @@ def _c_double(x: float) -> str:
     return repr(float(x))
 
 
-def _model_vars(model: str, root: ET.Element) -> tuple[str, dict[str, int]]:
+def _model_vars(model: str, root: ET.Element) -> str:
     variables = {v.name: v for v in VARIABLES[model]()}
     scalars = list(root.find("ModelVariables"))
     rows, vr_of = [], {}
@@ -96,7 +96,7 @@ def _model_vars(model: str, root: ET.Element) -> tuple[str, dict[str, int]]:
         *_hook_config(model, vr_of),
         "",
     ])
-    return text, vr_of
+    return text
 
 
 def _int_list(values) -> str:
@@ -180,8 +180,7 @@ def build(out: Path, models: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig"
                 root = ET.fromstring(z.read("modelDescription.xml"))
             src = tmp / model / "sources"
             src.mkdir(parents=True)
-            vars_h, _ = _model_vars(model, root)
-            (src / "model_vars.h").write_text(vars_h)
+            (src / "model_vars.h").write_text(_model_vars(model, root))
             shutil.copyfile(source_dir() / "native" / HOOKS[model], src / "model_hooks.c")
             _casadi_source(model, src)
             shutil.copyfile(source_dir() / "native" / "fmi2_native.c", src / "fmi2_native.c")
