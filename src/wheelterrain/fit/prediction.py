@@ -217,10 +217,10 @@ def run(progress: Callable[[str], None] | None = None, starts: int = 4) -> dict:
     cases = calibration.paper_cases()
     rows: list[dict] = []
 
-    def add(row: Row) -> None:
-        rows.append(row.as_dict())
+    def add(row: Row | dict) -> None:
+        rows.append(row.as_dict() if isinstance(row, Row) else row)
         if progress:
-            progress(f"{row.model} {row.protocol}")
+            progress(f"{rows[-1]['model']} {rows[-1]['protocol']}")
 
     for protocol in ("all-case", "leave-one-out", "c2-only"):
         add(line_row(protocol, cases))
@@ -241,10 +241,8 @@ def run(progress: Callable[[str], None] | None = None, starts: int = 4) -> dict:
                 t = transfer_errors(ps, wheel)
             except WheelTerrainError as exc:  # reported, not hidden
                 t = {"drawbar_pull_mae": None, "sinkage_mae": None, "error": str(exc)}
-            rows.append({"model": name, "protocol": "transfer", "free": [], "in_sample": False,
-                         "data": f"{label} ({DING_SOURCE})", **t})
-            if progress:
-                progress(f"{name} transfer {label}")
+            add({"model": name, "protocol": "transfer", "free": [], "in_sample": False,
+                 "data": f"{label} ({DING_SOURCE})", **t})
     return {"rows": rows, "load": LOAD, "transfer_load": DING_LOAD,
             "units": {"drawbar_pull_mae": "N", "sinkage_mae": "m", "torque_mae": "N.m"}}
 
