@@ -18,6 +18,16 @@ static void load_params(Instance *c, casadi_real *p) {
     for (int k = 0; k < N_P; k++) p[k] = c->b.v[P_VRS[k]];
 }
 
+/* The arguments rig_outputs and rig_step share: arg[0] the state, arg[1] the inputs u,
+   arg[2] the parameters p (u and p are the caller's buffers, filled here). */
+static void bind_state_inputs_params(Instance *c, casadi_real *u, casadi_real *p) {
+    for (int k = 0; k < N_U; k++) u[k] = c->b.v[IN_VRS[k]];
+    load_params(c, p);
+    c->arg[0] = c->b.s;
+    c->arg[1] = u;
+    c->arg[2] = p;
+}
+
 static void model_initialize(Instance *c) {
     casadi_real p[N_P];
     load_params(c, p);
@@ -33,11 +43,7 @@ static int model_refresh(Instance *c, char *message) {
     casadi_real u[N_U], p[N_P], y[N_OUT];
     int k;
     (void)message;
-    for (k = 0; k < N_U; k++) u[k] = c->b.v[IN_VRS[k]];
-    load_params(c, p);
-    c->arg[0] = c->b.s;
-    c->arg[1] = u;
-    c->arg[2] = p;
+    bind_state_inputs_params(c, u, p);
     c->arg[3] = &c->b.s[N_X];
     c->res[0] = y;
     rig_outputs(c->arg, c->res, c->iw, c->w, 0);
@@ -49,11 +55,7 @@ static void model_step(Instance *c, double t, double h) {
     casadi_real u[N_U], p[N_P], x_next[N_X], torque;
     int k;
     (void)t;
-    for (k = 0; k < N_U; k++) u[k] = c->b.v[IN_VRS[k]];
-    load_params(c, p);
-    c->arg[0] = c->b.s;
-    c->arg[1] = u;
-    c->arg[2] = p;
+    bind_state_inputs_params(c, u, p);
     c->arg[3] = &h;
     c->res[0] = x_next;
     c->res[1] = &torque;
