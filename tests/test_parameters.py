@@ -9,7 +9,7 @@ import pytest
 from wheelterrain import presets
 from wheelterrain.errors import InputError, ParameterError
 from wheelterrain.model.slip import paper_from_traction, to_traction, traction_from_paper
-from wheelterrain.parameters import TABLE, ParameterSet, parse_assignments
+from wheelterrain.parameters import TABLE, ParameterSet, lookup, parse_assignments
 
 
 def test_every_row_is_complete_and_its_default_valid():
@@ -86,3 +86,23 @@ def test_plausible_ranges_are_a_column_inside_the_validity_range():
         assert p.plausible == (lo, hi, source)
         assert p.min <= lo < hi <= p.max, name
         assert source
+
+
+def test_rig_parameters_are_rows_of_the_one_table_and_each_fmu_takes_its_own():
+    """The rig's parameters are rows of parameters.ROWS (fmu column SingleWheelRig); each FMU's
+    parameter variables are exactly its rows, in table order, and the terrain model's parameter
+    vector (TABLE) holds no rig row."""
+    from wheelterrain.fmu import variables
+    from wheelterrain.model import rig
+    from wheelterrain.parameters import RIG_FMU, ROWS, TABLE, TERRAIN_FMU
+
+    assert tuple(p for p in ROWS if p.fmu == RIG_FMU) == rig.RIG_TABLE
+    assert tuple(p for p in ROWS if p.fmu == TERRAIN_FMU) == TABLE
+    assert {p.fmu for p in ROWS} == {RIG_FMU, TERRAIN_FMU}
+    for fmu, build in ((TERRAIN_FMU, variables.terrain_variables),
+                       (RIG_FMU, variables.rig_variables)):
+        params = [v.name for v in build() if v.causality == "parameter"]
+        assert params[:len([p for p in ROWS if p.fmu == fmu])] == [
+            p.name for p in ROWS if p.fmu == fmu]
+    with pytest.raises(ParameterError, match="belongs to the rig"):
+        lookup("rig.load")

@@ -1,10 +1,11 @@
-"""The one table of wheel, grouser, soil, ripple and model parameters.
+"""The one table of wheel, grouser, soil, ripple, model and rig parameters.
 
 Every other face of the project (the CasADi functions, the FMU variables, the CLI's ``--set`` keys,
-the JSON printed by ``wheelterrain params``) is generated from :data:`TABLE`. A parameter has a
-structured name (``soil.phi``), an SI unit, a default, a closed valid range ``[min, max]``, a
-description and the source of its default. Presets (see :mod:`wheelterrain.presets`) override the
-defaults with documented values.
+the JSON printed by ``wheelterrain params``, calibration's plausible ranges) is generated from
+:data:`ROWS`: :data:`TABLE`, the terrain model's parameters, then :data:`RIG_TABLE`, the rig's.
+A parameter has a structured name (``soil.phi``), an SI unit, a default, a closed valid range
+``[min, max]``, a description, the source of its default and the FMU that carries it.
+Presets (see :mod:`wheelterrain.presets`) override the defaults with documented values.
 
 Ranges are *validity* ranges: the model is defined, finite and tested at every corner of the box
 they span (see ``tests/test_robustness.py``). Values outside are rejected with an error that names
@@ -23,6 +24,7 @@ import numpy as np
 from wheelterrain.errors import ParameterError
 
 DEG = math.pi / 180.0
+TERRAIN_FMU, RIG_FMU = "WheelTerrain", "SingleWheelRig"
 
 
 @dataclass(frozen=True)
@@ -47,6 +49,9 @@ class Parameter:
     plausible: tuple[float, float, str] | None = None
     """(min, max, source): the physically plausible range calibration may use, narrower than
     the validity range [min, max]; None for parameters that are not calibrated."""
+    fmu: str = TERRAIN_FMU
+    """The FMU that carries the row as a parameter: WheelTerrain (the terrain model's parameter
+    vector, :data:`TABLE`) or SingleWheelRig (the rig's, :data:`RIG_TABLE`)."""
 
     def check(self, value: float) -> float:
         """``value`` as float if valid for this parameter, else raise ParameterError."""
@@ -85,6 +90,7 @@ class Parameter:
             "kind": self.kind,
             "description": self.description,
             "source": self.source,
+            "fmu": self.fmu,
         }
         if self.quantity:
             row["quantity"] = self.quantity
@@ -249,9 +255,77 @@ TABLE: tuple[Parameter, ...] = (
        choices=MappingProxyType({0: "arc", 1: "patch"})),
 )
 
+# --- the single-wheel rig (SingleWheelRig.fmu) ------------------------------------------------
+# Same columns; ``fmu`` says which FMU carries the row. The CasADi terrain model's parameter
+# vector is TABLE (the terrain rows); the rig's is RIG_TABLE.
+STANDARD_GRAVITY = 9.80665  # m/s2
+
+
+def _R(*args, **kwargs) -> Parameter:
+    return Parameter(*args, fmu=RIG_FMU, **kwargs)
+
+
+_RIG = "The paper's single-wheel rig (Abubakar et al., Rashid rover wheel-terrain study)"
+_RIG_ROWS: tuple[Parameter, ...] = (
+    _R("rig.load", "N", 62.0, 0.0, 1.0e5,
+              "Vertical load the rig applies to the wheel axle (the paper's normal force).",
+              f"{_RIG}: ~62 N measured in every case", quantity="Force"),
+    _R("rig.mass", "kg", 62.0 / STANDARD_GRAVITY, 0.01, 1.0e4,
+              "Mass that moves vertically with the wheel (wheel, axle, dead weight).",
+              "Dead-weight reading: load / standard gravity; the paper does not state it",
+              quantity="Mass"),
+    _R("rig.rim_speed", "m/s", 0.03, 1.0e-4, 10.0,
+              "Commanded wheel rim speed omega_ref*R_ref.",
+              f"{_RIG}: 3 cm/s in C1-C4", quantity="Velocity"),
+    _R("rig.slip_paper", "1", 0.0, 0.0, 10.0,
+              "Commanded slip in the paper's definition s = (omega*R - V)/V; sets the carriage "
+              "speed V = rim_speed/(1 + s). Traction slip i = s/(1 + s).",
+              f"{_RIG}: 0, 0.25, 0.5, 0.75 in C1-C4"),
+    _R("rig.slip_radius", "m", 0.05, 0.01, 1.0,
+              "Radius R_ref the rig's slip is referenced to; must equal the terrain model's "
+              "wheel.radius + model.slip_radius_factor*grouser.height.",
+              f"{_RIG}: rim radius 0.05 m", quantity="Length"),
+    _R("rig.wheel_inertia", "kg.m2", 0.01, 1.0e-6, 100.0,
+              "Rotational inertia of wheel and motor about the axle.",
+              "Estimate: 1 kg wheel of 5 cm radius plus geared motor; the paper does not state it",
+              quantity="MomentOfInertia"),
+    _R("rig.speed_bandwidth", "rad/s", 200.0, 0.1, 1.0e4,
+              "Closed-loop bandwidth of the wheel speed controller (both poles at -bandwidth).",
+              "Design choice for a stiff geared servo. It must be: with the slip-dependent "
+              "exponent the soil softens as slip grows, so the soil torque falls with wheel "
+              "speed (dT/domega ~ -0.4 N.m.s at C2); a 20 rad/s loop (Kp = 0.4 N.m.s) then "
+              "limit-cycles, as measured", quantity="AngularVelocity"),
+    _R("rig.drive", "1", 0, 0, 2,
+              "Wheel drive: 0 = speed loop to rig.rim_speed/rig.slip_radius (the paper's rig); "
+              "1 = speed loop to the input wheel_speed_command; 2 = the input "
+              "motor_torque_command applied directly (no speed loop).",
+              "Design: 0 reproduces the paper; 1 and 2 are for external controllers "
+              "(wheelterrain.control.mpc)", kind="enum",
+              choices=MappingProxyType({0: "paper-speed-loop", 1: "speed-command",
+                                        2: "torque-command"})),
+    _R("rig.carriage", "1", 0, 0, 1,
+              "Carriage: 0 = kinematic at rim_speed/(1 + slip_paper) (the paper's rig); 1 = free, "
+              "its speed a state driven by the drawbar pull against rig.slope and "
+              "rig.towing_force, with mass rig.mass.",
+              "Design: 1 is a rover wheel carrying its share of the vehicle", kind="enum",
+              choices=MappingProxyType({0: "kinematic", 1: "free"})),
+    _R("rig.towing_force", "N", 0.0, -1.0e4, 1.0e4,
+              "Force resisting the free carriage's forward motion (a towed load, the rest of the "
+              "rover); negative pushes.", "Scenario input; 0 on the level with nothing in tow",
+              quantity="Force"),
+    _R("rig.slope", "rad", 0.0, -45 * DEG, 45 * DEG,
+              "Slope the free carriage climbs: adds rig.mass*g*sin(slope) against its motion.",
+              "Scenario input; lunar rovers are specified for ~15-25 deg slopes",
+              quantity="Angle", display_unit="deg"),
+)
+RIG_TABLE = _RIG_ROWS
+ROWS: tuple[Parameter, ...] = (*TABLE, *RIG_TABLE)
+"""Every parameter of the project, terrain rows then rig rows: the one table."""
+
 INDEX: Mapping[str, int] = MappingProxyType({p.name: k for k, p in enumerate(TABLE)})
 BY_NAME: Mapping[str, Parameter] = MappingProxyType({p.name: p for p in TABLE})
 NAMES: tuple[str, ...] = tuple(p.name for p in TABLE)
+RIG_NAMES: tuple[str, ...] = tuple(p.name for p in RIG_TABLE)
 
 
 def lookup(name: str) -> Parameter:
@@ -260,6 +334,10 @@ def lookup(name: str) -> Parameter:
         return BY_NAME[name]
     except KeyError:
         import difflib
+
+        if name in RIG_NAMES:
+            raise ParameterError(name, None, "belongs to the rig (SingleWheelRig.fmu), "
+                                 "not to the terrain model; the rig cases set it") from None
 
         close = difflib.get_close_matches(name, NAMES, n=3)
         hint = f"; did you mean {', '.join(close)}?" if close else ""

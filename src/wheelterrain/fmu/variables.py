@@ -1,7 +1,7 @@
 """The one table of the FMUs' variables: every input, output and FMU-only parameter of
 WheelTerrain.fmu and SingleWheelRig.fmu, with causality, unit, Modelica quantity, display unit,
 type, start, range, description and direct dependencies. The soil, wheel and rig parameters come
-from their own tables (:data:`wheelterrain.parameters.TABLE`, ``wheelterrain.model.rig.RIG_TABLE``).
+from the one parameter table (:data:`wheelterrain.parameters.ROWS`).
 
 Every list of FMU variable names in the project is derived from here: the order of the values
 in and out of the per-step CasADi Functions (:data:`TERRAIN_INPUTS`, :data:`TERRAIN_OUTPUTS`,
@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from wheelterrain.parameters import TABLE, Parameter
+from wheelterrain.parameters import RIG_FMU, ROWS, TERRAIN_FMU, Parameter
 
 
 @dataclass(frozen=True)
@@ -174,16 +174,15 @@ def terrain_variables() -> list[Var]:
     start = dict(presets.load(presets.DEFAULT_PRESET))
     rim_speed = rig.defaults()["rig.rim_speed"]
     starts = {"wheel_speed": rim_speed / start["wheel.radius"], "carriage_speed": rim_speed}
-    return [*(parameter_var(p, start[p.name]) for p in TABLE),
+    rows = (p for p in ROWS if p.fmu == TERRAIN_FMU)
+    return [*(parameter_var(p, start[p.name]) for p in rows),
             *(replace(v, start=starts[v.name]) if v.name in starts else v for v in TERRAIN_IO)]
 
 
 def rig_variables() -> list[Var]:
-    """SingleWheelRig.fmu's variables in value-reference order: the rig's parameter table, then
-    :data:`RIG_IO`."""
-    from wheelterrain.model import rig
-
-    return [*(parameter_var(p, p.default) for p in rig.RIG_TABLE), *RIG_IO]
+    """SingleWheelRig.fmu's variables in value-reference order: the parameter table's rig rows,
+    then :data:`RIG_IO`."""
+    return [*(parameter_var(p, p.default) for p in ROWS if p.fmu == RIG_FMU), *RIG_IO]
 
 
 def units() -> dict[str, str]:

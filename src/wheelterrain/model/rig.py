@@ -36,69 +36,12 @@ first order: halving h is how the co-simulation's convergence is checked.
 from __future__ import annotations
 
 import math
-from types import MappingProxyType
 
 import casadi as ca
 
 from wheelterrain.errors import ParameterError
-from wheelterrain.parameters import DEG, Parameter
+from wheelterrain.parameters import RIG_NAMES, RIG_TABLE, STANDARD_GRAVITY
 
-STANDARD_GRAVITY = 9.80665  # m/s2
-
-_RIG = "The paper's single-wheel rig (Abubakar et al., Rashid rover wheel-terrain study)"
-RIG_TABLE: tuple[Parameter, ...] = (
-    Parameter("rig.load", "N", 62.0, 0.0, 1.0e5,
-              "Vertical load the rig applies to the wheel axle (the paper's normal force).",
-              f"{_RIG}: ~62 N measured in every case", quantity="Force"),
-    Parameter("rig.mass", "kg", 62.0 / STANDARD_GRAVITY, 0.01, 1.0e4,
-              "Mass that moves vertically with the wheel (wheel, axle, dead weight).",
-              "Dead-weight reading: load / standard gravity; the paper does not state it",
-              quantity="Mass"),
-    Parameter("rig.rim_speed", "m/s", 0.03, 1.0e-4, 10.0,
-              "Commanded wheel rim speed omega_ref*R_ref.",
-              f"{_RIG}: 3 cm/s in C1-C4", quantity="Velocity"),
-    Parameter("rig.slip_paper", "1", 0.0, 0.0, 10.0,
-              "Commanded slip in the paper's definition s = (omega*R - V)/V; sets the carriage "
-              "speed V = rim_speed/(1 + s). Traction slip i = s/(1 + s).",
-              f"{_RIG}: 0, 0.25, 0.5, 0.75 in C1-C4"),
-    Parameter("rig.slip_radius", "m", 0.05, 0.01, 1.0,
-              "Radius R_ref the rig's slip is referenced to; must equal the terrain model's "
-              "wheel.radius + model.slip_radius_factor*grouser.height.",
-              f"{_RIG}: rim radius 0.05 m", quantity="Length"),
-    Parameter("rig.wheel_inertia", "kg.m2", 0.01, 1.0e-6, 100.0,
-              "Rotational inertia of wheel and motor about the axle.",
-              "Estimate: 1 kg wheel of 5 cm radius plus geared motor; the paper does not state it",
-              quantity="MomentOfInertia"),
-    Parameter("rig.speed_bandwidth", "rad/s", 200.0, 0.1, 1.0e4,
-              "Closed-loop bandwidth of the wheel speed controller (both poles at -bandwidth).",
-              "Design choice for a stiff geared servo. It must be: with the slip-dependent "
-              "exponent the soil softens as slip grows, so the soil torque falls with wheel "
-              "speed (dT/domega ~ -0.4 N.m.s at C2); a 20 rad/s loop (Kp = 0.4 N.m.s) then "
-              "limit-cycles, as measured", quantity="AngularVelocity"),
-    Parameter("rig.drive", "1", 0, 0, 2,
-              "Wheel drive: 0 = speed loop to rig.rim_speed/rig.slip_radius (the paper's rig); "
-              "1 = speed loop to the input wheel_speed_command; 2 = the input "
-              "motor_torque_command applied directly (no speed loop).",
-              "Design: 0 reproduces the paper; 1 and 2 are for external controllers "
-              "(wheelterrain.control.mpc)", kind="enum",
-              choices=MappingProxyType({0: "paper-speed-loop", 1: "speed-command",
-                                        2: "torque-command"})),
-    Parameter("rig.carriage", "1", 0, 0, 1,
-              "Carriage: 0 = kinematic at rim_speed/(1 + slip_paper) (the paper's rig); 1 = free, "
-              "its speed a state driven by the drawbar pull against rig.slope and "
-              "rig.towing_force, with mass rig.mass.",
-              "Design: 1 is a rover wheel carrying its share of the vehicle", kind="enum",
-              choices=MappingProxyType({0: "kinematic", 1: "free"})),
-    Parameter("rig.towing_force", "N", 0.0, -1.0e4, 1.0e4,
-              "Force resisting the free carriage's forward motion (a towed load, the rest of the "
-              "rover); negative pushes.", "Scenario input; 0 on the level with nothing in tow",
-              quantity="Force"),
-    Parameter("rig.slope", "rad", 0.0, -45 * DEG, 45 * DEG,
-              "Slope the free carriage climbs: adds rig.mass*g*sin(slope) against its motion.",
-              "Scenario input; lunar rovers are specified for ~15-25 deg slopes",
-              quantity="Angle", display_unit="deg"),
-)
-RIG_NAMES = tuple(p.name for p in RIG_TABLE)
 RIG_INDEX = {name: k for k, name in enumerate(RIG_NAMES)}
 
 STATES = ("sinkage", "sinkage_rate", "wheel_speed", "speed_error_integral", "carriage_speed")
