@@ -40,7 +40,7 @@ def main() -> None:
     controller = mpc.Controller(settings, p_rig)
     p_terrain = np.array([soil[name] for name in NAMES])
     omega, speed = rig.references(p_rig)
-    x_now = np.array([0.0144, 0.0, omega, 0.0027, speed, 0.0])  # mpc.STATES
+    x_now = np.array([0.0144, 0.0, omega, 0.0027, speed, 0.0])  # mpc.MPC_STATES
     step = controller.solve(x_now, p_terrain, args.reference, omega)
     print(f"one solve: command {step.command:.4f} rad/s in {1e3 * step.solve_time:.1f} ms, "
           f"{step.iterations} SQP iterations ({step.status})")

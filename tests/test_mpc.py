@@ -53,7 +53,7 @@ def test_interval_jacobian_matches_central_differences():
                     3: np.array([max(abs(v), 1e-2 * (t.max - t.min), 1e-3)
                                  for v, t in zip(PT, TABLE, strict=True)])}
     for arg, scales in input_scales.items():
-        analytic = np.array(blocks[arg]).reshape(len(mpc.STATES), -1) * scales
+        analytic = np.array(blocks[arg]).reshape(len(mpc.MPC_STATES), -1) * scales
         base = np.atleast_1d(np.asarray(args[arg], dtype=float))
         numeric = np.zeros_like(analytic)
         for j in range(base.size):

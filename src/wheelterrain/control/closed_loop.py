@@ -153,7 +153,7 @@ class CasadiPlant:
 
     def _forces(self) -> np.ndarray:
         """The terrain's outputs (TERRAIN_OUTPUTS) at the rig's state, its inputs by name."""
-        given = {**dict(zip(rig.STATES, self.x, strict=True)), "load": self.p_rig["rig.load"]}
+        given = {**dict(zip(rig.RIG_STATES, self.x, strict=True)), "load": self.p_rig["rig.load"]}
         u = [given[n] for n in fmu_model.TERRAIN_INPUTS]
         y, status, info = self.terrain(u, self.angle, self.p)
         if int(status) != fmu_model.STATUS_OK:
@@ -206,15 +206,15 @@ class FMUPlant:
         self.rig.set(values)
 
     def state(self) -> np.ndarray:
-        """mpc.STATES: the rig's states (rig.STATES), then the terrain's wheel angle."""
-        return np.array([*self.rig.get(rig.STATES), *self.terrain.get(("wheel_angle",))])
+        """mpc.MPC_STATES: the rig's states (rig.RIG_STATES), then the terrain's wheel angle."""
+        return np.array([*self.rig.get(rig.RIG_STATES), *self.terrain.get(("wheel_angle",))])
 
     def advance(self, command: float, steps: int, record: Callable) -> None:
         for _ in range(steps):
             r, y = self.pair.exchange((command,))
             rv = dict(zip(self._rig_names, r, strict=True))
             tv = dict(zip(self._terrain_names, y, strict=True))
-            record(tuple(rv[n] for n in rig.STATES), tv["wheel_angle"],
+            record(tuple(rv[n] for n in rig.RIG_STATES), tv["wheel_angle"],
                    [tv[n] for n in fmu_model.TERRAIN_OUTPUTS], rv["motor_torque"])
             try:
                 self.pair.step(self.t, PLANT_STEP)
@@ -245,7 +245,7 @@ class SoilEstimator:
     def __init__(self, p: np.ndarray, load: float, interval: float) -> None:
         terrain, _ = fmu_model.terrain_functions()
         theta = ca.MX.sym("theta", len(ESTIMATED))
-        x = ca.MX.sym("x", len(mpc.STATES))
+        x = ca.MX.sym("x", len(mpc.MPC_STATES))
         pt = ca.MX.sym("p", len(NAMES))
         nominal = np.array([p[INDEX[name]] for name in ESTIMATED])
         scaled = ca.vertcat(*(pt[INDEX[n]] if n not in ESTIMATED
@@ -265,7 +265,7 @@ class SoilEstimator:
         self.projections = 0
 
     def update(self, x: np.ndarray, measured: np.ndarray) -> np.ndarray:
-        """One predict-update with the state ``x`` (mpc.STATES) and the forces measured
+        """One predict-update with the state ``x`` (mpc.MPC_STATES) and the forces measured
         there; returns the table parameter vector with the estimates."""
         self.P = self.P + self.Q
         y, H = (np.array(v) for v in self.measure(self.theta, x, self.p))
@@ -378,9 +378,9 @@ def _loop(scenario, ps, plant_name, settings, steps, p_rig, plant, progress, sta
     settle_steps = round(scenario.settle / PLANT_STEP)
 
     def record(x, angle, y, motor_torque):
-        """One plant sample: x the rig's states (rig.STATES), y the terrain's outputs
+        """One plant sample: x the rig's states (rig.RIG_STATES), y the terrain's outputs
         (TERRAIN_OUTPUTS); the row holds RECORD, by name."""
-        xs = dict(zip(rig.STATES, x, strict=True))
+        xs = dict(zip(rig.RIG_STATES, x, strict=True))
         ys = dict(zip(fmu_model.TERRAIN_OUTPUTS, y, strict=True))
         last.update(x=np.array([*x, angle]),
                     forces=np.array([ys["normal_force"], ys["drawbar_pull"]]))

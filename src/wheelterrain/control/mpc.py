@@ -4,7 +4,7 @@ Prediction model
     The WheelTerrain FMU's Function ``terrain_dynamic`` (the full contact model, grouser ripple
     included, at the wheel's sinkage, sinkage rate, speeds and angle) closed by the rig's
     equations :func:`wheelterrain.model.rig.rates` in the same drive and carriage mode as the plant.
-    States (STATES): sinkage, sinkage rate, wheel speed, the speed loop's integral, carriage
+    States (MPC_STATES): sinkage, sinkage rate, wheel speed, the speed loop's integral, carriage
     speed, wheel angle. No surrogate: the prediction differs from the co-simulated plant only by
     its discretisation.
 
@@ -49,7 +49,7 @@ from wheelterrain.fmu import functions as fmu_model
 from wheelterrain.model import rig
 from wheelterrain.parameters import NAMES
 
-STATES = (*rig.STATES, "wheel_angle")
+MPC_STATES = (*rig.RIG_STATES, "wheel_angle")
 OUTPUTS = ("slip", "drawbar_pull", "normal_force", "soil_torque", "motor_torque", "power")
 REGULARISATION = 1e-4  # Levenberg-Marquardt term on the Gauss-Newton Hessian (slip terms ~1e6)
 SLIP_SCALE = 1e-3  # slip error of weight 1 in the tracking objective
@@ -105,19 +105,19 @@ class Settings:
 @lru_cache(maxsize=1)
 def dynamics() -> ca.Function:
     """``dynamics(x, command, p_terrain, p_rig) -> (xdot, y)``: the continuous prediction model
-    (x = STATES, y = OUTPUTS) from the FMUs' Functions: terrain_dynamic and rig.rates."""
+    (x = MPC_STATES, y = OUTPUTS) from the FMUs' Functions: terrain_dynamic and rig.rates."""
     terrain, _ = fmu_model.terrain_functions()
-    x = ca.MX.sym("x", len(STATES))
+    x = ca.MX.sym("x", len(MPC_STATES))
     command = ca.MX.sym("command")
     pt, pr = ca.MX.sym("p_terrain", len(NAMES)), ca.MX.sym("p_rig", len(rig.RIG_NAMES))
     named = rig.named(pr)
-    z, z_rate, omega, _, speed, angle = (x[k] for k in range(len(STATES)))
+    z, z_rate, omega, _, speed, angle = (x[k] for k in range(len(MPC_STATES)))
     u = ca.vertcat(z, z_rate, omega, speed, named["rig.load"])
     y = terrain(u, angle, pt)[0]
     out = dict(zip(fmu_model.TERRAIN_OUTPUTS, ca.vertsplit(y), strict=True))
     # the command is the speed loop's reference (rig.drive 1) or the torque (rig.drive 2)
     inputs = (out["normal_force"], out["drawbar_pull"], out["torque"], command, command)
-    x_rig = tuple(x[k] for k in range(len(rig.STATES)))
+    x_rig = tuple(x[k] for k in range(len(rig.RIG_STATES)))
     xdot = ca.vertcat(*rig.rates(x_rig, inputs, named), omega)
     motor = rig.motor_torque(x_rig, inputs, named)
     outputs = ca.vertcat(out["slip"], out["drawbar_pull"], out["normal_force"], out["torque"],
@@ -131,7 +131,7 @@ def interval_residual() -> ca.Function:
     """``interval(x0, x1, command, p_terrain, p_rig, h) -> (residual, y1)``: backward Euler
     x1 - x0 - h*f(x1, command) and the outputs at the interval's end."""
     f = dynamics()
-    x0, x1 = ca.MX.sym("x0", len(STATES)), ca.MX.sym("x1", len(STATES))
+    x0, x1 = ca.MX.sym("x0", len(MPC_STATES)), ca.MX.sym("x1", len(MPC_STATES))
     command, h = ca.MX.sym("command"), ca.MX.sym("h")
     pt, pr = ca.MX.sym("p_terrain", len(NAMES)), ca.MX.sym("p_rig", len(rig.RIG_NAMES))
     xdot, y = f(x1, command, pt, pr)
@@ -144,7 +144,7 @@ def interval_step() -> ca.Function:
     """``step(x0, command, p_terrain, p_rig, h) -> (x1, y1)``: one backward-Euler interval
     solved by Newton (for forward rollouts: the first guess and the shift's last interval)."""
     residual = interval_residual()
-    x0, x1 = ca.MX.sym("x0", len(STATES)), ca.MX.sym("x1", len(STATES))
+    x0, x1 = ca.MX.sym("x0", len(MPC_STATES)), ca.MX.sym("x1", len(MPC_STATES))
     command, h = ca.MX.sym("command"), ca.MX.sym("h")
     pt, pr = ca.MX.sym("p_terrain", len(NAMES)), ca.MX.sym("p_rig", len(rig.RIG_NAMES))
     g = ca.Function("g", [x1, ca.vertcat(x0, command, pt, pr, h)],
@@ -183,7 +183,7 @@ def stiffness(pt: np.ndarray, pr: dict, x: np.ndarray, command: float) -> np.nda
     """Eigenvalues [1/s] of the prediction model's Jacobian d(xdot)/dx at ``x`` (without the
     wheel angle, a pure integrator), in the drive mode of ``pr``."""
     f = dynamics()
-    xs = ca.MX.sym("x", len(STATES))
+    xs = ca.MX.sym("x", len(MPC_STATES))
     jac = ca.Function("a", [xs], [ca.jacobian(f(xs, command, pt, _vector(pr))[0], xs)])
     a = np.array(jac(x))[:5, :5]
     keep = [0, 1, 2] + ([3] if pr["rig.drive"] != rig.DRIVE_TORQUE else []) + (
@@ -226,7 +226,7 @@ class Controller:
 
     # --- the NLP --------------------------------------------------------------------------
     def _build(self) -> None:
-        s, n, nx = self.settings, self.settings.horizon, len(STATES)
+        s, n, nx = self.settings, self.settings.horizon, len(MPC_STATES)
         # scale of each state in the NLP's variables: m, m/s, rad/s, rad, m/s, rad
         self.x_scale = x_scale = np.array([1e-2, 1e-2, self.command_scale, 1e-2, 1e-2, 1.0])
         u_hat, x_hat = ca.MX.sym("u", n), ca.MX.sym("x", nx, n)
@@ -244,7 +244,7 @@ class Controller:
         named = rig.named(pr)
         omega, speed = xs[2, :].T, xs[4, :].T
         slip, _, _ = fmu_model.slips(omega, speed, fmu_model.slip_radius(pt))
-        motor = rig.motor_torque(tuple(xs[k, :].T for k in range(len(rig.STATES))),
+        motor = rig.motor_torque(tuple(xs[k, :].T for k in range(len(rig.RIG_STATES))),
                                  (0, 0, 0, u, u), named)
         power = motor * omega
         moves = ca.diff(ca.vertcat(previous, u)) / self.command_scale
@@ -309,7 +309,7 @@ class Controller:
 
     # --- solving -----------------------------------------------------------------------------
     def rollout(self, x_now: np.ndarray, commands: np.ndarray, pt: np.ndarray) -> np.ndarray:
-        """States (len(STATES) x horizon) of the prediction model under ``commands``."""
+        """States (len(MPC_STATES) x horizon) of the prediction model under ``commands``."""
         step = interval_step()
         xs, x = [], np.asarray(x_now, dtype=float)
         for c in commands:
@@ -318,7 +318,7 @@ class Controller:
         return np.array(xs).T
 
     def solve(self, x_now, pt, reference, previous: float) -> Step:
-        """Solve the NLP at state ``x_now`` (STATES) with soil ``pt`` and the slip ``reference``
+        """Solve the NLP at state ``x_now`` (MPC_STATES) with soil ``pt`` and the slip ``reference``
         (scalar or one per interval); ``previous`` is the command applied until now."""
         n = self.settings.horizon
         x_now = np.asarray(x_now, dtype=float)
@@ -347,7 +347,7 @@ class Controller:
     def _shift(self, w: np.ndarray, pt: np.ndarray) -> None:
         """Warm start for the next solve: the solution moved one interval on, its last
         interval repeated with the last command."""
-        n, nx = self.settings.horizon, len(STATES)
+        n, nx = self.settings.horizon, len(MPC_STATES)
         u, x = w[:n], w[n:].reshape(n, nx)
         last = self.rollout(x[-1] * self.x_scale, [u[-1] * self.command_scale], pt)[:, 0]
         self.guess = np.concatenate([np.append(u[1:], u[-1]),

@@ -30,7 +30,7 @@ import numpy as np
 
 from wheelterrain import data
 from wheelterrain.errors import FMUError
-from wheelterrain.fmu.variables import COUPLED_FORCES, COUPLED_STATES
+from wheelterrain.fmu.variables import COUPLED_FORCES, COUPLED_STATES, RIG_IO, TERRAIN_IO
 from wheelterrain.model import rig
 from wheelterrain.model.slip import reference_radius
 from wheelterrain.parameters import TABLE, ParameterSet
@@ -175,6 +175,15 @@ class Coupling:
         self._ter_out = terrain.refs((*COUPLED_FORCES, *terrain_extra))
         self._rig_in = rig_fmu.refs((*COUPLED_FORCES, *commands))
         self._states, self._forces = len(COUPLED_STATES), len(COUPLED_FORCES)
+        self.read = (*COUPLED_STATES, *rig_extra, *COUPLED_FORCES, *terrain_extra)
+        """What one :meth:`exchange` reads, by name, in the order of its two lists joined."""
+
+    def positions(self, names) -> list[int]:
+        """Where each of ``names`` sits in the two lists of :meth:`exchange` joined (x + y)."""
+        missing = [n for n in names if n not in self.read]
+        if missing:
+            raise ValueError(f"the exchange does not read {', '.join(missing)}")
+        return [self.read.index(n) for n in names]
 
     def exchange(self, commands: tuple = ()) -> tuple[list[float], list[float]]:
         """One exchange; returns (rig outputs: COUPLED_STATES + rig_extra, terrain outputs: forces +
@@ -190,6 +199,12 @@ class Coupling:
         self.terrain.fmu.doStep(t, h)
 
 
+def _extra(names, io, coupled) -> tuple[str, ...]:
+    """Those of ``names`` that are outputs in ``io`` and not already read as ``coupled``."""
+    outputs = {v.name for v in io if v.causality == "output"}
+    return tuple(n for n in names if n in outputs and n not in coupled)
+
+
 def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, rim_speed: float,
              case: str = "", stop: float = STOP_TIME, step: float = STEP,
              unzipped: dict[str, str] | None = None, settle: float = SETTLE_TIME) -> CaseResult:
@@ -203,15 +218,19 @@ def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, ri
     terrain, rig_fmu = start_pair(paths, unzipped, ps,
                                   rig_parameters(ps, slip_paper, load, rim_speed), stop)
     try:
-        pair = Coupling(terrain, rig_fmu, rig_extra=("motor_torque",),
-                        terrain_extra=("slip", "slip_paper", "wheel_angle"))
+        pair = Coupling(terrain, rig_fmu,
+                        rig_extra=_extra(RECORD, RIG_IO, COUPLED_STATES),
+                        terrain_extra=_extra(RECORD, TERRAIN_IO, COUPLED_FORCES))
         exchange, advance = pair.exchange, pair.step
+        where = pair.positions(RECORD)
         n = round(stop / step)
         data = np.empty((n + 1, len(RECORD) + 1))
         for k in range(n + 1):
             t = k * step
             x, y = exchange()
-            data[k] = (t, x[0], y[0], y[1], y[2], y[3], y[4], x[2], x[3], x[4], y[5])
+            xy = x + y
+            data[k, 0] = t
+            data[k, 1:] = [xy[j] for j in where]
             if k < n:
                 advance(t, step)
     finally:

@@ -23,7 +23,7 @@ from wheelterrain.parameters import TABLE, ParameterSet
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
       "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
       "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues"}
-STATES, FORCES = variables.COUPLED_STATES, variables.COUPLED_FORCES  # the connections
+COUPLED_STATES, FORCES = variables.COUPLED_STATES, variables.COUPLED_FORCES  # the connections
 RIG_OUTPUTS = variables.RIG_OUTPUTS  # every output of each FMU is a connector
 TERRAIN_OUTPUTS = tuple(v.name for v in variables.TERRAIN_IO if v.causality == "output")
 
@@ -66,10 +66,10 @@ def system_description(case: str, ps: ParameterSet, slip_paper: float, load: flo
     rig_params = {p.name: _binding(p, rig_values[p.name]) for p in rig.RIG_TABLE}
     _component(elements, "rig", "resources/SingleWheelRig.fmu", FORCES, RIG_OUTPUTS, rig_params,
                case)
-    _component(elements, "terrain", "resources/WheelTerrain.fmu", STATES, TERRAIN_OUTPUTS,
+    _component(elements, "terrain", "resources/WheelTerrain.fmu", COUPLED_STATES, TERRAIN_OUTPUTS,
                terrain_params, case)
     connections = ET.SubElement(system, _q("ssd", "Connections"))
-    for n in STATES:
+    for n in COUPLED_STATES:
         ET.SubElement(connections, _q("ssd", "Connection"), startElement="rig",
                       startConnector=n, endElement="terrain", endConnector=n)
     for n in FORCES:

@@ -138,10 +138,10 @@ def terrain_functions() -> tuple[ca.Function, ca.Function]:
 
 
 def rig_outputs(x, u, p, motor_torque):
-    """RIG_OUTPUTS, in that order, from the rig state x (rig.STATES), the inputs u
+    """RIG_OUTPUTS, in that order, from the rig state x (rig.RIG_STATES), the inputs u
     (RIG_INPUTS), the rig parameters ``p[name]`` and the motor torque; plain arithmetic on
     floats or CasADi symbols. Named, so an output reaches the right place whatever the order."""
-    state = dict(zip(rig.STATES, x, strict=True))
+    state = dict(zip(rig.RIG_STATES, x, strict=True))
     inputs = dict(zip(RIG_INPUTS, u, strict=True))
     out = {"sinkage": state["sinkage"], "sinkage_rate": state["sinkage_rate"],
            "wheel_speed": state["wheel_speed"], "carriage_speed": state["carriage_speed"],
@@ -156,10 +156,10 @@ def rig_outputs(x, u, p, motor_torque):
 @lru_cache(maxsize=1)
 def rig_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
     """(rig_step, rig_outputs, rig_initial(p) -> x0)."""
-    x, u = ca.SX.sym("x", len(rig.STATES)), ca.SX.sym("u", len(rig.INPUTS))
+    x, u = ca.SX.sym("x", len(rig.RIG_STATES)), ca.SX.sym("u", len(rig.INPUTS))
     p, torque = ca.SX.sym("p", len(rig.RIG_NAMES)), ca.SX.sym("motor_torque")
     named = rig.named(p)
-    y = rig_outputs(tuple(x[k] for k in range(len(rig.STATES))),
+    y = rig_outputs(tuple(x[k] for k in range(len(rig.RIG_STATES))),
                     tuple(u[k] for k in range(len(rig.INPUTS))), named, torque)
     outputs = ca.Function("rig_outputs", [x, u, p, torque], [ca.vertcat(*y)],
                           ["x", "u", "p", "motor_torque"], ["y"])

@@ -44,7 +44,7 @@ from wheelterrain.parameters import RIG_NAMES, RIG_TABLE, STANDARD_GRAVITY
 
 RIG_INDEX = {name: k for k, name in enumerate(RIG_NAMES)}
 
-STATES = ("sinkage", "sinkage_rate", "wheel_speed", "speed_error_integral", "carriage_speed")
+RIG_STATES = ("sinkage", "sinkage_rate", "wheel_speed", "speed_error_integral", "carriage_speed")
 FORCE_INPUTS = ("normal_force", "drawbar_pull", "torque")
 COMMANDS = ("wheel_speed_command", "motor_torque_command")
 INPUTS = (*FORCE_INPUTS, *COMMANDS)
@@ -102,7 +102,7 @@ def _sin(angle):
 
 
 def rates(x, u, p) -> tuple:
-    """dx/dt of the rig (STATES) in state ``x`` with inputs ``u`` (INPUTS): the continuous
+    """dx/dt of the rig (RIG_STATES) in state ``x`` with inputs ``u`` (INPUTS): the continuous
     equations that :func:`step` integrates, for controllers' prediction models."""
     z_rate, omega = x[1], x[2]
     loop = p["rig.drive"] != DRIVE_TORQUE
@@ -114,7 +114,7 @@ def rates(x, u, p) -> tuple:
 
 
 def step(x, u, p, h):
-    """Advance the rig state ``x`` (STATES) over ``h`` with the inputs ``u`` (INPUTS: soil forces
+    """Advance the rig state ``x`` (RIG_STATES) over ``h`` with inputs ``u`` (INPUTS: soil forces
     and commands) held. ``p`` maps rig parameter names to values. Works on floats and on CasADi
     symbols.
 
@@ -153,9 +153,9 @@ def initial_state(p) -> tuple:
 def build() -> ca.Function:
     """``rig_step(x, u, p, h) -> (x_next, motor_torque)`` as a CasADi Function, traced from
     :func:`step` (for generated C)."""
-    x, u = ca.SX.sym("x", len(STATES)), ca.SX.sym("u", len(INPUTS))
+    x, u = ca.SX.sym("x", len(RIG_STATES)), ca.SX.sym("u", len(INPUTS))
     p, h = ca.SX.sym("p", len(RIG_NAMES)), ca.SX.sym("h")
-    nxt, torque = step(tuple(x[k] for k in range(len(STATES))),
+    nxt, torque = step(tuple(x[k] for k in range(len(RIG_STATES))),
                        tuple(u[k] for k in range(len(INPUTS))), named(p), h)
     return ca.Function("rig_step", [x, u, p, h], [ca.vertcat(*nxt), torque],
                        ["x", "u", "p", "h"], ["x_next", "motor_torque"])
