@@ -28,10 +28,8 @@ from fmpy import extract
 
 from wheelterrain import presets
 from wheelterrain.cosim import master as cosim
+from wheelterrain.fmu.instance import Instance
 from wheelterrain.model import contact
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from fmu_support import Instance
 
 
 def per_call(fn, n: int, repeats: int) -> float:

@@ -105,8 +105,9 @@ def test_an_fmu_built_from_another_table_is_named_not_a_key_error():
     """A stale FMU (built before a table row existed) gets one sentence saying what to do; the
     CLI turns it into exit code 2 (reproduce, sweep and mpc catch FMUError)."""
     from wheelterrain.errors import FMUError
+    from wheelterrain.fmu.instance import set_values
 
     with pytest.raises(FMUError, match=r"old/WheelTerrain\.fmu has no variable "
                                        r"'soil\.phi' \(1 missing\).*wheelterrain build"):
-        cosim.set_values(None, {}, {"soil.n0": "Real"}, {"soil.phi": 0.4},
-                         where="old/WheelTerrain.fmu")
+        set_values(None, {}, {"soil.n0": "Real"}, {"soil.phi": 0.4},
+                   where="old/WheelTerrain.fmu")

@@ -14,8 +14,8 @@ from fmpy import extract, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from fmu_support import Instance
 from wheelterrain import model, presets
+from wheelterrain.fmu.instance import Instance
 from wheelterrain.parameters import TABLE
 
 NAMES = ("WheelTerrain", "SingleWheelRig")
@@ -31,11 +31,13 @@ def fmus(fmu_dir):
 
 
 def terrain(fmus, name="terrain", **values):
-    return Instance(fmus["WheelTerrain"], fmus["unzip"]["WheelTerrain"], name).start(values)
+    return Instance(fmus["WheelTerrain"], fmus["unzip"]["WheelTerrain"], name,
+                    log=True).start(values)
 
 
 def rig(fmus, name="rig", **values):
-    return Instance(fmus["SingleWheelRig"], fmus["unzip"]["SingleWheelRig"], name).start(values)
+    return Instance(fmus["SingleWheelRig"], fmus["unzip"]["SingleWheelRig"], name,
+                    log=True).start(values)
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -100,7 +102,7 @@ def test_dynamic_mode_matches_contact_forces(fmus):
     ps = presets.load(presets.DEFAULT_PRESET)
     t = terrain(fmus, sinkage=0.03, sinkage_rate=0.002, wheel_speed=0.6, carriage_speed=0.024)
     try:
-        got = t.get("normal_force", "drawbar_pull", "torque", "slip", "wheel_angle")
+        got = t.get(("normal_force", "drawbar_pull", "torque", "slip", "wheel_angle"))
         want = model.contact_forces(ps, 0.03, got[3], sinkage_rate=0.002, wheel_angle=got[4])
         for k, key in enumerate(("normal_force", "drawbar_pull", "torque")):
             assert got[k] == pytest.approx(want[key], rel=1e-12)
@@ -117,7 +119,7 @@ def test_braking_and_driving_use_the_contact_models_slip(fmus, slip):
     speed = omega * ps["wheel.radius"] * (1 - slip)
     t = terrain(fmus, sinkage=0.02, wheel_speed=omega, carriage_speed=speed)
     try:
-        got = t.get("normal_force", "drawbar_pull", "torque", "slip", "wheel_angle")
+        got = t.get(("normal_force", "drawbar_pull", "torque", "slip", "wheel_angle"))
         assert got[3] == pytest.approx(slip, rel=1e-12)
         want = model.contact_forces(ps, 0.02, slip, wheel_angle=got[4])
         for k, key in enumerate(("normal_force", "drawbar_pull", "torque")):
@@ -150,19 +152,19 @@ def test_several_instances_and_both_fmus_in_one_process(fmus):
     r1 = rig(fmus, "r1")
     r2 = rig(fmus, "r2", **{"rig.load": 40.0, "rig.slip_paper": 0.5})
     try:
-        fa, fb = a.get("drawbar_pull"), b.get("drawbar_pull")
+        fa, fb = a.value("drawbar_pull"), b.value("drawbar_pull")
         assert fa != fb  # independent parameters and inputs
         for k in range(20):
             for inst in (a, b, r1, r2):
                 inst.fmu.doStep(k * 1e-3, 1e-3)
-        assert a.get("wheel_angle") == pytest.approx(20 * 0.6e-3)
+        assert a.value("wheel_angle") == pytest.approx(20 * 0.6e-3)
         single = terrain(fmus, "single", sinkage=0.02, wheel_speed=0.6, carriage_speed=0.03)
         for k in range(20):
             single.fmu.doStep(k * 1e-3, 1e-3)
-        assert single.get("drawbar_pull") == a.get("drawbar_pull")
+        assert single.value("drawbar_pull") == a.value("drawbar_pull")
         single.close()
-        assert r2.get("carriage_speed") == pytest.approx(0.03 / 1.5)
-        assert r1.get("carriage_speed") == pytest.approx(0.03)
+        assert r2.value("carriage_speed") == pytest.approx(0.03 / 1.5)
+        assert r1.value("carriage_speed") == pytest.approx(0.03)
     finally:
         for inst in (a, b, r1, r2):
             inst.close()
@@ -176,14 +178,14 @@ def test_fmu_state_round_trip_restores_internal_state(fmus, serialize):
         def run(n, k0):
             trace = []
             for k in range(k0, k0 + n):
-                x = r.get("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")
+                x = r.get(("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed"))
                 t.set(dict(zip(("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed"), x,
                                strict=True)))
-                f = t.get("normal_force", "drawbar_pull", "torque")
+                f = t.get(("normal_force", "drawbar_pull", "torque"))
                 r.set(dict(zip(("normal_force", "drawbar_pull", "torque"), f, strict=True)))
                 r.fmu.doStep(k * 1e-3, 1e-3)
                 t.fmu.doStep(k * 1e-3, 1e-3)
-                trace.append((*x, *f, t.get("wheel_angle")))
+                trace.append((*x, *f, t.value("wheel_angle")))
             return trace
 
         run(50, 0)
@@ -208,13 +210,13 @@ def test_fmu_state_round_trip_restores_internal_state(fmus, serialize):
 def test_reset_restores_the_start(fmus):
     t = terrain(fmus, sinkage=0.03, wheel_speed=0.6, carriage_speed=0.024)
     try:
-        before = t.get("drawbar_pull", "wheel_angle")
+        before = t.get(("drawbar_pull", "wheel_angle"))
         for k in range(30):
             t.fmu.doStep(k * 1e-3, 1e-3)
-        assert t.get("wheel_angle") != before[1]
+        assert t.value("wheel_angle") != before[1]
         t.fmu.reset()
         t.start({"sinkage": 0.03, "wheel_speed": 0.6, "carriage_speed": 0.024})
-        assert t.get("drawbar_pull", "wheel_angle") == before
+        assert t.get(("drawbar_pull", "wheel_angle")) == before
     finally:
         t.close()
 
@@ -265,7 +267,7 @@ def test_wheelterrain_ships_and_uses_the_compiled_model(fmus):
 
     if native.compiler() is None:
         pytest.skip("no C compiler: the FMU is built for the CasADi VM")
-    t = Instance(fmus["WheelTerrain"], fmus["unzip"]["WheelTerrain"], "c").start()
+    t = Instance(fmus["WheelTerrain"], fmus["unzip"]["WheelTerrain"], "c", log=True).start()
     try:
         assert any("evaluated by compiled C" in m for _, m in t.log), t.log
     finally:
@@ -287,7 +289,7 @@ def test_rig_command_inputs_and_free_carriage_follow_rig_step(fmus, drive, carri
         r.set(dict(zip(rig_model.INPUTS, u, strict=True)))
         r.fmu.doStep(k * 1e-3, 1e-3)
         x, torque = rig_model.step(x, u, p, 1e-3)
-        got = r.get("sinkage", "sinkage_rate", "wheel_speed", "speed_error_integral",
-                    "carriage_speed", "motor_torque")
+        got = r.get(("sinkage", "sinkage_rate", "wheel_speed", "speed_error_integral",
+                    "carriage_speed", "motor_torque"))
         assert got == pytest.approx([*x, torque], rel=1e-12, abs=1e-15)
     r.close()

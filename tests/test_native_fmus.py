@@ -18,13 +18,13 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
 
-from fmu_support import Instance
 from wheelterrain import presets
 from wheelterrain.cosim import master as cosim
 from wheelterrain.cosim import ssp
 from wheelterrain.fmu import build_native as nativebuild
 from wheelterrain.fmu import build_pythonfmu as fmubuild
 from wheelterrain.fmu import compiled as native
+from wheelterrain.fmu.instance import Instance
 
 pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
 NAMES = ("WheelTerrain", "SingleWheelRig")
@@ -44,7 +44,7 @@ def flavours(tmp_path_factory):
 
 def instance(flavours, flavour, name, label="i", values=None):
     path = flavours["root"] / flavour / f"{name}.fmu"
-    return Instance(path, flavours["unzip"][(flavour, name)], label).start(values or {})
+    return Instance(path, flavours["unzip"][(flavour, name)], label, log=True).start(values or {})
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -97,7 +97,7 @@ def test_flavours_agree_on_wheelterrain(flavours, quasi_static, contact_form):
                 t.set(values)
                 trace = []
                 for step in range(3):
-                    trace.append(t.get(*TERRAIN_OUT))
+                    trace.append(t.get(TERRAIN_OUT))
                     t.fmu.doStep(step * 1e-3, 1e-3)
                 out.append(np.array(trace))
             except FMICallException:
@@ -128,9 +128,9 @@ def test_flavours_agree_on_the_rig(flavours):
                        "wheel_speed_command": 0.5 + 0.01 * step,
                        "motor_torque_command": 0.6 - 0.01 * step})
                 r.fmu.doStep(step * 1e-3, 1e-3)
-                trace.append(r.get("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed",
+                trace.append(r.get(("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed",
                                    "motor_torque", "speed_error_integral",
-                                   "sensor.slip_paper"))
+                                   "sensor.slip_paper")))
             r.close()
             traces.append(np.array(trace))
         np.testing.assert_allclose(traces[1], traces[0], rtol=1e-9, atol=1e-15)
@@ -158,13 +158,13 @@ def test_wrong_guid_and_wrong_call_sequence_are_rejected(flavours):
     with pytest.raises(Exception, match="Failed to instantiate"):
         fmu.instantiate()
     fmu.freeLibrary()
-    t = Instance(root / "WheelTerrain.fmu", unzip, "seq")
+    t = Instance(root / "WheelTerrain.fmu", unzip, "seq", log=True)
     try:
         with pytest.raises(FMICallException):
             t.fmu.doStep(0.0, 1e-3)  # before initialization
         assert any("illegal call sequence" in m for m in t.errors())
     finally:
-        t.fmu.freeInstance()
+        t.close()
     assert md.guid
 
 
@@ -218,12 +218,12 @@ def test_state_round_trip_and_serialization(flavours):
         first = []
         for k in range(10, 20):
             t.fmu.doStep(k * 1e-3, 1e-3)
-            first.append(t.get("drawbar_pull", "wheel_angle"))
+            first.append(t.get(("drawbar_pull", "wheel_angle")))
         t.fmu.setFMUstate(t.fmu.deSerializeFMUstate(blob))
         again = []
         for k in range(10, 20):
             t.fmu.doStep(k * 1e-3, 1e-3)
-            again.append(t.get("drawbar_pull", "wheel_angle"))
+            again.append(t.get(("drawbar_pull", "wheel_angle")))
         assert again == first
     finally:
         t.close()
@@ -334,7 +334,7 @@ def test_a_c_host_loads_the_native_binary_without_python(flavours, tmp_path):
         t = instance(flavours, "native", "WheelTerrain", label, values)
         for k in range(100):
             t.fmu.doStep(k * 1e-3, 1e-3)
-        assert t.get("drawbar_pull") == pytest.approx(dp, rel=1e-14)
+        assert t.value("drawbar_pull") == pytest.approx(dp, rel=1e-14)
         t.close()
     assert dp_a != dp_b
 

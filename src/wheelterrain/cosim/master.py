@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from wheelterrain import data
-from wheelterrain.errors import FMUError
+from wheelterrain.fmu.instance import Instance
 from wheelterrain.fmu.variables import COUPLED_FORCES, COUPLED_STATES, RIG_IO, TERRAIN_IO
 from wheelterrain.model import rig
 from wheelterrain.model.slip import reference_radius
@@ -75,78 +75,19 @@ def averaging_window(ps: ParameterSet, rim_speed: float, stop: float,
     return (stop - periods * period, stop) if periods >= 1 else (settle, stop)
 
 
-def set_values(fmu, vr: dict[str, int], types: dict[str, str], values: dict,
-               where: str = "the FMU") -> None:
-    """Set ``values`` (by variable name) on an fmpy FMU2Slave with the setter of each
-    variable's type (Integer values rounded: table integers are whole numbers). A name the FMU
-    lacks means it was built from another version of the parameter table: FMUError."""
-    missing = [name for name in values if name not in types]
-    if missing:
-        raise FMUError(
-            f"{where} has no variable {missing[0]!r} ({len(missing)} missing): it was built by "
-            "another version of wheelterrain; rebuild it with `wheelterrain build` (add "
-            "`--flavor native` for the native FMUs)")
-    for name, value in values.items():
-        kind = types[name]
-        if kind == "Real":
-            fmu.setReal([vr[name]], [float(value)])
-        elif kind == "Integer":
-            fmu.setInteger([vr[name]], [round(value)])
-        else:
-            fmu.setBoolean([vr[name]], [bool(value)])
-
-
-class _Instance:
-    """One FMU instance through fmpy's FMU2Slave with name -> value reference maps."""
-
-    def __init__(self, path: Path, unzip: str, name: str, log: Callable | None = None) -> None:
-        from fmpy import read_model_description
-        from fmpy.fmi2 import FMU2Slave
-
-        md = read_model_description(str(path))
-        self.path = path
-        self.running = False  # initialised (terminate is legal only then)
-        self.vr = {v.name: v.valueReference for v in md.modelVariables}
-        self.types = {v.name: v.type for v in md.modelVariables}
-        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip,
-                             modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
-        self.fmu.instantiate(loggingOn=log is not None)
-
-    def set(self, values: dict[str, float]) -> None:
-        set_values(self.fmu, self.vr, self.types, values, where=str(self.path))
-
-    def refs(self, names) -> list[int]:
-        return [self.vr[n] for n in names]
-
-    def get(self, names) -> list[float]:
-        return self.fmu.getReal(self.refs(names))
-
-    def close(self) -> None:
-        if self.running:  # an FMU refuses fmi2Terminate before initialisation has ended
-            self.fmu.terminate()
-        self.fmu.freeInstance()
-
-
 def start_pair(paths: dict[str, Path], unzipped: dict[str, str], ps: ParameterSet,
                rig_values: dict[str, float], stop: float | None = None) -> tuple:
     """(terrain, rig) instances, initialised: the table parameters ``ps`` on WheelTerrain in
     dynamic mode, ``rig_values`` on SingleWheelRig."""
-    terrain = _Instance(paths["WheelTerrain"], unzipped["WheelTerrain"], "terrain")
+    terrain = Instance(paths["WheelTerrain"], unzipped["WheelTerrain"], "terrain")
     try:
-        rig_fmu = _Instance(paths["SingleWheelRig"], unzipped["SingleWheelRig"], "rig")
+        rig_fmu = Instance(paths["SingleWheelRig"], unzipped["SingleWheelRig"], "rig")
     except BaseException:
         terrain.close()
         raise
     try:
-        for inst in (terrain, rig_fmu):
-            inst.fmu.setupExperiment(startTime=0.0, stopTime=stop)
-            inst.fmu.enterInitializationMode()
-        terrain.set({p.name: ps[p.name] for p in TABLE})
-        terrain.set({"quasi_static": False})
-        rig_fmu.set(rig_values)
-        for inst in (terrain, rig_fmu):
-            inst.fmu.exitInitializationMode()
-            inst.running = True
+        terrain.start({**{p.name: ps[p.name] for p in TABLE}, "quasi_static": False}, stop)
+        rig_fmu.start(rig_values, stop)
     except BaseException:
         terrain.close()
         rig_fmu.close()
@@ -167,7 +108,7 @@ class Coupling:
     master (:func:`run_case`) and the MPC's FMU plant (``closed_loop.FMUPlant``).
     """
 
-    def __init__(self, terrain: _Instance, rig_fmu: _Instance, rig_extra: tuple = (),
+    def __init__(self, terrain: Instance, rig_fmu: Instance, rig_extra: tuple = (),
                  terrain_extra: tuple = (), commands: tuple = ()) -> None:
         self.terrain, self.rig = terrain, rig_fmu
         self._rig_out = rig_fmu.refs((*COUPLED_STATES, *rig_extra))

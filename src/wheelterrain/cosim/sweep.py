@@ -16,13 +16,13 @@ from __future__ import annotations
 import itertools
 import math
 import os
-import shutil
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
 
 from wheelterrain.errors import ParameterError
+from wheelterrain.fmu.instance import Instance
 from wheelterrain.fmu.variables import TERRAIN_OUTPUTS
 from wheelterrain.model.slip import reference_radius, traction_from_paper
 from wheelterrain.parameters import BY_NAME, DEG, TABLE
@@ -94,26 +94,13 @@ def check_axes(axes: dict[str, list[float]], slip_definition: str) -> None:
 _WORKER: dict = {}
 
 
-def _worker_instance(fmu: str):
-    """The worker's FMU instance: extracted and instantiated once per process."""
+def _worker_instance(fmu: str) -> Instance:
+    """The worker's FMU instance, quasi-static: extracted and initialised once per process."""
     if _WORKER.get("fmu") != fmu:
-        from fmpy import extract, read_model_description
-        from fmpy.fmi2 import FMU2Slave
-
-        md = read_model_description(fmu)
-        unzip = extract(fmu)
-        inst = FMU2Slave(guid=md.guid, unzipDirectory=unzip,
-                         modelIdentifier=md.coSimulation.modelIdentifier,
-                         instanceName=f"sweep{os.getpid()}")
-        inst.instantiate()
-        inst.setupExperiment(startTime=0.0)
-        inst.enterInitializationMode()
-        vr = {v.name: v.valueReference for v in md.modelVariables}
-        inst.setBoolean([vr["quasi_static"]], [True])
-        inst.exitInitializationMode()
-        _WORKER.update(fmu=fmu, inst=inst, vr=vr, unzip=unzip, time=0.0,
-                       types={v.name: v.type for v in md.modelVariables})
-    return _WORKER
+        _close_worker()
+        inst = Instance(fmu, name=f"sweep{os.getpid()}").start({"quasi_static": True})
+        _WORKER.update(fmu=fmu, inst=inst, time=0.0)
+    return _WORKER["inst"]
 
 
 def run_points(fmu: str, base: dict[str, float], points: list[dict[str, float]],
@@ -121,9 +108,7 @@ def run_points(fmu: str, base: dict[str, float], points: list[dict[str, float]],
     """Evaluate ``points`` (each: slip, load and parameter values) in this process."""
     from fmpy.fmi1 import FMICallException
 
-    from wheelterrain.cosim.master import set_values
-
-    w = _worker_instance(fmu)
+    inst = _worker_instance(fmu)
     rows = []
     for point in points:
         values = {**base, **{k: v for k, v in point.items() if k not in ("slip", "load")}}
@@ -131,13 +116,12 @@ def run_points(fmu: str, base: dict[str, float], points: list[dict[str, float]],
             slip = point.get("slip", 0.0)
             i = traction_from_paper(slip) if slip_definition == "paper" else slip
             r_ref = reference_radius(values)
-            set_values(w["inst"], w["vr"], w["types"],
-                       {**values, "wheel_speed": WHEEL_SPEED,
-                        "carriage_speed": WHEEL_SPEED * r_ref * (1 - i),
-                        "load": point.get("load", 62.0)}, where=str(fmu))
-            w["inst"].doStep(w["time"], 1e-6)  # refuses (fmi2Discard) an infeasible point
-            w["time"] += 1e-6
-            out = w["inst"].getReal([w["vr"][k] for k in OUTPUTS])
+            inst.set({**values, "wheel_speed": WHEEL_SPEED,
+                      "carriage_speed": WHEEL_SPEED * r_ref * (1 - i),
+                      "load": point.get("load", 62.0)})
+            inst.fmu.doStep(_WORKER["time"], 1e-6)  # refuses (fmi2Discard) an infeasible point
+            _WORKER["time"] += 1e-6
+            out = inst.get(OUTPUTS)
             named = {COLUMNS.get(k, k): v for k, v in zip(OUTPUTS, out, strict=True)}
             rows.append({**point, **named, "status": "ok"})
         except FMICallException:
@@ -148,9 +132,7 @@ def run_points(fmu: str, base: dict[str, float], points: list[dict[str, float]],
 
 def _close_worker() -> None:
     if "inst" in _WORKER:
-        _WORKER["inst"].terminate()
-        _WORKER["inst"].freeInstance()
-        shutil.rmtree(_WORKER["unzip"], ignore_errors=True)
+        _WORKER["inst"].close()
         _WORKER.clear()
 
 

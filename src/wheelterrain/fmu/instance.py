@@ -1,0 +1,137 @@
+"""One FMU instance through fmpy, addressed by variable name.
+
+The one wrapper every caller of a built FMU uses: the C1-C4 master and the MPC's FMU plant
+(:mod:`wheelterrain.cosim.master`), the sweep's workers (:mod:`wheelterrain.cosim.sweep`), the
+built-FMU tests and the benchmarks. It keeps the name -> value-reference and name -> type maps
+of the modelDescription, sets each value with its type's setter, optionally captures the FMU's
+log, and on :meth:`close` terminates only what was initialised and removes the folder it
+extracted itself.
+"""
+
+from __future__ import annotations
+
+import shutil
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+
+from wheelterrain.errors import FMUError
+
+
+def set_values(fmu, vr: Mapping[str, int], types: Mapping[str, str], values: Mapping,
+               where: str = "the FMU") -> None:
+    """Set ``values`` (by variable name) on an fmpy FMU2Slave with the setter of each
+    variable's type (Integer values rounded: table integers are whole numbers). A name the FMU
+    lacks means it was built from another version of the parameter table: FMUError."""
+    missing = [name for name in values if name not in types]
+    if missing:
+        raise FMUError(
+            f"{where} has no variable {missing[0]!r} ({len(missing)} missing): it was built by "
+            "another version of wheelterrain; rebuild it with `wheelterrain build` (add "
+            "`--flavor native` for the native FMUs)")
+    for name, value in values.items():
+        kind = types[name]
+        if kind == "Real":
+            fmu.setReal([vr[name]], [float(value)])
+        elif kind == "Integer":
+            fmu.setInteger([vr[name]], [round(value)])
+        else:
+            fmu.setBoolean([vr[name]], [bool(value)])
+
+
+class Instance:
+    """An instantiated FMI 2.0 co-simulation FMU.
+
+    ``unzip`` is the folder the FMU was extracted to (None: extract it here and remove it on
+    :meth:`close`). With ``log=True`` every message the FMU logs is kept in :attr:`log` as
+    (status, text) and :meth:`errors` lists those of status discard, error or fatal.
+    """
+
+    def __init__(self, path: str | Path, unzip: str | None = None, name: str = "instance",
+                 log: bool = False) -> None:
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Slave
+
+        self.path = Path(path)
+        self.md = read_model_description(str(path))
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.types = {v.name: v.type for v in self.md.modelVariables}
+        self.log: list[tuple[int, str]] = []
+        self.running = False  # initialised (fmi2Terminate is legal only then)
+        self._own_unzip = unzip is None
+        self.unzip = extract(str(path)) if unzip is None else unzip
+        try:
+            self._callbacks = self._logging_callbacks() if log else None
+            self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzip,
+                                 modelIdentifier=self.md.coSimulation.modelIdentifier,
+                                 instanceName=name)
+            self.fmu.instantiate(callbacks=self._callbacks, loggingOn=log)
+        except BaseException:
+            self._remove_unzip()
+            raise
+
+    def _logging_callbacks(self):
+        from fmpy import calloc, free
+        from fmpy.fmi2 import (
+            fmi2CallbackAllocateMemoryTYPE,
+            fmi2CallbackFreeMemoryTYPE,
+            fmi2CallbackFunctions,
+            fmi2CallbackLoggerTYPE,
+            fmi2StepFinishedTYPE,
+        )
+
+        def logger(component, instance, status, category, message):
+            self.log.append((status, message.decode("utf-8", "replace")))
+
+        callbacks = fmi2CallbackFunctions()
+        callbacks.logger = fmi2CallbackLoggerTYPE(logger)
+        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        callbacks.stepFinished = fmi2StepFinishedTYPE()
+        return callbacks  # kept on self: the ctypes objects must outlive the instance
+
+    def start(self, values: Mapping | None = None, stop: float | None = None) -> Instance:
+        """Initialise at t = 0 with ``values`` set in initialisation mode; returns self."""
+        self.fmu.setupExperiment(startTime=0.0, stopTime=stop)
+        self.fmu.enterInitializationMode()
+        if values:
+            self.set(values)
+        self.fmu.exitInitializationMode()
+        self.running = True
+        return self
+
+    def set(self, values: Mapping) -> None:
+        set_values(self.fmu, self.vr, self.types, values, where=str(self.path))
+
+    def refs(self, names: Iterable[str]) -> list[int]:
+        return [self.vr[n] for n in names]
+
+    def get(self, names: Iterable[str]) -> list[float]:
+        """The Real variables ``names``, in that order."""
+        return self.fmu.getReal(self.refs(names))
+
+    def value(self, name: str) -> float:
+        """The Real variable ``name``."""
+        return self.fmu.getReal([self.vr[name]])[0]
+
+    def errors(self) -> list[str]:
+        """Logged messages of status discard (2), error (3) or fatal (4); needs ``log=True``."""
+        return [m for status, m in self.log if status >= 2]
+
+    def close(self) -> None:
+        try:
+            if self.running:  # an FMU refuses fmi2Terminate before initialisation has ended
+                self.running = False
+                self.fmu.terminate()
+        finally:
+            self.fmu.freeInstance()
+            self._remove_unzip()
+
+    def _remove_unzip(self) -> None:
+        if self._own_unzip:
+            shutil.rmtree(self.unzip, ignore_errors=True)
+
+    def __enter__(self) -> Instance:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
