@@ -1,4 +1,4 @@
-"""The CLI contract of shared/design.md: `params --json`, `steady --json`, errors, exit codes."""
+"""The CLI contract (README, "Contract"): `params --json`, `steady --json`, errors, exit codes."""
 
 from __future__ import annotations
 

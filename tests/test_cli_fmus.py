@@ -1,4 +1,4 @@
-"""`wheelterrain build` and `wheelterrain reproduce` (contract in shared/design.md), end to end
+"""`wheelterrain build` and `wheelterrain reproduce` (the README's contract), end to end
 through the installed console script."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Gates on the built pythonfmu FMUs (shared/spec/fmi-notes.md): validation, default experiment,
+"""Gates on the built pythonfmu FMUs: validation, default experiment,
 agreement with the core model, several instances, FMU state, reset, bad input."""
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """The native flavour (wheelterrain build --flavor native): no Python at run time, the same
-model as the pythonfmu flavour. Gates of shared/spec/fmi-notes.md plus flavour agreement, an
+model as the pythonfmu flavour. The FMI gates plus flavour agreement, an
 independent master (ecos) and a plain C host."""
 
 from __future__ import annotations

@@ -89,7 +89,7 @@ def test_paper_table2_gives_the_unfitted_patch_sinkage():
 
 def test_the_arc_reading_keeps_the_known_gap():
     """contact_form = 0 is the arc: the paper's values there give the known gap of
-    shared/spec/model-notes.md (-29.8 N and 32.0 mm at C1), as before the patch form existed."""
+    the arc form (-29.8 N and 32.0 mm at C1), as before the patch form existed."""
     arc = presets.load("paper-table2-arc")
     assert arc["model.contact_form"] == 0
     out = model.steady_state(arc, 62.0, 0.0)

@@ -17,8 +17,6 @@ import argparse
 import json
 from pathlib import Path
 
-import numpy as np
-
 from wheelterrain import presets
 from wheelterrain.cosim.master import write_atomic
 from wheelterrain.fit import calibration
@@ -27,12 +25,11 @@ from wheelterrain.parameters import DEG
 CASES = ["C1", "C2", "C3", "C4"]
 
 
-def mae(errors: dict) -> tuple[float, float]:
-    if not errors:
-        return float("nan"), float("nan")
-    dp = float(np.mean([abs(e["drawbar_pull"]) for e in errors.values()]))
-    z = float(np.mean([abs(e["sinkage"]) for e in errors.values()])) * 1e3
-    return dp, z
+def mae(errors) -> tuple[float, float]:
+    """(drawbar pull N, sinkage mm) mean absolute errors: calibration.mean_absolute, in the
+    units this script prints."""
+    out = calibration.mean_absolute(errors)
+    return out["drawbar_pull"], 1e3 * out["sinkage"]
 
 
 def show(label: str, result, held: dict) -> dict:

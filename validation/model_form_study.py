@@ -84,8 +84,10 @@ LEAST_ABSOLUTE_SCALE = 0.005  # N: soft-L1 scale far below the residuals, ~ leas
 
 
 def mae(errors) -> tuple[float, float]:
-    dp = float(np.mean([abs(e["drawbar_pull"]) for e in errors]))
-    return dp, 1e3 * float(np.mean([abs(e["sinkage"]) for e in errors]))
+    """(drawbar pull N, sinkage mm) mean absolute errors: calibration.mean_absolute, in the
+    units this script prints."""
+    out = calibration.mean_absolute(errors)
+    return out["drawbar_pull"], 1e3 * out["sinkage"]
 
 
 def study(starts: int = 4, echo=print) -> list[dict]:

@@ -217,6 +217,15 @@ def errors_on(ps: ParameterSet, case_names: list[str], load: float = 62.0,
             for c, o in zip(cases, out, strict=True)}
 
 
+def mean_absolute(errors) -> dict[str, float]:
+    """Mean absolute error of each of OUTPUTS over ``errors``: a mapping case -> {output: model
+    minus data} (as :func:`errors_on` and ``Fit.residuals`` give) or an iterable of such
+    dicts. NaN for no errors."""
+    rows = list(errors.values()) if isinstance(errors, dict) else list(errors)
+    return {k: float(np.mean([abs(e[k]) for e in rows])) if rows else math.nan
+            for k in OUTPUTS}
+
+
 def code_version() -> str:
     try:
         rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,

@@ -36,7 +36,7 @@ CASES = ("C1", "C2", "C3", "C4")
 PAPER_FREE = ("soil.phi", "soil.n0")
 """The paper's two most influential parameters (phi, the sinkage exponent): its protocol's
 free set, and the leave-one-out free set of presets that fitted nothing."""
-OUTPUTS = ("drawbar_pull", "sinkage")
+OUTPUTS = calibration.OUTPUTS
 LOAD = 62.0  # N, the rig's normal force in every case (validation data)
 
 DING_FILE = "ding2011_single_wheel.csv"
@@ -128,8 +128,8 @@ class Row:
     error: str | None = None  # why the row has no figures (a fold's fit failed)
 
     def as_dict(self) -> dict:
-        mae = {k: (float(np.mean([abs(e[k]) for e in self.errors.values()]))
-                   if self.error is None else None) for k in OUTPUTS}
+        mae = (calibration.mean_absolute(self.errors) if self.error is None
+               else dict.fromkeys(OUTPUTS))
         row = {"model": self.model, "protocol": self.protocol, "free": self.free,
                "drawbar_pull_mae": mae["drawbar_pull"], "sinkage_mae": mae["sinkage"],
                "in_sample": self.in_sample, "judged_on": list(self.errors), "data": self.data,
