@@ -50,13 +50,43 @@ def test_json_onto_a_folder_is_refused(tmp_path):
     _one_line_exit_2(result, "is a folder")
 
 
-@pytest.mark.parametrize("command", [["reproduce"], ["mpc"], ["sweep"]])
+@pytest.mark.parametrize("command", [["reproduce"], ["mpc"], ["sweep"],
+                                     ["calibrate", "--params", "soil.phi"]])
 def test_an_out_folder_that_cannot_be_made_is_refused_before_the_run(tmp_path, command):
     blocker = tmp_path / "a-file"
     blocker.write_text("")
     out = blocker / "sub" / "dir"
     result = CliRunner().invoke(main, [*command, "--out", str(out)])
     _one_line_exit_2(result, "is not a writable folder")
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux's /proc")
+def test_a_folder_that_only_looks_writable_is_refused_before_the_run():
+    """os.access says yes to root on /proc; the check creates the folder (or a probe file)
+    instead, so the mistake is one line before the run, not a traceback after it."""
+    result = CliRunner().invoke(main, ["reproduce", "--out", "/proc/wheelterrain-out"])
+    _one_line_exit_2(result, "cannot create the folder")
+    result = CliRunner().invoke(main, ["steady", "--slip", "0.2", "--load", "62", "--json",
+                                       "/proc/wheelterrain.json"])
+    _one_line_exit_2(result, "is not writable")
+
+
+def test_calibrate_out_is_a_folder_holding_the_named_preset(tmp_path):
+    """--out DIR writes DIR/NAME.json, the file --preset reads back; FILE.json still works."""
+    out = tmp_path / "fits"
+    result = CliRunner().invoke(main, ["calibrate", "--params", "soil.phi", "--starts", "1",
+                                       "--out", str(out), "--name", "my-fit"])
+    assert result.exit_code == 0, result.output
+    doc = json.loads((out / "my-fit.json").read_text())
+    assert doc["name"] == "my-fit"
+    result = CliRunner().invoke(main, ["steady", "--preset", str(out / "my-fit.json"),
+                                       "--slip", "0.25", "--load", "62", "--json"])
+    assert json.loads(result.output)["preset"] == str(out / "my-fit.json")
+    legacy = tmp_path / "legacy.json"
+    result = CliRunner().invoke(main, ["calibrate", "--params", "soil.phi", "--starts", "1",
+                                       "--out", str(legacy)])
+    assert result.exit_code == 0, result.output
+    assert json.loads(legacy.read_text())["provenance"]["fitted"]["soil.phi"]
 
 
 def test_infinite_load_names_a_half_open_range():

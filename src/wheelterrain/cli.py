@@ -80,8 +80,20 @@ def _check_file_target(target: str | None, option: str = "--json") -> None:
         _usage_error(f"{option} {target} is a folder; give a file name")
     if not folder.is_dir():
         _usage_error(f"{option} {target}: folder {folder} does not exist (it is not created)")
-    if not os.access(folder, os.W_OK):
+    if not os.access(folder, os.W_OK) or not _can_create_in(folder):
         _usage_error(f"{option} {target}: folder {folder} is not writable")
+
+
+def _can_create_in(folder) -> bool:
+    """Whether a file can really be created in ``folder`` (os.access says yes to root on a
+    read-only or pseudo file system)."""
+    import tempfile
+
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            return True
+    except OSError:
+        return False
 
 
 def _check_out_dir(out: str, option: str = "--out") -> None:
@@ -97,6 +109,12 @@ def _check_out_dir(out: str, option: str = "--out") -> None:
         existing = existing.parent
     if not existing.is_dir() or not os.access(existing, os.W_OK | os.X_OK):
         _usage_error(f"{option} {out}: {existing} is not a writable folder")
+    try:  # created now, so that a folder that cannot be made fails before the run, not after
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        _usage_error(f"{option} {out}: cannot create the folder ({err.strerror or err})")
+    if not _can_create_in(path):
+        _usage_error(f"{option} {out}: {path} is not a writable folder")
 
 
 def _finite(value):
@@ -366,8 +384,10 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_targ
 @click.option("--starts", default=8, show_default=True, type=click.IntRange(1, 200),
               help="Starting points (the base preset, then random over the plausible box).")
 @click.option("--seed", default=0, show_default=True, type=int, help="Seed of the starts.")
-@click.option("--out", "out_file", type=click.Path(dir_okay=False),
-              help="Write the fitted preset (values and provenance) to this .json file.")
+@click.option("--out", "out", type=click.Path(),
+              help="Folder to write the fitted preset (values and provenance) into, as "
+              "NAME.json (--name; created if needed). The earlier form, a FILE.json, still "
+              "names the file.")
 @click.option("--name", default="fitted", show_default=True, help="Name of the written preset.")
 @click.option("--protocol", default=None, help="How the fit was chosen, for the preset's "
               "provenance (default: 'least squares on <cases>').")
@@ -381,7 +401,7 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_targ
               "sinkage does (both are reported either way).")
 @json_option("The fit (values, ranges, residuals, held-out errors, profiles)")
 def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, starts: int,
-              seed: int, out_file: str | None, name: str, protocol: str | None,
+              seed: int, out: str | None, name: str, protocol: str | None,
               profile_points: int, outputs: str, json_target: str | None) -> None:
     """Fit parameters to the rig's C1-C4 drawbar pull and sinkage by least squares.
 
@@ -399,7 +419,12 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
     from wheelterrain.fit import calibration
 
     _check_file_target(json_target)
-    _check_file_target(out_file, "--out")
+    out_file = None
+    if out:
+        out_file = Path(out) if out.endswith(".json") else Path(out) / f"{name}.json"
+        _check_out_dir(str(out_file.parent), "--out")
+        if out_file.is_dir():
+            _usage_error(f"--out {out} is a folder named like a JSON file")
     base = _load(preset, assignments)
     names = [n.strip() for n in free.split(",") if n.strip()]
     case_names = [c.strip() for c in cases.split(",") if c.strip()]
@@ -460,7 +485,7 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
             protocol or f"least squares on {', '.join(case_names)}")
         for n, prof in profiles.items():
             doc["provenance"]["fitted"][n]["profile_interval"] = list(prof["interval"])
-        write_atomic(Path(out_file), json.dumps(doc, indent=2) + "\n")
+        write_atomic(out_file, json.dumps(doc, indent=2) + "\n")
         click.echo(f"wrote {out_file}", err=True)
 
 
