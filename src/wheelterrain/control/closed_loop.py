@@ -50,6 +50,7 @@ def record_units() -> dict[str, str]:
     """The unit of every RECORD column (the result CSV's header)."""
     return {**variables.units(), **RECORD_UNITS}
 ESTIMATED = ("soil.phi", "soil.k_phi")
+MEASURED = ("normal_force", "drawbar_pull")  # what the soil estimator's update compares
 
 
 @dataclass(frozen=True)
@@ -171,7 +172,8 @@ class CasadiPlant:
                      "wheel_speed_command": command, "motor_torque_command": 0.0}
             forces = tuple(given[n] for n in variables.RIG_INPUTS)
             record(self.x, self.angle, y, self.motor_torque)
-            omega = self.x[2]  # WheelTerrain advances its angle with the speed it was given
+            # WheelTerrain advances its angle with the speed it was given
+            omega = self.x[rig.RIG_STATES.index("wheel_speed")]
             self.x, self.motor_torque = rig.step(self.x, forces, self.p_rig, PLANT_STEP)
             self.angle += omega * PLANT_STEP
 
@@ -251,8 +253,10 @@ class SoilEstimator:
         scaled = ca.vertcat(*(pt[INDEX[n]] if n not in ESTIMATED
                               else theta[ESTIMATED.index(n)] * nominal[ESTIMATED.index(n)]
                               for n in NAMES))
-        u = ca.vertcat(x[0], x[1], x[2], x[4], load)
-        y = terrain(u, x[5], scaled)[0][:2]
+        xs = dict(zip(mpc.MPC_STATES, ca.vertsplit(x), strict=True))
+        out = dict(zip(fmu_model.TERRAIN_OUTPUTS, ca.vertsplit(
+            terrain(mpc.terrain_inputs(xs, load), xs["wheel_angle"], scaled)[0]), strict=True))
+        y = ca.vertcat(*(out[n] for n in MEASURED))
         self.measure = ca.Function("soil_measurement", [theta, x, pt], [y, ca.jacobian(y, theta)])
         self.nominal, self.p = nominal, np.array(p, dtype=float)
         self.theta = np.ones(len(ESTIMATED))
@@ -383,7 +387,7 @@ def _loop(scenario, ps, plant_name, settings, steps, p_rig, plant, progress, sta
         xs = dict(zip(rig.RIG_STATES, x, strict=True))
         ys = dict(zip(fmu_model.TERRAIN_OUTPUTS, y, strict=True))
         last.update(x=np.array([*x, angle]),
-                    forces=np.array([ys["normal_force"], ys["drawbar_pull"]]))
+                    forces=np.array([ys[n] for n in MEASURED]))
         row = {"time": (len(rows) - settle_steps) * PLANT_STEP, "slip": ys["slip"],
                "slip_reference": state["reference"], "command": state["command"],
                "wheel_speed": xs["wheel_speed"], "motor_torque": motor_torque,

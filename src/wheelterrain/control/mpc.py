@@ -102,6 +102,13 @@ class Settings:
         return self
 
 
+def terrain_inputs(states: dict, load):
+    """The terrain Functions' ``u`` (TERRAIN_INPUTS, in order) from states by name and the
+    load."""
+    given = {**states, "load": load}
+    return ca.vertcat(*(given[n] for n in fmu_model.TERRAIN_INPUTS))
+
+
 @lru_cache(maxsize=1)
 def dynamics() -> ca.Function:
     """``dynamics(x, command, p_terrain, p_rig) -> (xdot, y)``: the continuous prediction model
@@ -111,17 +118,18 @@ def dynamics() -> ca.Function:
     command = ca.MX.sym("command")
     pt, pr = ca.MX.sym("p_terrain", len(NAMES)), ca.MX.sym("p_rig", len(rig.RIG_NAMES))
     named = rig.named(pr)
-    z, z_rate, omega, _, speed, angle = (x[k] for k in range(len(MPC_STATES)))
-    u = ca.vertcat(z, z_rate, omega, speed, named["rig.load"])
-    y = terrain(u, angle, pt)[0]
-    out = dict(zip(fmu_model.TERRAIN_OUTPUTS, ca.vertsplit(y), strict=True))
+    xs = dict(zip(MPC_STATES, ca.vertsplit(x), strict=True))
+    out = dict(zip(fmu_model.TERRAIN_OUTPUTS, ca.vertsplit(
+        terrain(terrain_inputs(xs, named["rig.load"]), xs["wheel_angle"], pt)[0]), strict=True))
     # the command is the speed loop's reference (rig.drive 1) or the torque (rig.drive 2)
-    inputs = (out["normal_force"], out["drawbar_pull"], out["torque"], command, command)
-    x_rig = tuple(x[k] for k in range(len(rig.RIG_STATES)))
-    xdot = ca.vertcat(*rig.rates(x_rig, inputs, named), omega)
+    given = {**out, "wheel_speed_command": command, "motor_torque_command": command}
+    inputs = tuple(given[n] for n in rig.INPUTS)
+    x_rig = tuple(xs[n] for n in rig.RIG_STATES)
+    xdot = ca.vertcat(*rig.rates(x_rig, inputs, named), xs["wheel_speed"])
     motor = rig.motor_torque(x_rig, inputs, named)
-    outputs = ca.vertcat(out["slip"], out["drawbar_pull"], out["normal_force"], out["torque"],
-                         motor, motor * omega)
+    y = {**out, "soil_torque": out["torque"], "motor_torque": motor,
+         "power": motor * xs["wheel_speed"]}
+    outputs = ca.vertcat(*(y[n] for n in OUTPUTS))
     return ca.Function("wheel_dynamics", [x, command, pt, pr], [xdot, outputs],
                        ["x", "command", "p_terrain", "p_rig"], ["xdot", "y"])
 
