@@ -25,6 +25,7 @@ from wheelterrain.fmu import build_native as nativebuild
 from wheelterrain.fmu import build_pythonfmu as fmubuild
 from wheelterrain.fmu import compiled as native
 from wheelterrain.fmu.instance import Instance
+from wheelterrain.parameters import TABLE
 
 pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
 NAMES = ("WheelTerrain", "SingleWheelRig")
@@ -204,6 +205,99 @@ def test_both_flavours_refuse_a_slip_outside_the_domain_with_the_same_sentence(f
     assert messages[1], messages
     assert "gives traction slip -1.5," in messages[1][0]
     assert messages[0][0] == messages[1][0]  # one template: fmu_model.STATUS_MESSAGES
+
+
+def _step_is_honest(inst, outputs, t=0.0) -> str:
+    """'ok' when doStep returns OK and every output is finite; 'refused' when it is refused
+    (Discard/Error) with a logged reason; any other outcome fails the test."""
+    inst.log.clear()
+    try:
+        inst.fmu.doStep(t, 1e-3)
+    except FMICallException:
+        assert inst.errors(), "a refused step must log its reason"
+        return "refused"
+    values = inst.get(outputs)
+    assert all(math.isfinite(v) for v in values), dict(zip(outputs, values, strict=True))
+    return "ok"
+
+
+def _grid(v) -> list[float]:
+    """Points across a declared [min, max]: both ends, zero if inside, and decades between."""
+    points = {v.min, v.max, 0.5 * (v.min + v.max)}
+    for scale in (1e-1, 1e-2, 1e-3, 1e-4):
+        points.update(x for x in (v.min * scale, v.max * scale) if v.min <= x <= v.max)
+    if v.min <= 0 <= v.max:
+        points.add(0.0)
+    return sorted(points)
+
+
+@pytest.mark.parametrize("flavour", ["pythonfmu", "native"])
+@pytest.mark.parametrize("quasi_static", [False, True], ids=["dynamic", "quasi-static"])
+def test_every_terrain_input_and_parameter_over_its_declared_range_is_finite_or_refused(
+        flavours, flavour, quasi_static):
+    """Each input over its declared range (the others at a C2-like point), then each
+    parameter at its declared min, middle and max: OK with finite outputs, or refused with a
+    reason. Never a NaN or an infinity served with fmi2OK."""
+    from wheelterrain.fmu import variables
+
+    t = instance(flavours, flavour, "WheelTerrain", f"range-{flavour}",
+                 {"quasi_static": quasi_static})
+    nominal = {"sinkage": 0.015, "sinkage_rate": 0.0, "wheel_speed": 0.6,
+               "carriage_speed": 0.024, "load": 62.0}
+    outputs = variables.TERRAIN_OUTPUTS
+    seen = {"ok": 0, "refused": 0}
+    try:
+        for v in variables.TERRAIN_IO:
+            if v.causality != "input":
+                continue
+            for x in _grid(v):
+                t.set({**nominal, v.name: x})
+                seen[_step_is_honest(t, outputs)] += 1
+        t.set(nominal)
+        base = presets.load(presets.DEFAULT_PRESET)
+        for p in TABLE:
+            for x in (p.min, 0.5 * (p.min + p.max), p.max):
+                x = round(x) if p.kind in ("integer", "enum") else x
+                t.set({p.name: x})
+                seen[_step_is_honest(t, outputs)] += 1
+                t.set({p.name: base[p.name]})
+    finally:
+        t.close()
+    assert seen["ok"], seen  # both outcomes occur: the check can fail either way
+    assert seen["refused"], seen
+
+
+@pytest.mark.parametrize("flavour", ["pythonfmu", "native"])
+def test_a_sinkage_beyond_full_burial_is_refused_not_served(flavours, flavour):
+    """Twice the radius gave 5.5e14 N with fmi2OK, and beyond it NaN with OK; now the step is
+    refused with the depth the model covers, in both flavours."""
+    t = instance(flavours, flavour, "WheelTerrain", f"burial-{flavour}",
+                 {"quasi_static": False})
+    try:
+        t.set({"sinkage": 0.1, "wheel_speed": 0.6, "carriage_speed": 0.024})
+        assert _step_is_honest(t, ("normal_force",)) == "refused"
+        assert any("is beyond full burial" in m for m in t.errors()), t.log
+    finally:
+        t.close()
+
+
+@pytest.mark.parametrize("flavour", ["pythonfmu", "native"])
+def test_the_rig_alone_refuses_to_fall_through_the_floor(flavours, flavour):
+    """Without soil forces the wheel free-falls; once its sinkage leaves the declared range
+    the rig refuses the next step (it fell to 19.6 m in 2 s without a word)."""
+    r = instance(flavours, flavour, "SingleWheelRig", f"fall-{flavour}",
+                 {"normal_force": 0.0})
+    try:
+        outcome, k = "ok", 0
+        while outcome == "ok" and k < 2000:
+            outcome = _step_is_honest(r, ("sinkage",), k * 1e-3)
+            k += 1
+        assert outcome == "refused"
+        assert 0.4 < k * 1e-3 < 0.5  # 1 m of free fall at g takes 0.45 s
+        assert abs(r.value("sinkage")) <= 1.0
+        assert any("left the rig's range" in m for m in r.errors()), r.log
+    finally:
+        r.close()
 
 
 def test_state_round_trip_and_serialization(flavours):

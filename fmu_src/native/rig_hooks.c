@@ -39,10 +39,30 @@ static void model_initialize(Instance *c) {
 
 static void model_reset(Instance *c) { model_initialize(c); }
 
+/* The rig's own domain (wheelterrain.fmu.functions.rig_state_problem, same checks and
+   messages): a state that is not finite, or a sinkage beyond RIG_SINKAGE_LIMIT. */
+static int state_problem(const Instance *c, char *message) {
+    const casadi_real *s = c->b.s;
+    int k;
+    for (k = 0; k < N_X; k++) {
+        if (!(fabs(s[k]) < FINITE_LIMIT)) {
+            snprintf(message, MAX_MESSAGE, MESSAGE_RIG_NONFINITE, s[X_SINKAGE],
+                     s[X_WHEEL_SPEED], s[X_CARRIAGE_SPEED]);
+            return 1;
+        }
+    }
+    if (fabs(s[X_SINKAGE]) > RIG_SINKAGE_LIMIT) {
+        snprintf(message, MAX_MESSAGE, MESSAGE_RIG_DEPTH, s[X_SINKAGE], RIG_SINKAGE_LIMIT,
+                 RIG_SINKAGE_LIMIT);
+        return 1;
+    }
+    return 0;
+}
+
 static int model_refresh(Instance *c, char *message) {
     casadi_real u[N_U], p[N_P], y[N_OUT];
     int k;
-    (void)message;
+    if (state_problem(c, message)) return 1;
     bind_state_inputs_params(c, u, p);
     c->arg[3] = &c->b.s[N_X];
     c->res[0] = y;

@@ -44,6 +44,15 @@ static int model_refresh(Instance *c, char *message) {
         snprintf(message, MAX_MESSAGE, MESSAGE_LOAD, c->b.v[VR_LOAD], info, info);
         return 1;
     }
+    if (status == STATUS_BURIED) {
+        snprintf(message, MAX_MESSAGE, MESSAGE_BURIED, c->b.v[VR_SINKAGE], info);
+        return 1;
+    }
+    if (status == STATUS_NONFINITE) {
+        snprintf(message, MAX_MESSAGE, MESSAGE_NONFINITE, c->b.v[VR_SINKAGE],
+                 c->b.v[VR_WHEEL_SPEED], c->b.v[VR_CARRIAGE_SPEED], c->b.v[VR_LOAD]);
+        return 1;
+    }
     if (status != STATUS_OK) {
         snprintf(message, MAX_MESSAGE, MESSAGE_UNCONVERGED, c->b.v[VR_LOAD]);
         return 1;

@@ -116,15 +116,22 @@ def _hook_config(model: str, vr: dict[str, int]) -> list[str]:
                                    [p.name for p in TABLE])
         lines = [f"#define N_IN {len(inputs)}"]
         lines += [f"#define VR_{name.upper()} {vr[name]}" for name in
-                  ("quasi_static", "wheel_angle", "wheel_speed", "carriage_speed", "load")]
+                  ("quasi_static", "wheel_angle", "sinkage", "wheel_speed", "carriage_speed",
+                   "load")]
         lines += [f"#define STATUS_{key} {_c_double(getattr(fmu_model, f'STATUS_{key}'))}"
-                  for key in ("OK", "SLIP", "LOAD", "UNCONVERGED")]
+                  for key in ("OK", "SLIP", "LOAD", "UNCONVERGED", "BURIED", "NONFINITE")]
         lines += [f"#define MESSAGE_{key} "
                   f"{_c_string(fmu_model.STATUS_MESSAGES[getattr(fmu_model, f'STATUS_{key}')])}"
-                  for key in ("SLIP", "LOAD", "UNCONVERGED")]
+                  for key in ("SLIP", "LOAD", "UNCONVERGED", "BURIED", "NONFINITE")]
     else:
         inputs, outputs, params = rig.INPUTS, fmu_model.RIG_OUTPUTS, list(rig.RIG_NAMES)
-        lines = [f"#define N_X {len(rig.RIG_STATES)}", f"#define N_U {len(inputs)}"]
+        lines = [f"#define N_X {len(rig.RIG_STATES)}", f"#define N_U {len(inputs)}",
+                 f"#define FINITE_LIMIT {_c_double(fmu_model.FINITE_LIMIT)}",
+                 f"#define RIG_SINKAGE_LIMIT {_c_double(fmu_model.RIG_SINKAGE_LIMIT)}"]
+        lines += [f"#define X_{name.upper()} {rig.RIG_STATES.index(name)}"
+                  for name in ("sinkage", "wheel_speed", "carriage_speed")]
+        lines += [f"#define MESSAGE_RIG_{key.upper()} {_c_string(text)}"
+                  for key, text in fmu_model.RIG_MESSAGES.items()]
     lines += [f"#define N_OUT {len(outputs)}", f"#define N_P {len(params)}",
               f"static const int IN_VRS[{len(inputs)}] = {_int_list(vr[n] for n in inputs)};",
               f"static const int OUT_VRS[{len(outputs)}] = "

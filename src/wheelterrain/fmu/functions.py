@@ -12,7 +12,9 @@ WheelTerrain
     TERRAIN_OUTPUTS (without wheel_angle, which the wrapper integrates). ``status``: STATUS_OK,
     STATUS_SLIP (traction slip outside [-1, 1], or the wheel or the carriage moving backward;
     ``info`` is the slip), STATUS_LOAD (load beyond the capacity; ``info`` is the capacity),
-    STATUS_UNCONVERGED (the solve's convergence check failed). On a status other than OK the
+    STATUS_UNCONVERGED (the solve's convergence check failed), STATUS_BURIED (dynamic mode:
+    sinkage beyond full burial, R_c; ``info`` is R_c), STATUS_NONFINITE (an output is NaN or
+    infinite: a last guard, so that no non-finite value is served). On a status other than OK the
     wrappers keep their previous outputs and refuse the next step with the reason.
 SingleWheelRig
     ``rig_step`` (:func:`wheelterrain.model.rig.build`) and
@@ -25,7 +27,13 @@ from functools import lru_cache
 
 import casadi as ca
 
-from wheelterrain.fmu.variables import RIG_INPUTS, RIG_OUTPUTS, TERRAIN_INPUTS, TERRAIN_OUTPUTS
+from wheelterrain.fmu.variables import (
+    RIG_INPUTS,
+    RIG_OUTPUTS,
+    TERRAIN_INPUTS,
+    TERRAIN_IO,
+    TERRAIN_OUTPUTS,
+)
 from wheelterrain.model import contact, rig
 from wheelterrain.model.api import RESIDUAL_TOLERANCE, STEP_TOLERANCE
 from wheelterrain.model.slip import reference_radius
@@ -36,11 +44,14 @@ if RIG_INPUTS != rig.INPUTS:  # the FMU's inputs are the rig model's, in the sam
                       f"{rig.INPUTS}")
 
 SPEED_FLOOR = 1e-9  # m/s: below this the wheel and the carriage are both at rest (slip 0)
-STATUS_OK, STATUS_SLIP, STATUS_LOAD, STATUS_UNCONVERGED = 0, 1, 2, 3
+STATUS_OK, STATUS_SLIP, STATUS_LOAD, STATUS_UNCONVERGED, STATUS_BURIED, STATUS_NONFINITE = (
+    0, 1, 2, 3, 4, 5)
+FINITE_LIMIT = 1e300  # |y| at or above this (or NaN) is not a finite output
 # What each status tells the user, as printf templates that both FMU flavours fill (the
 # pythonfmu slaves with %, the native wrapper with snprintf), so both print one sentence.
 # Arguments: SLIP wheel_speed, carriage_speed, slip; LOAD load, capacity, capacity;
-# UNCONVERGED load.
+# UNCONVERGED load; BURIED sinkage, full-burial depth; NONFINITE sinkage, wheel_speed,
+# carriage_speed, load.
 STATUS_MESSAGES = {
     STATUS_SLIP: ("wheel speed %g rad/s with carriage speed %g m/s gives traction slip %g, "
                   "outside the model's domain: the model covers forward rolling (wheel and "
@@ -50,6 +61,11 @@ STATUS_MESSAGES = {
     STATUS_LOAD: ("load %g N exceeds what the wheel can carry fully buried (%.6g N); valid range "
                   "[0, %.6g] N"),
     STATUS_UNCONVERGED: "sinkage solve did not converge for load %g N",
+    STATUS_BURIED: ("sinkage %g m is beyond full burial (%.6g m, the contact radius): the "
+                    "contact model covers sinkage up to the depth at which the soil reaches "
+                    "the axle; a wheel pushed deeper is outside its domain"),
+    STATUS_NONFINITE: ("the model's outputs are not finite at sinkage %g m, wheel speed %g "
+                       "rad/s, carriage speed %g m/s, load %g N"),
 }
 
 
@@ -61,7 +77,20 @@ def status_message(status: int, info: float, u) -> str:
         return STATUS_MESSAGES[status] % (v["wheel_speed"], v["carriage_speed"], info)
     if status == STATUS_LOAD:
         return STATUS_MESSAGES[status] % (v["load"], info, info)
+    if status == STATUS_BURIED:
+        return STATUS_MESSAGES[status] % (v["sinkage"], info)
+    if status == STATUS_NONFINITE:
+        return STATUS_MESSAGES[status] % (v["sinkage"], v["wheel_speed"], v["carriage_speed"],
+                                          v["load"])
     return STATUS_MESSAGES[STATUS_UNCONVERGED] % v["load"]
+
+
+def _finite(y):
+    """1 when every entry of ``y`` is finite (NaN compares false), else 0."""
+    finite = 1
+    for k in range(y.shape[0]):
+        finite = ca.logic_and(finite, ca.fabs(y[k]) < FINITE_LIMIT)
+    return finite
 
 
 def slips(wheel_speed, carriage_speed, slip_radius):
@@ -118,8 +147,12 @@ def terrain_functions() -> tuple[ca.Function, ca.Function]:
                    strict=True))
     out.update(contact_sinkage=sinkage, slip=traction, slip_paper=paper)
     y = ca.vertcat(*(out[k] for k in TERRAIN_OUTPUTS))
-    dynamic = ca.Function("terrain_dynamic", [u, angle, p],
-                          [y, ca.if_else(slip_bad, STATUS_SLIP, STATUS_OK), traction],
+    full_burial = contact._radii(contact._P(p))[0]  # sinkage R_c: the soil at the axle
+    status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(
+        sinkage > full_burial, STATUS_BURIED, ca.if_else(
+            _finite(y), STATUS_OK, STATUS_NONFINITE)))
+    info = ca.if_else(slip_bad, traction, full_burial)
+    dynamic = ca.Function("terrain_dynamic", [u, angle, p], [y, status, info],
                           ["u", "angle", "p"], ["y", "status", "info"])
 
     steady = dict(zip(contact.STEADY_OUTPUTS, fns.steady_calls(load, safe_slip, p), strict=True))
@@ -130,11 +163,38 @@ def terrain_functions() -> tuple[ca.Function, ca.Function]:
     converged = ca.logic_or(ca.fabs(steady["residual"]) <= RESIDUAL_TOLERANCE,
                             steady["last_step"] <= STEP_TOLERANCE)
     status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(
-        too_heavy, STATUS_LOAD, ca.if_else(converged, STATUS_OK, STATUS_UNCONVERGED)))
+        too_heavy, STATUS_LOAD, ca.if_else(converged, ca.if_else(
+            _finite(y), STATUS_OK, STATUS_NONFINITE), STATUS_UNCONVERGED)))
     info = ca.if_else(slip_bad, traction, steady["capacity"])
     quasi = ca.Function("terrain_quasi_static", [u, p], [y, status, info], ["u", "p"],
                         ["y", "status", "info"])
     return dynamic, quasi
+
+
+# The rig's own domain: a state outside it means the terrain no longer holds the wheel (or
+# is not connected); both flavours refuse the next step with these messages. The sinkage
+# limit is the terrain's declared sinkage input range, so the pair agrees on it.
+RIG_SINKAGE_LIMIT = next(v.max for v in TERRAIN_IO
+                         if v.name == "sinkage" and v.causality == "input")
+RIG_MESSAGES = {
+    "depth": ("the wheel's sinkage %g m left the rig's range [-%g, %g] m: the soil's normal "
+              "force no longer holds the load (is WheelTerrain connected, and can it carry "
+              "rig.load?)"),
+    "nonfinite": ("the rig's state is not finite (sinkage %g m, wheel speed %g rad/s, carriage "
+                  "speed %g m/s)"),
+}
+
+
+def rig_state_problem(x) -> str | None:
+    """Why the rig state ``x`` (rig.RIG_STATES, floats) is outside the rig's domain, or None.
+    The native wrapper makes the same two checks with the same messages (rig_hooks.c)."""
+    state = dict(zip(rig.RIG_STATES, x, strict=True))
+    if not all(abs(v) < FINITE_LIMIT for v in x):
+        return RIG_MESSAGES["nonfinite"] % (state["sinkage"], state["wheel_speed"],
+                                            state["carriage_speed"])
+    if abs(state["sinkage"]) > RIG_SINKAGE_LIMIT:
+        return RIG_MESSAGES["depth"] % (state["sinkage"], RIG_SINKAGE_LIMIT, RIG_SINKAGE_LIMIT)
+    return None
 
 
 def rig_outputs(x, u, p, motor_torque):

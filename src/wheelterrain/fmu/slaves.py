@@ -266,7 +266,13 @@ class RigCore(_Core):
         if not self.dirty:
             return
         self.dirty = False
-        if self.errors:
+        if any(name != OPERATING_POINT for name in self.errors):
+            return
+        self.errors.pop(OPERATING_POINT, None)
+        problem = fmu_model.rig_state_problem(self.state)
+        if problem:
+            self.errors[OPERATING_POINT] = problem
+            self.log_error(problem)
             return
         y = fmu_model.rig_outputs(self.state, self.forces(), self.params(), self.motor_torque)
         self.values.update(zip(fmu_model.RIG_OUTPUTS, y, strict=True))

@@ -104,8 +104,11 @@ TERRAIN_IO: tuple[Var, ...] = (
 )
 
 RIG_IO: tuple[Var, ...] = (
+    # start: the default rig.load, so that unconnected the soil holds the wheel still (with
+    # no force the wheel free-falls and the rig refuses to step once it leaves its range)
     Var("normal_force", "input", "Normal force of the soil on the wheel (from WheelTerrain)",
-        "N", "Force", start=0.0, min=-1.0e6, max=1.0e6),
+        "N", "Force", start=next(p.default for p in ROWS if p.name == "rig.load"),
+        min=-1.0e6, max=1.0e6),
     Var("drawbar_pull", "input", "Drawbar pull of the soil on the wheel (from WheelTerrain)",
         "N", "Force", start=0.0, min=-1.0e6, max=1.0e6),
     Var("torque", "input", "Resistive soil torque about the axle (from WheelTerrain)", "N.m",
@@ -114,8 +117,9 @@ RIG_IO: tuple[Var, ...] = (
         "= 1 (speed-command)", "rad/s", "AngularVelocity", start=0.0, min=-1.0e3, max=1.0e3),
     Var("motor_torque_command", "input", "Torque the wheel motor applies when rig.drive = 2 "
         "(torque-command)", "N.m", "Torque", start=0.0, min=-1.0e4, max=1.0e4),
-    Var("sinkage", "output", "Wheel sinkage (state of the vertical motion), positive down",
-        "m", "Length", "mm", depends_on=()),
+    Var("sinkage", "output", "Wheel sinkage (state of the vertical motion), positive down; "
+        "a step that takes it outside its range is the rig's last (the next is refused)",
+        "m", "Length", "mm", min=-1.0, max=1.0, depends_on=()),
     Var("sinkage_rate", "output", "Sinkage rate, positive down", "m/s", "Velocity",
         depends_on=()),
     Var("wheel_speed", "output", "Wheel angular velocity (state of the speed loop)", "rad/s",
