@@ -77,6 +77,33 @@ def test_model_description_is_modelica_friendly(fmus):
     assert md.defaultExperiment.stepSize == "0.001"
 
 
+@pytest.mark.parametrize("name", NAMES)
+def test_guid_is_derived_from_the_content_and_the_fmu_names_its_version(fmus, name):
+    """The GUID hashes the description without the GUID and the build time: recomputing it
+    from the shipped description gives it back (a rebuild of the same model gets the same
+    GUID), and any change to a variable gives another one. Version and author are set."""
+    import copy
+    import zipfile
+    from xml.etree import ElementTree as ET
+
+    from wheelterrain import __version__
+    from wheelterrain.fmu.build_pythonfmu import _identify
+
+    with zipfile.ZipFile(fmus[name]) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+    assert root.get("version") == __version__
+    assert root.get("author")
+    assert "generationDateAndTime" not in root.attrib
+    shipped = root.get("guid")
+    again = copy.deepcopy(root)
+    _identify(again)
+    assert again.get("guid") == shipped
+    changed = copy.deepcopy(root)
+    changed.find("ModelVariables")[0][0].set("start", "0.123")
+    _identify(changed)
+    assert changed.get("guid") != shipped
+
+
 @pytest.mark.parametrize(("slip", "phi"), [(0.0, 0.45), (0.2, 0.40), (0.43, 0.42)])
 def test_quasi_static_fmpy_cli_matches_steady(fmus, tmp_path, slip, phi):
     ps = presets.load(presets.DEFAULT_PRESET).with_values({"soil.phi": phi})

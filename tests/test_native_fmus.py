@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 import shutil
 import subprocess
 import zipfile
@@ -148,6 +149,22 @@ def test_flavours_give_the_same_c1_c4_means(flavours):
             means.append(r.means)
         for key in ("drawbar_pull", "normal_force", "sinkage"):
             assert means[1][key] == pytest.approx(means[0][key], rel=1e-9), (case, key)
+
+
+def test_only_declared_log_categories_are_accepted(flavours):
+    """The native wrapper accepts exactly the categories its modelDescription declares
+    (logEvents was accepted but not declared)."""
+    md = read_model_description(str(flavours["root"] / "native" / "WheelTerrain.fmu"))
+    declared = [c.name for c in md.logCategories]
+    t = instance(flavours, "native", "WheelTerrain", "categories")
+    try:
+        t.fmu.setDebugLogging(True, declared)
+        with pytest.raises(FMICallException):
+            t.fmu.setDebugLogging(True, ["logEvents"])
+        assert any("unknown log category 'logEvents'" in m for m in t.errors())
+    finally:
+        t.close()
+    assert "logEvents" not in declared
 
 
 def test_wrong_guid_and_wrong_call_sequence_are_rejected(flavours):
@@ -441,6 +458,48 @@ def test_shipped_sources_compile_with_every_warning_as_an_error(flavours, name, 
     sources = Path(flavours["unzip"][("native", name)]) / "sources"
     run = subprocess.run([native.compiler(), "-std=c99", "-Wall", "-Wextra", "-Werror",
                           "-pedantic-errors", "-O2", "-fPIC", "-shared", "-I", str(sources),
-                          str(sources / "fmi2_native.c"), "-o", str(tmp_path / "lib.so"),
-                          "-lm"], capture_output=True, text=True, check=False)
+                          *map(str, sorted(sources.glob("*.c"))), "-o",
+                          str(tmp_path / "lib.so"), "-lm"],
+                         capture_output=True, text=True, check=False)
     assert run.returncode == 0, run.stderr[-3000:]
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_sources_build_as_all_c_files_and_the_result_loads(flavours, name, tmp_path):
+    """What an importer does with a source FMU: `cc -shared -fPIC sources/*.c -lm`. Every
+    .c in sources/ is a translation unit of its own (the included parts are .h/.inc), and
+    the library it gives answers fmi2GetVersion."""
+    import ctypes
+
+    sources = Path(flavours["unzip"][("native", name)]) / "sources"
+    assert [p.name for p in sources.glob("*.c")] == ["fmi2_native.c"]
+    library = tmp_path / f"{name}.so"
+    run = subprocess.run(f"{native.compiler()} -shared -fPIC {sources}/*.c -o {library} -lm",
+                         shell=True, capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr[-3000:]
+    lib = ctypes.CDLL(str(library))
+    lib.fmi2GetVersion.restype = ctypes.c_char_p
+    assert lib.fmi2GetVersion() == b"2.0"
+
+
+@pytest.mark.skipif(shutil.which("objdump") is None, reason="needs objdump (binutils)")
+@pytest.mark.parametrize("name", NAMES)
+def test_the_binary_loads_on_glibc_2_17_and_exports_only_the_fmi2_api(flavours, name):
+    """`objdump -T`: no GLIBC symbol version above 2.17 (exp and pow are bound to their
+    2.2.5 versions; they were 2.29), and every defined global symbol is an fmi2 function
+    (there were ~70 internal ones). The binary is stripped."""
+    binary = next((Path(flavours["unzip"][("native", name)]) / "binaries").rglob("*.so"))
+    table = subprocess.run(["objdump", "-T", str(binary)], capture_output=True, text=True,
+                           check=True).stdout
+    versions = {tuple(int(x) for x in v.split(".")) for v in
+                re.findall(r"GLIBC_([0-9.]+)", table)}
+    assert versions, table[:2000]  # the check reads real version tags
+    assert max(versions) <= (2, 17), sorted(versions)
+    exported = sorted({line.split()[-1] for line in table.splitlines()
+                       if re.match(r"^[0-9a-f]+ g +DF? +\.text", line)})
+    assert exported, table[:2000]
+    assert all(sym.startswith("fmi2") for sym in exported), exported
+    assert "fmi2DoStep" in exported
+    symtab = subprocess.run(["objdump", "-t", str(binary)], capture_output=True, text=True,
+                            check=True).stdout
+    assert "no symbols" in symtab.lower() or "model_refresh" not in symtab

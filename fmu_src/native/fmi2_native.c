@@ -4,7 +4,7 @@
  * One translation unit per FMU: this file includes model_vars.h, which `wheelterrain build
  * --flavor native` generates for WheelTerrain or SingleWheelRig (the variable table, the GUID,
  * the sizes and value references the hooks use, and the C that CasADi generates from the very
- * Functions the Python flavour calls, wheelterrain.fmu.functions), and model_hooks.c, the
+ * Functions the Python flavour calls, wheelterrain.fmu.functions), and model_hooks.inc, the
  * model's hooks (terrain_hooks.c or rig_hooks.c beside this file: model_work, model_reset,
  * model_initialize, model_refresh, model_step, copying values in and out of those Functions).
  * No arithmetic of the model is written by hand.
@@ -20,6 +20,19 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* glibc 2.29 gave exp, exp2, log, log2 and pow new symbol versions. `wheelterrain build`
+ * defines WHEELTERRAIN_PORTABLE_LIBM to bind them to the versions every x86_64 glibc has
+ * (2.2.5), so the shipped binary loads on glibc >= 2.17 systems (RHEL/CentOS 7 and 8, Ubuntu
+ * 18.04, Debian 10); same mathematics, the newer ones are faster. A build of sources/ on the
+ * machine that runs it needs nothing (and a build without -lm could not bind versions). */
+#if defined(__GLIBC__) && defined(__x86_64__) && defined(WHEELTERRAIN_PORTABLE_LIBM)
+__asm__(".symver exp,exp@GLIBC_2.2.5");
+__asm__(".symver exp2,exp2@GLIBC_2.2.5");
+__asm__(".symver log,log@GLIBC_2.2.5");
+__asm__(".symver log2,log2@GLIBC_2.2.5");
+__asm__(".symver pow,pow@GLIBC_2.2.5");
+#endif
 
 #include "fmi2Functions.h"
 
@@ -87,11 +100,12 @@ static void cover(WorkSizes f, casadi_int *sz_arg, casadi_int *sz_res, casadi_in
     if (w > *sz_w) *sz_w = w;
 }
 
-#include "model_hooks.c"
+#include "model_hooks.inc"
 
-static const char *CATEGORIES[] = {"logEvents", "logStatusWarning", "logStatusDiscard",
-                                   "logStatusError", "logStatusFatal", "logAll"};
-#define N_CATEGORIES 6
+/* Exactly the categories the modelDescription declares; any other name is refused. */
+static const char *CATEGORIES[] = {"logStatusWarning", "logStatusDiscard", "logStatusError",
+                                   "logStatusFatal", "logAll"};
+#define N_CATEGORIES 5
 
 static void log_message(Instance *c, fmi2Status status, int category, const char *fmt, ...) {
     char text[MAX_MESSAGE * 2];
@@ -119,8 +133,8 @@ static void log_message(Instance *c, fmi2Status status, int category, const char
     }
 }
 
-#define LOG_ERROR(c, ...) log_message((c), fmi2Error, 3, __VA_ARGS__)
-#define LOG_DISCARD(c, ...) log_message((c), fmi2Discard, 2, __VA_ARGS__)
+#define LOG_ERROR(c, ...) log_message((c), fmi2Error, 2, __VA_ARGS__)
+#define LOG_DISCARD(c, ...) log_message((c), fmi2Discard, 1, __VA_ARGS__)
 
 static const char *mode_name(int mode) {
     switch (mode) {

@@ -1,5 +1,5 @@
 /* SingleWheelRig's model hooks for fmi2_native.c (copied into the FMU as
- * sources/model_hooks.c).
+ * sources/model_hooks.inc).
  *
  * Values in and out of the CasADi Functions rig_step / rig_outputs / rig_initial
  * (wheelterrain.model.rig, wheelterrain.fmu.functions). States 0..N_X-1 are the rig's states

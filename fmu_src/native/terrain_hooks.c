@@ -1,4 +1,4 @@
-/* WheelTerrain's model hooks for fmi2_native.c (copied into the FMU as sources/model_hooks.c).
+/* WheelTerrain's model hooks for fmi2_native.c (copied into the FMU as sources/model_hooks.inc).
  *
  * Values in and out of the CasADi Functions terrain_dynamic / terrain_quasi_static
  * (wheelterrain.fmu.functions); the wheel angle (state 0) is integrated from wheel_speed, so the

@@ -6,7 +6,7 @@ For each FMU:
    structure), with the co-simulation flags of a native binary;
 2. CasADi generates C for the FMU's Functions (:mod:`wheelterrain.fmu.functions`: the same ones the
    pythonfmu flavour calls);
-3. model_vars.h (variable table, GUID) and model_hooks.c (copying values in and out of those
+3. model_vars.h (variable table, GUID) and model_hooks.inc (copying values in and out of those
    Functions) are generated from the variable list the slaves use;
 4. fmu_src/native/fmi2_native.c (our FMI 2.0 wrapper) is compiled with them against the FMI 2
    headers shipped in fmpy, into binaries/linux64/<model>.so;
@@ -32,8 +32,14 @@ from wheelterrain.fmu.build_pythonfmu import build as build_pythonfmu
 from wheelterrain.model import rig
 from wheelterrain.parameters import TABLE
 
-SOURCES = ("fmi2_native.c", "model_vars.h", "model_hooks.c", "casadi_functions.c",
+SOURCES = ("fmi2_native.c", "model_vars.h", "model_hooks.inc", "casadi_functions.inc",
            "fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+"""sources/ of a native FMU. fmi2_native.c is the one translation unit: it includes the
+rest, which is why those do not end in .c, so ``cc -shared -fPIC sources/*.c -lm`` and
+``fmpy compile`` build the binary as the FMI standard's source-code FMUs expect."""
+CFLAGS = ("-O2", "-fPIC", "-shared", "-fvisibility=hidden", "-s", "-DWHEELTERRAIN_PORTABLE_LIBM")
+"""Only the fmi2 functions are exported (the header marks them visible), the binary is
+stripped, and libm's functions are bound to versions glibc >= 2.17 has (fmi2_native.c)."""
 
 
 def fmi_headers() -> Path:
@@ -84,10 +90,13 @@ def _model_vars(model: str, root: ET.Element) -> str:
         f"#define N_VARS {len(rows)}",
         f"#define N_STATES {n_states}",
         "/* CasADi's generated functions share one signature, so some leave parameters unused;",
-        "   everything else is compiled with -Wall -Wextra -Werror in tests/test_native_fmus.py */",
+        "   everything else is compiled with -Wall -Wextra -Werror in tests/test_native_fmus.py.",
+        "   CasADi's functions are internal to the binary: hidden, whatever the build flags. */",
         "#pragma GCC diagnostic push",
         '#pragma GCC diagnostic ignored "-Wunused-parameter"',
-        '#include "casadi_functions.c"',
+        "#pragma GCC visibility push(hidden)",
+        '#include "casadi_functions.inc"',
+        "#pragma GCC visibility pop",
         "#pragma GCC diagnostic pop",
         "static const VarInfo VARS[N_VARS] = {",
         *rows,
@@ -104,7 +113,7 @@ def _int_list(values) -> str:
 
 
 HOOKS = {"WheelTerrain": "terrain_hooks.c", "SingleWheelRig": "rig_hooks.c"}
-"""The model hooks of each FMU: real C in fmu_src/native/, shipped as sources/model_hooks.c.
+"""The model hooks of each FMU: real C in fmu_src/native/, shipped as sources/model_hooks.inc.
 What they need that is a list of names comes from model_vars.h (:func:`_hook_config`)."""
 
 
@@ -151,6 +160,8 @@ def _casadi_source(model: str, directory: Path) -> None:
     for fn in _functions(model):
         cg.add(fn)
     cg.generate(str(directory) + os.sep)
+    # included by fmi2_native.c, so not a .c of its own (sources/*.c is one translation unit)
+    os.replace(directory / "casadi_functions.c", directory / "casadi_functions.inc")
 
 
 def _native_description(root: ET.Element) -> bytes:
@@ -188,16 +199,15 @@ def build(out: Path, models: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig"
             src = tmp / model / "sources"
             src.mkdir(parents=True)
             (src / "model_vars.h").write_text(_model_vars(model, root))
-            shutil.copyfile(source_dir() / "native" / HOOKS[model], src / "model_hooks.c")
+            shutil.copyfile(source_dir() / "native" / HOOKS[model], src / "model_hooks.inc")
             _casadi_source(model, src)
             shutil.copyfile(source_dir() / "native" / "fmi2_native.c", src / "fmi2_native.c")
             for header in ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"):
                 shutil.copyfile(headers / header, src / header)
             library = tmp / model / f"{model}.so"
             try:
-                run = subprocess.run([cc, "-O2", "-fPIC", "-shared", "-fvisibility=default",
-                                      "-I", str(src), str(src / "fmi2_native.c"), "-o",
-                                      str(library), "-lm"],
+                run = subprocess.run([cc, *CFLAGS, "-I", str(src), str(src / "fmi2_native.c"),
+                                      "-o", str(library), "-lm"],
                                      capture_output=True, text=True, check=False)
             except OSError as err:
                 raise BuildError(f"cannot run the C compiler {cc!r}: {err}") from err

@@ -10,7 +10,8 @@ same :class:`wheelterrain.fmu.variables.Var` lists the slaves register:
   one exists (``Modelica.Units.SI.Velocity``), else ``wheelterrain.<Quantity>``;
 - declaredType, unit, min/max and a description on every variable, displayUnit where useful;
 - ModelStructure: Outputs with their direct dependencies on inputs, InitialUnknowns;
-- a DefaultExperiment (from the slave class).
+- a DefaultExperiment (from the slave class);
+- version, author, and a GUID derived from the description's content (same model, same GUID).
 
 The wheelterrain package itself is bundled into resources/, so the FMU needs only numpy and
 casadi in the host's Python.
@@ -18,9 +19,11 @@ casadi in the host's Python.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import shutil
 import tempfile
+import uuid
 import zipfile
 from pathlib import Path
 from xml.dom import minidom
@@ -127,6 +130,22 @@ def _fmt(x: float) -> str:
     return repr(float(x))
 
 
+def _identify(root: ET.Element) -> None:
+    """Version, author, and a GUID derived from the description's content: the same model
+    built twice gets the same GUID, a changed one (variables, ranges, defaults, version)
+    another. The hash is over the canonical XML (C14N, whitespace stripped), so it can be
+    recomputed from the shipped file; the build time is left out of it and of the file."""
+    from wheelterrain import __version__
+
+    root.set("version", __version__)
+    root.set("author", "The wheelterrain project")
+    for volatile in ("guid", "generationDateAndTime"):
+        root.attrib.pop(volatile, None)
+    canonical = ET.canonicalize(ET.tostring(root, encoding="unicode"), strip_text=True)
+    digest = hashlib.sha256(canonical.encode("utf-8")).digest()
+    root.set("guid", "{" + str(uuid.UUID(bytes=digest[:16], version=5)) + "}")
+
+
 def finish_model_description(fmu: Path, model: str) -> None:
     """Rewrite modelDescription.xml inside ``fmu`` (see the module docstring)."""
     variables = {v.name: v for v in VARIABLES[model]()}
@@ -208,6 +227,7 @@ def finish_model_description(fmu: Path, model: str) -> None:
         ET.SubElement(outputs, "Unknown", attrs)
         ET.SubElement(initial, "Unknown", index=str(index[v.name]))
 
+    _identify(root)
     text = minidom.parseString(ET.tostring(root, encoding="unicode")).toprettyxml(indent="  ")
     text = "\n".join(line for line in text.splitlines() if line.strip())
     members["modelDescription.xml"] = text.encode("utf-8")
