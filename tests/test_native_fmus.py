@@ -167,6 +167,54 @@ def test_only_declared_log_categories_are_accepted(flavours):
     assert "logEvents" not in declared
 
 
+@pytest.mark.parametrize("flavour", ["pythonfmu", "native"])
+@pytest.mark.parametrize("h", [0.0, -1e-3, math.nan, math.inf])
+def test_a_bad_step_size_is_refused_with_a_reason(flavours, flavour, h):
+    """A step of size 0, negative, NaN or infinite is refused with a logged reason (the
+    pythonfmu flavour returned OK and the state became NaN); the instance then steps on."""
+    t = instance(flavours, flavour, "WheelTerrain", f"h-{flavour}")
+    try:
+        with pytest.raises(FMICallException):
+            t.fmu.doStep(0.0, h)
+        assert any("must be finite and > 0" in m for m in t.errors()), t.log
+        t.fmu.doStep(0.0, 1e-3)
+        assert math.isfinite(t.value("drawbar_pull"))
+    finally:
+        t.close()
+
+
+def test_native_steps_must_continue_and_states_must_be_their_own(flavours):
+    """The native wrapper refuses a doStep that does not start where the last one ended, and
+    an FMU state of the other model (a rig state on a WheelTerrain instance)."""
+    t = instance(flavours, "native", "WheelTerrain", "continuity")
+    r = instance(flavours, "native", "SingleWheelRig", "foreign")
+    try:
+        t.fmu.doStep(0.0, 1e-3)
+        with pytest.raises(FMICallException):
+            t.fmu.doStep(5e-3, 1e-3)
+        assert any("steps must continue" in m for m in t.errors()), t.log
+        t.fmu.doStep(1e-3, 1e-3)
+        foreign = r.fmu.getFMUstate()
+        with pytest.raises(FMICallException):
+            t.fmu.setFMUstate(foreign)
+        assert any("not a state of WheelTerrain" in m for m in t.errors()), t.log
+        r.fmu.freeFMUstate(foreign)
+    finally:
+        t.close()
+        r.close()
+
+
+def test_pythonfmu_refuses_a_step_before_initialisation(flavours):
+    t = Instance(flavours["root"] / "pythonfmu" / "WheelTerrain.fmu",
+                 flavours["unzip"][("pythonfmu", "WheelTerrain")], "early", log=True)
+    try:
+        with pytest.raises(FMICallException):
+            t.fmu.doStep(0.0, 1e-3)
+        assert any("illegal call sequence" in m for m in t.errors()), t.log
+    finally:
+        t.close()
+
+
 def test_wrong_guid_and_wrong_call_sequence_are_rejected(flavours):
     root = flavours["root"] / "native"
     unzip = flavours["unzip"][("native", "WheelTerrain")]
@@ -224,15 +272,18 @@ def test_both_flavours_refuse_a_slip_outside_the_domain_with_the_same_sentence(f
     assert messages[0][0] == messages[1][0]  # one template: fmu_model.STATUS_MESSAGES
 
 
-def _step_is_honest(inst, outputs, t=0.0) -> str:
+def _step_is_honest(inst, outputs) -> str:
     """'ok' when doStep returns OK and every output is finite; 'refused' when it is refused
-    (Discard/Error) with a logged reason; any other outcome fails the test."""
+    (Discard/Error) with a logged reason; any other outcome fails the test. Steps continue
+    from the last one's end (the native flavour checks it)."""
     inst.log.clear()
+    t = getattr(inst, "clock", 0.0)
     try:
         inst.fmu.doStep(t, 1e-3)
     except FMICallException:
         assert inst.errors(), "a refused step must log its reason"
         return "refused"
+    inst.clock = t + 1e-3
     values = inst.get(outputs)
     assert all(math.isfinite(v) for v in values), dict(zip(outputs, values, strict=True))
     return "ok"
@@ -307,7 +358,7 @@ def test_the_rig_alone_refuses_to_fall_through_the_floor(flavours, flavour):
     try:
         outcome, k = "ok", 0
         while outcome == "ok" and k < 2000:
-            outcome = _step_is_honest(r, ("sinkage",), k * 1e-3)
+            outcome = _step_is_honest(r, ("sinkage",))
             k += 1
         assert outcome == "refused"
         assert 0.4 < k * 1e-3 < 0.5  # 1 m of free fall at g takes 0.45 s

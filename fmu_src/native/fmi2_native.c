@@ -64,6 +64,7 @@ typedef enum {
 /* The instance state that get/set/serialize FMU state carries, as one plain block. */
 typedef struct {
     unsigned magic;
+    char guid[48]; /* the model's GUID: a state of another FMU (or build) is refused */
     double v[N_VARS];
     int invalid[N_VARS];
     double s[N_STATES];
@@ -231,6 +232,7 @@ fmi2Status fmi2SetDebugLogging(fmi2Component comp, fmi2Boolean loggingOn, size_t
 static void set_defaults(Instance *c) {
     memset(&c->b, 0, sizeof c->b);
     c->b.magic = BLOCK_MAGIC;
+    snprintf(c->b.guid, sizeof c->b.guid, "%s", MODEL_GUID);
     for (int k = 0; k < N_VARS; k++) c->b.v[k] = VARS[k].start;
     c->b.dirty = 1;
     c->b.mode = S_INSTANTIATED;
@@ -479,8 +481,9 @@ fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate state) {
     Instance *c = (Instance *)comp;
     const Block *copy = (const Block *)state;
     if (!allowed(c, "fmi2SetFMUstate", SETTABLE | S_TERMINATED | S_ERROR)) return fmi2Error;
-    if (copy == NULL || copy->magic != BLOCK_MAGIC) {
-        LOG_ERROR(c, "fmi2SetFMUstate: not a state of %s", MODEL_NAME);
+    if (copy == NULL || copy->magic != BLOCK_MAGIC ||
+        strncmp(copy->guid, MODEL_GUID, sizeof copy->guid) != 0) {
+        LOG_ERROR(c, "fmi2SetFMUstate: not a state of %s (GUID %s)", MODEL_NAME, MODEL_GUID);
         return fmi2Error;
     }
     c->b = *copy;
@@ -517,8 +520,10 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte bytes[], s
                                    fmi2FMUstate *state) {
     Instance *c = (Instance *)comp;
     Block *copy;
-    if (size != sizeof(Block) || ((const Block *)bytes)->magic != BLOCK_MAGIC) {
-        LOG_ERROR(c, "fmi2DeSerializeFMUstate: not a serialized state of %s", MODEL_NAME);
+    if (size != sizeof(Block) || ((const Block *)bytes)->magic != BLOCK_MAGIC ||
+        strncmp(((const Block *)bytes)->guid, MODEL_GUID, sizeof((Block *)0)->guid) != 0) {
+        LOG_ERROR(c, "fmi2DeSerializeFMUstate: not a serialized state of %s (GUID %s)",
+                  MODEL_NAME, MODEL_GUID);
         return fmi2Error;
     }
     copy = (Block *)c->cb.allocateMemory(1, sizeof(Block));
@@ -562,6 +567,11 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
     if (!allowed(c, "fmi2DoStep", S_STEP_COMPLETE)) return fmi2Error;
     if (!(h > 0.0) || !isfinite(h) || !isfinite(t)) {
         LOG_ERROR(c, "fmi2DoStep: communication step %g at t = %g must be finite and > 0", h, t);
+        return fmi2Error;
+    }
+    if (fabs(t - c->b.time) > 1e-9 * fmax(1.0, fabs(t))) {
+        LOG_ERROR(c, "fmi2DoStep: the step starts at t = %.17g but the last one ended at "
+                  "t = %.17g; steps must continue from the last step's end", t, c->b.time);
         return fmi2Error;
     }
     refresh(c);

@@ -68,6 +68,7 @@ class _Core:
         self.vars = {v.name: v for v in variables}
         self.values: dict[str, float] = {}
         self.errors: dict[str, str] = {}
+        self.initialized = False  # initialisation mode has been left (doStep is legal)
         for v in variables:
             if v.start is not None:
                 self.values[v.name] = v.start
@@ -144,6 +145,20 @@ class _Core:
         from pythonfmu.enums import Fmi2Status
         self.slave.log(f"{self.model_name}: {message}", Fmi2Status.error)
 
+    def step_allowed(self, t: float, h: float) -> bool:
+        """The API checks of fmi2DoStep, logged as errors when they fail: initialisation has
+        ended, and the step's time and size are finite with h > 0 (a bad step made the state
+        NaN with fmi2OK). pythonfmu maps the refusal to fmi2Discard."""
+        if not self.initialized:
+            self.log_error("fmi2DoStep: illegal call sequence: initialisation mode has not been "
+                           "left (call fmi2ExitInitializationMode first)")
+            return False
+        if not (math.isfinite(t) and math.isfinite(h) and h > 0):
+            self.log_error(f"fmi2DoStep: communication step {h:g} at t = {t:g} must be finite "
+                           "and > 0")
+            return False
+        return True
+
     def refuse_if_invalid(self) -> bool:
         """True if the instance may step; else log every reason and refuse."""
         if not self.errors:
@@ -217,6 +232,7 @@ class TerrainCore(_Core):
         v["wheel_angle"] = self.angle
 
     def initialize(self) -> None:
+        self.initialized = True
         self.dirty = True
         self.refresh()
 
@@ -224,6 +240,8 @@ class TerrainCore(_Core):
         """Check the step's inputs, advance the wheel angle. The outputs at the end of the step
         are computed when first read (a master that sets new inputs first pays for one
         evaluation per step, not two); a problem found then refuses the next step."""
+        if not self.step_allowed(t, h):
+            return False
         self.refresh()
         if not self.refuse_if_invalid():
             return False
@@ -257,6 +275,7 @@ class RigCore(_Core):
         self.motor_torque = float(state["motor_torque"])
 
     def initialize(self) -> None:
+        self.initialized = True
         if not self.errors:
             self.state = rig.initial_state(self.params())
         self.dirty = True
@@ -281,6 +300,8 @@ class RigCore(_Core):
         return tuple(float(self.values[name]) for name in rig.INPUTS)
 
     def do_step(self, t: float, h: float) -> bool:
+        if not self.step_allowed(t, h):
+            return False
         if not self.refuse_if_invalid():
             return False
         self.state, self.motor_torque = rig.step(self.state, self.forces(), self.params(), h)
