@@ -7,7 +7,8 @@ same :class:`wheelterrain.fmu.variables.Var` lists the slaves register:
 
 - UnitDefinitions with SI base-unit exponents, display units deg (angles) and mm (sinkage);
 - TypeDefinitions: one SimpleType per quantity, named after its Modelica.Units.SI type where
-  one exists (``Modelica.Units.SI.Velocity``), else ``wheelterrain.<Quantity>``;
+  one exists (``Modelica.Units.SI.Velocity``), else ``wheelterrain.<Quantity>``; each mode
+  switch an Enumeration of its own (``wheelterrain.model.contact_form``: arc, patch);
 - declaredType, unit, min/max and a description on every variable, displayUnit where useful;
 - ModelStructure: Outputs with their direct dependencies on inputs, InitialUnknowns;
 - a DefaultExperiment (from the slave class);
@@ -114,6 +115,8 @@ def build(out: Path, models: tuple[str, ...] = tuple(SOURCES),
 
 
 def _type_name(v: variables.Var) -> str:
+    if v.choices:
+        return f"wheelterrain.{v.name}"  # an Enumeration of its own
     if v.type == "Boolean":
         return "wheelterrain.Switch"
     if v.type == "Integer":
@@ -179,7 +182,11 @@ def finish_model_description(fmu: Path, model: str) -> None:
     for name in sorted(types):
         v = types[name]
         st = ET.SubElement(type_defs, "SimpleType", name=name)
-        if v.type == "Real":
+        if v.choices:
+            enum = ET.SubElement(st, "Enumeration")
+            for value, item in sorted(v.choices.items()):
+                ET.SubElement(enum, "Item", name=item, value=str(value))
+        elif v.type == "Real":
             ET.SubElement(st, "Real", quantity=name.rsplit(".", 1)[1], unit=v.unit)
         else:
             ET.SubElement(st, v.type)
@@ -192,6 +199,8 @@ def finish_model_description(fmu: Path, model: str) -> None:
         v = variables[sv.get("name")]
         sv.set("description", v.description)
         typed = sv[0]
+        if v.choices:
+            typed.tag = "Enumeration"  # set and read with fmi2SetInteger/fmi2GetInteger
         typed.set("declaredType", _type_name(v))
         if v.type == "Real":
             typed.set("unit", v.unit)

@@ -32,7 +32,7 @@ def set_values(fmu, vr: Mapping[str, int], types: Mapping[str, str], values: Map
         kind = types[name]
         if kind == "Real":
             fmu.setReal([vr[name]], [float(value)])
-        elif kind == "Integer":
+        elif kind in ("Integer", "Enumeration"):
             fmu.setInteger([vr[name]], [round(value)])
         else:
             fmu.setBoolean([vr[name]], [bool(value)])

@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 
@@ -145,6 +146,40 @@ class _Core:
         from pythonfmu.enums import Fmi2Status
         self.slave.log(f"{self.model_name}: {message}", Fmi2Status.error)
 
+    # --- value references the FMU does not have --------------------------------------------
+    # pythonfmu 0.7 turns the KeyError or TypeError of an unknown (or wrongly typed) value
+    # reference into fmi2Fatal, frees the Python instance, and the next call crashes the host.
+    # The slaves route every get/set through these: the bad references are logged as an error
+    # (nothing is set for them, NaN/0/false is returned for them), the good ones are served.
+    _EMPTY = MappingProxyType({"Real": math.nan, "Integer": 0, "Boolean": False})
+
+    def _bad_references(self, kind: str, vrs) -> list[int]:
+        if not hasattr(self, "_valid"):
+            self._valid = {k: frozenset(vr for vr, var in self.slave.vars.items()
+                                        if type(var).__name__ == k) for k in self._EMPTY}
+        valid = self._valid[kind]
+        return [] if valid.issuperset(vrs) else [vr for vr in vrs if vr not in valid]
+
+    def get_checked(self, fetch: Callable, kind: str, vrs) -> list:
+        bad = self._bad_references(kind, vrs)
+        if not bad:
+            return fetch(vrs)
+        self.log_error(f"fmi2Get{kind}: no {kind} variable with value reference "
+                       f"{', '.join(map(str, bad))}; {self._EMPTY[kind]} returned for it")
+        good = [vr for vr in vrs if vr not in bad]
+        values = dict(zip(good, fetch(good) if good else [], strict=True))
+        return [values.get(vr, self._EMPTY[kind]) for vr in vrs]
+
+    def set_checked(self, store: Callable, kind: str, vrs, values) -> None:
+        bad = self._bad_references(kind, vrs)
+        if bad:
+            self.log_error(f"fmi2Set{kind}: no {kind} variable with value reference "
+                           f"{', '.join(map(str, bad))}; not set")
+            pairs = [(vr, x) for vr, x in zip(vrs, values, strict=True) if vr not in bad]
+            vrs, values = [vr for vr, _ in pairs], [x for _, x in pairs]
+        if vrs:
+            store(vrs, values)
+
     def step_allowed(self, t: float, h: float) -> bool:
         """The API checks of fmi2DoStep, logged as errors when they fail: initialisation has
         ended, and the step's time and size are finite with h > 0 (a bad step made the state
@@ -199,8 +234,6 @@ class TerrainCore(_Core):
         self.dynamic, self.evaluator = compiled_or_vm(dynamic, resources)
         self.quasi_static, _ = compiled_or_vm(quasi, resources)
         super().__init__(slave, terrain_variables())
-        from pythonfmu.enums import Fmi2Status
-        slave.log(f"WheelTerrain: contact model evaluated by {self.evaluator}", Fmi2Status.ok)
         self.angle = 0.0
 
     def internal_state(self) -> dict:
@@ -232,6 +265,12 @@ class TerrainCore(_Core):
         v["wheel_angle"] = self.angle
 
     def initialize(self) -> None:
+        # Logged here, not at instantiation: pythonfmu 0.7 crashes the host (SIGSEGV) when an
+        # instance freed right after fmi2Instantiate still has a message queued
+        # (fmu_src/README.md, upstream notes).
+        from pythonfmu.enums import Fmi2Status
+        self.slave.log(f"WheelTerrain: contact model evaluated by {self.evaluator}",
+                       Fmi2Status.ok)
         self.initialized = True
         self.dirty = True
         self.refresh()

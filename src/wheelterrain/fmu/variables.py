@@ -17,6 +17,7 @@ only when a whole variable list is asked for.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
 from wheelterrain.parameters import RIG_FMU, ROWS, TERRAIN_FMU, Parameter
@@ -38,6 +39,9 @@ class Var:
     max: float | None = None
     depends_on: tuple[str, ...] | None = None  # outputs: the inputs they depend on directly
     integrated: bool = False  # outputs: kept by the wrapper (a state), not a Function output
+    choices: Mapping[int, str] | None = None
+    """A mode switch: its values and their names. Registered with pythonfmu as an Integer,
+    described in modelDescription.xml as an Enumeration of these items."""
 
 
 def _outputs(rows: list[Var], inputs: tuple[str, ...]) -> list[Var]:
@@ -165,7 +169,8 @@ def parameter_var(p: Parameter, start: float) -> Var:
     """A parameter table row as an FMU parameter."""
     kind = "Integer" if p.kind in ("integer", "enum") else "Real"
     return Var(p.name, "parameter", f"{p.description} [{p.source}]", p.unit, p.quantity,
-               p.display_unit, kind, start, p.min, p.max)
+               p.display_unit, kind, start, p.min, p.max,
+               choices=p.choices if p.kind == "enum" else None)
 
 
 def terrain_variables() -> list[Var]:
