@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 import re
 import shutil
 import subprocess
@@ -349,6 +350,31 @@ def test_a_sinkage_beyond_full_burial_is_refused_not_served(flavours, flavour):
         t.close()
 
 
+def test_native_outputs_of_a_refused_point_are_not_served_as_ok(flavours):
+    """After a refused step the outputs are the last valid point's: fmi2GetReal now says so
+    with fmi2Warning and the reason (it said fmi2OK), and OK again once the inputs are
+    valid."""
+    import ctypes
+
+    t = instance(flavours, "native", "WheelTerrain", "stale", {"quasi_static": False})
+    vr, value = (ctypes.c_uint * 1)(t.vr["normal_force"]), (ctypes.c_double * 1)()
+
+    def status():
+        return t.fmu.fmi2GetReal(t.fmu.component, vr, 1, value)
+
+    try:
+        assert status() == 0
+        t.set({"sinkage": 0.2})
+        assert _step_is_honest(t, ("normal_force",)) == "refused"
+        assert status() == 1  # fmi2Warning
+        assert any("outputs are those of the last valid operating point" in m
+                   for _, m in t.log), t.log
+        t.set({"sinkage": 0.02})
+        assert status() == 0
+    finally:
+        t.close()
+
+
 @pytest.mark.parametrize("flavour", ["pythonfmu", "native"])
 def test_the_rig_alone_refuses_to_fall_through_the_floor(flavours, flavour):
     """Without soil forces the wheel free-falls; once its sinkage leaves the declared range
@@ -564,3 +590,32 @@ def test_the_binary_loads_on_glibc_2_17_and_exports_only_the_fmi2_api(flavours, 
     symtab = subprocess.run(["objdump", "-t", str(binary)], capture_output=True, text=True,
                             check=True).stdout
     assert "no symbols" in symtab.lower() or "model_refresh" not in symtab
+
+
+def _rss_bytes() -> int:
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not Path("/proc/self/statm").exists(), reason="needs Linux's /proc")
+@pytest.mark.parametrize(("flavour", "steps"), [("native", 1_000_000), ("pythonfmu", 100_000)])
+def test_a_long_run_keeps_memory_flat(flavours, flavour, steps):
+    """Steps with inputs set and outputs read each time, as a master does: the resident
+    memory after the first tenth of the run (allocator and caches warmed up) and at its end
+    differ by less than 8 MB (a leak of one double per step would be 8 MB at 1e6 steps)."""
+    t = instance(flavours, flavour, "WheelTerrain", f"long-{flavour}", {"quasi_static": False})
+    sinkage, outputs = t.vr["sinkage"], [t.vr["drawbar_pull"], t.vr["normal_force"]]
+    step, get, put = t.fmu.doStep, t.fmu.getReal, t.fmu.setReal
+    try:
+        warm = None
+        for k in range(steps):
+            put([sinkage], [0.015 + 1e-3 * math.sin(k * 1e-3)])
+            step(k * 1e-3, 1e-3)
+            get(outputs)
+            if k == steps // 10:
+                warm = _rss_bytes()
+        grown = _rss_bytes() - warm
+    finally:
+        t.close()
+    assert grown < 8 * 2**20, f"resident memory grew by {grown / 2**20:.1f} MB"

@@ -362,11 +362,21 @@ static int check_vr(Instance *c, const char *function, fmi2ValueReference vr, Va
 
 static fmi2Status get_values(Instance *c, const char *function, const fmi2ValueReference vr[],
                              size_t n, VarType type, double *out) {
+    int stale = 0;
     if (!allowed(c, function, GETTABLE)) return fmi2Error;
     refresh(c);
     for (size_t i = 0; i < n; i++) {
         if (!check_vr(c, function, vr[i], type)) return fmi2Error;
         out[i] = c->b.v[vr[i]];
+        if (VARS[vr[i]].causality == C_OUTPUT) stale = 1;
+    }
+    /* outputs while the current inputs are refused are those of the last valid point: served,
+       but not as OK (fmi2Warning, with the reason when logging is on) */
+    if (stale && (c->b.operating_error || any_invalid(c, 0))) {
+        log_message(c, fmi2Warning, 0, "%s: %s: outputs are those of the last valid operating "
+                    "point; the current one is refused: %s", MODEL_NAME, function,
+                    c->b.operating_error ? c->b.operating_message : "an invalid value");
+        return fmi2Warning;
     }
     return fmi2OK;
 }
