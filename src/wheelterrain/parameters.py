@@ -120,7 +120,8 @@ TABLE: tuple[Parameter, ...] = (
        f"{_PAPER} prints 0.0075 m; read as 0.075 m because at 0.0075 m even a fully buried wheel "
        "carries only ~15 N of the 62 N measured", quantity="Length"),
     _P("wheel.mass", "kg", 1.0, 0.01, 1000.0,
-       "Mass of the wheel (used by the rig's vertical dynamics, not by the contact model).",
+       "Mass of the wheel, as the source states it. Recorded with the wheel's data; neither "
+       "the contact model nor the rig uses it (the rig's moving mass is rig.mass).",
        f"{_PAPER}: 1 kg", quantity="Mass"),
     # --- grousers ----------------------------------------------------------------------------
     _P("grouser.count", "1", 12, 0, 100,
