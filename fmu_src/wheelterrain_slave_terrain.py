@@ -26,25 +26,6 @@ class WheelTerrain(Fmi2Slave):
     def do_step(self, current_time, step_size):
         return self.core.do_step(current_time, step_size)
 
-    # unknown value references: an error with a message, not pythonfmu's fatal (see slaves.py)
-    def get_real(self, vrs):
-        return self.core.get_checked(super().get_real, "Real", vrs)
-
-    def get_integer(self, vrs):
-        return self.core.get_checked(super().get_integer, "Integer", vrs)
-
-    def get_boolean(self, vrs):
-        return self.core.get_checked(super().get_boolean, "Boolean", vrs)
-
-    def set_real(self, vrs, values):
-        self.core.set_checked(super().set_real, "Real", vrs, values)
-
-    def set_integer(self, vrs, values):
-        self.core.set_checked(super().set_integer, "Integer", vrs, values)
-
-    def set_boolean(self, vrs, values):
-        self.core.set_checked(super().set_boolean, "Boolean", vrs, values)
-
     def _get_fmu_state(self):
         return self.core.get_state()
 

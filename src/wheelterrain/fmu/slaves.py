@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from types import MappingProxyType
 
@@ -74,6 +75,7 @@ class _Core:
             if v.start is not None:
                 self.values[v.name] = v.start
         self._register(variables)
+        self._guard_references()
 
     # --- registration ---------------------------------------------------------------------
     def _register(self, variables: list[Var]) -> None:
@@ -149,9 +151,19 @@ class _Core:
     # --- value references the FMU does not have --------------------------------------------
     # pythonfmu 0.7 turns the KeyError or TypeError of an unknown (or wrongly typed) value
     # reference into fmi2Fatal, frees the Python instance, and the next call crashes the host.
-    # The slaves route every get/set through these: the bad references are logged as an error
-    # (nothing is set for them, NaN/0/false is returned for them), the good ones are served.
+    # Every get/set of the slave goes through these (_guard_references): the bad references
+    # are logged as an error (nothing is set for them, NaN/0/false is returned for them), the
+    # good ones are served.
     _EMPTY = MappingProxyType({"Real": math.nan, "Integer": 0, "Boolean": False})
+
+    def _guard_references(self) -> None:
+        """Route the slave's get_/set_ Real, Integer and Boolean through the checks below (as
+        instance attributes, which pythonfmu's calls by name find first)."""
+        for kind in self._EMPTY:
+            fetch = getattr(self.slave, f"get_{kind.lower()}")
+            store = getattr(self.slave, f"set_{kind.lower()}")
+            setattr(self.slave, f"get_{kind.lower()}", partial(self.get_checked, fetch, kind))
+            setattr(self.slave, f"set_{kind.lower()}", partial(self.set_checked, store, kind))
 
     def _bad_references(self, kind: str, vrs) -> list[int]:
         if not hasattr(self, "_valid"):
