@@ -159,6 +159,8 @@ class _Core:
     def _guard_references(self) -> None:
         """Route the slave's get_/set_ Real, Integer and Boolean through the checks below (as
         instance attributes, which pythonfmu's calls by name find first)."""
+        self._valid = {kind: frozenset(vr for vr, var in self.slave.vars.items()
+                                       if type(var).__name__ == kind) for kind in self._EMPTY}
         for kind in self._EMPTY:
             fetch = getattr(self.slave, f"get_{kind.lower()}")
             store = getattr(self.slave, f"set_{kind.lower()}")
@@ -166,9 +168,6 @@ class _Core:
             setattr(self.slave, f"set_{kind.lower()}", partial(self.set_checked, store, kind))
 
     def _bad_references(self, kind: str, vrs) -> list[int]:
-        if not hasattr(self, "_valid"):
-            self._valid = {k: frozenset(vr for vr, var in self.slave.vars.items()
-                                        if type(var).__name__ == k) for k in self._EMPTY}
         valid = self._valid[kind]
         return [] if valid.issuperset(vrs) else [vr for vr in vrs if vr not in valid]
 
