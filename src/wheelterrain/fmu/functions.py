@@ -30,8 +30,8 @@ import casadi as ca
 from wheelterrain.fmu.variables import (
     RIG_INPUTS,
     RIG_OUTPUTS,
+    SINKAGE_RANGE,
     TERRAIN_INPUTS,
-    TERRAIN_IO,
     TERRAIN_OUTPUTS,
 )
 from wheelterrain.model import contact, rig
@@ -173,9 +173,8 @@ def terrain_functions() -> tuple[ca.Function, ca.Function]:
 
 # The rig's own domain: a state outside it means the terrain no longer holds the wheel (or
 # is not connected); both flavours refuse the next step with these messages. The sinkage
-# limit is the terrain's declared sinkage input range, so the pair agrees on it.
-RIG_SINKAGE_LIMIT = next(v.max for v in TERRAIN_IO
-                         if v.name == "sinkage" and v.causality == "input")
+# limit is the pair's declared sinkage range (variables.SINKAGE_RANGE).
+RIG_SINKAGE_LIMIT = SINKAGE_RANGE[1]
 RIG_MESSAGES = {
     "depth": ("the wheel's sinkage %g m left the rig's range [-%g, %g] m: the soil's normal "
               "force no longer holds the load (is WheelTerrain connected, and can it carry "

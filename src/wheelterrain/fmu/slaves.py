@@ -205,6 +205,20 @@ class _Core:
             return False
         return True
 
+    def _settings_invalid(self) -> bool:
+        """A set value is invalid (its error names it): the model is not evaluated until it is
+        set right, and the last valid outputs stay."""
+        return any(name != OPERATING_POINT for name in self.errors)
+
+    def _operating_point(self, problem: str | None) -> bool:
+        """Record what the model says of the current operating point: ``problem`` (logged, and
+        the next step refused) or None (clears an earlier one). True if there is a problem."""
+        self.errors.pop(OPERATING_POINT, None)
+        if problem:
+            self.errors[OPERATING_POINT] = problem
+            self.log_error(problem)
+        return bool(problem)
+
     def refuse_if_invalid(self) -> bool:
         """True if the instance may step; else log every reason and refuse."""
         if not self.errors:
@@ -258,7 +272,7 @@ class TerrainCore(_Core):
         if not self.dirty:
             return
         self.dirty = False
-        if any(name != OPERATING_POINT for name in self.errors):
+        if self._settings_invalid():
             return  # keep the last valid outputs; the next doStep refuses with the reason
         v = self.values
         u = [float(v[name]) for name in fmu_model.TERRAIN_INPUTS]
@@ -267,10 +281,8 @@ class TerrainCore(_Core):
             y, status, info = self.quasi_static(u, p)
         else:
             y, status, info = self.dynamic(u, self.angle, p)
-        self.errors.pop(OPERATING_POINT, None)
-        if status != fmu_model.STATUS_OK:
-            self.errors[OPERATING_POINT] = fmu_model.status_message(int(status), info, u)
-            self.log_error(self.errors[OPERATING_POINT])
+        if self._operating_point(None if status == fmu_model.STATUS_OK else
+                                 fmu_model.status_message(int(status), info, u)):
             return
         v.update(zip(fmu_model.TERRAIN_OUTPUTS, y, strict=True))
         v["wheel_angle"] = self.angle
@@ -335,13 +347,8 @@ class RigCore(_Core):
         if not self.dirty:
             return
         self.dirty = False
-        if any(name != OPERATING_POINT for name in self.errors):
-            return
-        self.errors.pop(OPERATING_POINT, None)
-        problem = fmu_model.rig_state_problem(self.state)
-        if problem:
-            self.errors[OPERATING_POINT] = problem
-            self.log_error(problem)
+        if self._settings_invalid() or self._operating_point(
+                fmu_model.rig_state_problem(self.state)):
             return
         y = fmu_model.rig_outputs(self.state, self.forces(), self.params(), self.motor_torque)
         self.values.update(zip(fmu_model.RIG_OUTPUTS, y, strict=True))

@@ -49,10 +49,14 @@ def _outputs(rows: list[Var], inputs: tuple[str, ...]) -> list[Var]:
     return [replace(v, depends_on=inputs) if v.depends_on is None else v for v in rows]
 
 
+SINKAGE_RANGE = (-1.0, 1.0)
+"""m: the terrain's sinkage input and the rig's sinkage output (the rig refuses to step
+beyond it), one range for the pair."""
+
 _TERRAIN_INPUT_ROWS = [
     Var("sinkage", "input", "Sinkage of the wheel below the undisturbed soil surface, "
         "measured to the contact circle (dynamic mode)", "m", "Length", "mm", start=0.02,
-        min=-1.0, max=1.0),
+        min=SINKAGE_RANGE[0], max=SINKAGE_RANGE[1]),
     Var("sinkage_rate", "input", "Rate of sinkage, positive downward (dynamic mode)", "m/s",
         "Velocity", start=0.0, min=-100.0, max=100.0),
     # start: the default preset's rim speed over its radius (terrain_variables)
@@ -123,7 +127,7 @@ RIG_IO: tuple[Var, ...] = (
         "(torque-command)", "N.m", "Torque", start=0.0, min=-1.0e4, max=1.0e4),
     Var("sinkage", "output", "Wheel sinkage (state of the vertical motion), positive down; "
         "a step that takes it outside its range is the rig's last (the next is refused)",
-        "m", "Length", "mm", min=-1.0, max=1.0, depends_on=()),
+        "m", "Length", "mm", min=SINKAGE_RANGE[0], max=SINKAGE_RANGE[1], depends_on=()),
     Var("sinkage_rate", "output", "Sinkage rate, positive down", "m/s", "Velocity",
         depends_on=()),
     Var("wheel_speed", "output", "Wheel angular velocity (state of the speed loop)", "rad/s",
