@@ -23,6 +23,32 @@ from wheelterrain.model import rig
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def _parameters_used(functions) -> set[int]:
+    """Indices of the ``p`` input that some output of ``functions`` depends on (structurally)."""
+    import casadi as ca
+    import numpy as np
+
+    used: set[int] = set()
+    for fn in functions:
+        p = fn.index_in("p")
+        for out in range(fn.n_out()):
+            columns = np.asarray(ca.DM(fn.jac_sparsity(out, p), 1).full()).any(axis=0)
+            used |= set(np.flatnonzero(columns).tolist())
+    return used
+
+
+def test_each_fmu_carries_only_parameters_its_model_uses():
+    """An FMU parameter that no output depends on would be a promise the model does not keep
+    (a user sets it and nothing happens): every terrain row reaches the terrain Functions,
+    every rig row the rig Functions, whatever the switches select."""
+    from wheelterrain.parameters import NAMES
+
+    unused = set(range(len(NAMES))) - _parameters_used(fmu_model.terrain_functions())
+    assert not unused, [NAMES[k] for k in sorted(unused)]
+    unused = set(range(len(rig.RIG_NAMES))) - _parameters_used(fmu_model.rig_functions())
+    assert not unused, [rig.RIG_NAMES[k] for k in sorted(unused)]
+
+
 def test_the_derived_lists_are_the_ones_the_faces_use():
     assert variables.RIG_INPUTS == rig.INPUTS
     assert variables.COUPLED_FORCES == rig.FORCE_INPUTS

@@ -119,10 +119,6 @@ TABLE: tuple[Parameter, ...] = (
        "Wheel width b; also the plate width in the Reece pressure-sinkage law.",
        f"{_PAPER} prints 0.0075 m; read as 0.075 m because at 0.0075 m even a fully buried wheel "
        "carries only ~15 N of the 62 N measured", quantity="Length"),
-    _P("wheel.mass", "kg", 1.0, 0.01, 1000.0,
-       "Mass of the wheel, as the source states it. Recorded with the wheel's data; neither "
-       "the contact model nor the rig uses it (the rig's moving mass is rig.mass).",
-       f"{_PAPER}: 1 kg", quantity="Mass"),
     # --- grousers ----------------------------------------------------------------------------
     _P("grouser.count", "1", 12, 0, 100,
        "Number of grousers n_g around the rim; sets the ripple phase psi = n_g * wheel angle.",
@@ -131,10 +127,6 @@ TABLE: tuple[Parameter, ...] = (
        "Grouser height h_g above the rim (the paper's h_b).",
        f"{_PAPER}: grouser height 0.01 m; h_b = 0.01 m in Tables I/II read as the same length",
        quantity="Length"),
-    _P("grouser.thickness", "m", 0.001, 0.0, 0.02,
-       "Grouser thickness (width along the rim). Carried for the grouser-thrust extension; "
-       "the classical contact model does not use it.",
-       f"{_PAPER}: 0.001 m", quantity="Length"),
     # --- soil --------------------------------------------------------------------------------
     _P("soil.cohesion", "Pa", 0.0, 0.0, 20000.0,
        "Cohesion c (Mohr-Coulomb shear strength and Reece pressure-sinkage).",
