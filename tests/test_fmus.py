@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 import shutil
 import subprocess
 import sys
@@ -273,6 +274,51 @@ def test_bad_parameter_is_refused_with_a_logged_reason(fmus, name, value, needle
         t.fmu.doStep(0.0, 1e-3)
     finally:
         t.close()
+
+
+def test_fmpy_simulate_with_a_bad_start_value_writes_no_plausible_numbers(fmus, tmp_path):
+    """The run stops at the refused first step (fmpy ends on a Discard as an early stop, exit
+    0); its results must not look like a result: outputs never computed are NaN, not 0. The
+    reason reaches fmpy's log with --debug-logging (pythonfmu passes no message to the host
+    when logging is off: fmu_src/README.md)."""
+    out = tmp_path / "bad.csv"
+    run = subprocess.run([sys.executable, "-m", "fmpy", "simulate", str(fmus["WheelTerrain"]),
+                          "--debug-logging", "--start-values", "soil.phi", "5",
+                          "--stop-time", "0.01", "--output-file", str(out)],
+                         capture_output=True, text=True, check=False)
+    assert "soil.phi = 5.0 is out of range" in run.stdout + run.stderr
+    with out.open() as f:
+        rows = list(csv.DictReader(f))
+    assert rows
+    assert all(math.isnan(float(row["normal_force"])) for row in rows)
+    assert all(float(row["time"]) == 0.0 for row in rows)  # no step was taken
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(shutil.which("valgrind") is None, reason="needs valgrind (.ci/run installs it)")
+def test_no_invalid_memory_access_in_the_fmu_binary_up_to_process_exit(fmus, tmp_path):
+    """pythonfmu 0.7.0's library released its interpreter state twice at exit (a use after
+    free that sometimes corrupted the heap: the host aborted after a good run). The build
+    removes that (build_pythonfmu.fix_exit_crash); memcheck sees every run, not just the
+    unlucky ones: no invalid read, write or free inside the FMU's binaries, to the last exit
+    handler."""
+    import re
+
+    log = tmp_path / "memcheck.log"
+    run = subprocess.run(["valgrind", "--error-limit=no", "--num-callers=30",
+                          f"--log-file={log}", sys.executable, "-m", "fmpy", "simulate",
+                          str(fmus["WheelTerrain"]), "--start-values", "quasi_static", "true",
+                          "load", "62", "--stop-time", "0.02",
+                          "--output-file", str(tmp_path / "out.csv")],
+                         capture_output=True, text=True, check=False,
+                         env={**os.environ, "PYTHONMALLOC": "malloc"})
+    assert run.returncode == 0, run.stderr[-2000:]
+    text = log.read_text()
+    assert "ERROR SUMMARY" in text  # memcheck ran to the end of the process
+    blocks = re.split(r"\n==\d+== \n", text)
+    bad = [b for b in blocks if re.search(r"== (Invalid (read|write|free)|Mismatched free)", b)
+           and "binaries/linux64" in b]
+    assert not bad, bad[0][:3000]
 
 
 def test_impossible_operating_point_is_refused_with_the_capacity(fmus):

@@ -149,6 +149,55 @@ def _identify(root: ET.Element) -> None:
     root.set("guid", "{" + str(uuid.UUID(bytes=digest[:16], version=5)) + "}")
 
 
+# pythonfmu 0.7.0's Linux binary releases its interpreter state twice at process exit: a
+# static std::shared_ptr<PyState> is destroyed by the C++ exit handlers, then the library's
+# __attribute__((destructor)) finalizePythonInterpreter() assigns nullptr to that destroyed
+# shared_ptr, which still holds the freed control block: a use after free that decrements
+# (and may free again) freed memory. The heap is then corrupted and the host aborts at exit
+# ("corrupted double-linked list", "pure virtual method called") in some runs, depending on
+# what else freed memory (upstream note in fmu_src/README.md). The static destructor alone
+# already destroys the state (and on Windows DllMain runs first, so the win64 DLL is right);
+# the fix turns the Linux destructor's call into a plain return, in our copy of the binary.
+_EXIT_FIX_SYMBOL = b"finalizePythonInterpreter"
+_ENDBR64 = bytes.fromhex("f30f1efa")
+_EXIT_BUG_CODE = _ENDBR64 + bytes.fromhex("55660fefc0534883ec08488b2d")
+"""The start of finalizePythonInterpreter as pythonfmu 0.7.0 ships it (reads the freed
+shared_ptr); another start (a fixed pythonfmu) is left alone."""
+
+
+def _symbol_offset(elf: bytes, symbol: bytes) -> int | None:
+    """File offset of the code of dynamic ``symbol`` in a little-endian ELF64 library."""
+    import struct
+
+    if elf[:4] != b"\x7fELF" or elf[4] != 2 or elf[5] != 1:
+        return None
+    shoff, = struct.unpack_from("<Q", elf, 0x28)
+    shentsize, shnum = struct.unpack_from("<HH", elf, 0x3A)
+    sections = [struct.unpack_from("<IIQQQQIIQQ", elf, shoff + k * shentsize)
+                for k in range(shnum)]
+    for _, kind, _, _, offset, size, link, _, _, entsize in sections:
+        if kind != 11:  # SHT_DYNSYM
+            continue
+        names = sections[link][4]
+        for entry in range(offset, offset + size, entsize):
+            name, _, _, shndx, value, _ = struct.unpack_from("<IBBHQQ", elf, entry)
+            end = elf.index(b"\0", names + name)
+            if elf[names + name:end] == symbol and 0 < shndx < len(sections):
+                addr, file_offset = sections[shndx][3], sections[shndx][4]
+                return value - addr + file_offset
+    return None
+
+
+def fix_exit_crash(binary: bytes) -> bytes:
+    """``binary`` (pythonfmu's Linux library) with the double release at exit removed: the
+    destructor's call returns at once. Unchanged if the code is not the known-bad one."""
+    at = _symbol_offset(binary, _EXIT_FIX_SYMBOL)
+    if at is None or binary[at:at + len(_EXIT_BUG_CODE)] != _EXIT_BUG_CODE:
+        return binary
+    ret = at + len(_ENDBR64)
+    return binary[:ret] + b"\xc3" + binary[ret + 1:]
+
+
 def finish_model_description(fmu: Path, model: str) -> None:
     """Rewrite modelDescription.xml inside ``fmu`` (see the module docstring)."""
     variables = {v.name: v for v in VARIABLES[model]()}
@@ -240,6 +289,9 @@ def finish_model_description(fmu: Path, model: str) -> None:
     text = minidom.parseString(ET.tostring(root, encoding="unicode")).toprettyxml(indent="  ")
     text = "\n".join(line for line in text.splitlines() if line.strip())
     members["modelDescription.xml"] = text.encode("utf-8")
+    for name in members:
+        if name.startswith("binaries/linux64/") and name.endswith(".so"):
+            members[name] = fix_exit_crash(members[name])
     partial = fmu.with_suffix(".rewrite")
     with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
         for name, data in members.items():

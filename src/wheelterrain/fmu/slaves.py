@@ -97,7 +97,9 @@ class _Core:
         def get():
             if self.vars[name].causality == "output":
                 self.refresh()
-            return self.values.get(name, 0.0)
+            # an output the model has never computed (every evaluation so far was refused) is
+            # NaN, not a plausible-looking 0 in the host's results
+            return self.values.get(name, math.nan)
         return get
 
     def _setter(self, name: str) -> Callable[[float], None]:
