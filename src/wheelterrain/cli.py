@@ -254,6 +254,16 @@ def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definiti
 
 
 
+def _platforms(fmu) -> str:
+    """" (linux64, win64)": the platforms an FMU has binaries for."""
+    import zipfile
+
+    with zipfile.ZipFile(fmu) as z:
+        found = sorted({n.split("/")[1] for n in z.namelist()
+                        if n.startswith("binaries/") and n.count("/") == 2})
+    return f" ({', '.join(found)})" if found else ""
+
+
 @main.command(epilog=EPILOG)
 @click.option("--out", default="build", show_default=True, type=click.Path(file_okay=False),
               help="Directory for the FMUs (the native flavour goes to OUT/native).")
@@ -267,12 +277,14 @@ def build(out: str, flavor: str) -> None:
       wheelterrain package is bundled inside. Every table parameter is an FMU parameter.
     native (OUT/native/): CasADi-generated C of the same model in our own FMI 2.0
       wrapper; no Python at run time, for any FMI host (C masters, system simulators,
-      ecos). Needs a C compiler to build; ships its C sources in sources/.
+      ecos). Needs a C compiler to build; ships its C sources in sources/. Binaries for
+      linux64 and, with the MinGW-w64 cross compiler (x86_64-w64-mingw32-gcc), win64.
     Both have the same modelDescription (names, units, structure). Try one alone:
       fmpy simulate build/WheelTerrain.fmu --start-values quasi_static true soil.phi 0.45
     """
     from pathlib import Path
 
+    from wheelterrain.fmu.build_native import WIN64_CC, cross_compiler
     from wheelterrain.fmu.build_native import build as build_native
     from wheelterrain.fmu.build_pythonfmu import BuildError
     from wheelterrain.fmu.build_pythonfmu import build as build_pythonfmu
@@ -283,8 +295,12 @@ def build(out: str, flavor: str) -> None:
             paths += build_pythonfmu(out)
         if flavor in ("native", "all"):
             paths += build_native(Path(out) / "native")
+            if cross_compiler() is None:
+                click.echo(f"note: no {WIN64_CC} on PATH, so the native FMUs have no win64 "
+                           "binary (Debian/Ubuntu: apt-get install gcc-mingw-w64-x86-64)",
+                           err=True)
         for path in paths:
-            click.echo(f"wrote {path}")
+            click.echo(f"wrote {path}{_platforms(path)}")
     except BuildError as err:
         click.echo(f"error: {err}", err=True)
         sys.exit(EXIT_USAGE)

@@ -9,7 +9,8 @@ For each FMU:
 3. model_vars.h (variable table, GUID) and model_hooks.inc (copying values in and out of those
    Functions) are generated from the variable list the slaves use;
 4. fmu_src/native/fmi2_native.c (our FMI 2.0 wrapper) is compiled with them against the FMI 2
-   headers shipped in fmpy, into binaries/linux64/<model>.so;
+   headers shipped in fmpy, into binaries/linux64/<model>.so and, with the MinGW-w64 cross
+   compiler, binaries/win64/<model>.dll;
 5. the C sources go into sources/ so importers on other platforms can rebuild it.
 """
 
@@ -40,6 +41,28 @@ rest, which is why those do not end in .c, so ``cc -shared -fPIC sources/*.c -lm
 CFLAGS = ("-O2", "-fPIC", "-shared", "-fvisibility=hidden", "-s", "-DWHEELTERRAIN_PORTABLE_LIBM")
 """Only the fmi2 functions are exported (the header marks them visible), the binary is
 stripped, and libm's functions are bound to versions glibc >= 2.17 has (fmi2_native.c)."""
+WIN64_CC = "x86_64-w64-mingw32-gcc"
+"""The MinGW-w64 cross compiler (Debian: gcc-mingw-w64-x86-64) that builds binaries/win64."""
+WIN64_CFLAGS = ("-O2", "-shared", "-s", "-static-libgcc", "-D__USE_MINGW_ANSI_STDIO=1")
+"""A DLL that needs only the Windows C runtime (no libgcc DLL), exporting the fmi2 functions
+(the FMI header declares them dllexport), with C99 printf formats (%zu, %g as on Linux)."""
+PLATFORMS = {"linux64": ".so", "win64": ".dll"}
+
+
+def cross_compiler() -> str | None:
+    """The win64 cross compiler, or None (the FMUs are then built for linux64 only)."""
+    return os.environ.get("WHEELTERRAIN_WIN64_CC") or shutil.which(WIN64_CC)
+
+
+def _compile(cc: str, flags, src: Path, library: Path, model: str, libs=("-lm",)) -> None:
+    try:
+        run = subprocess.run([cc, *flags, "-I", str(src), str(src / "fmi2_native.c"),
+                              "-o", str(library), *libs],
+                             capture_output=True, text=True, check=False)
+    except OSError as err:
+        raise BuildError(f"cannot run the C compiler {cc!r}: {err}") from err
+    if run.returncode != 0:
+        raise BuildError(f"compiling the native {model} with {cc} failed:\n{run.stderr[:4000]}")
 
 
 def fmi_headers() -> Path:
@@ -181,11 +204,15 @@ def _native_description(root: ET.Element) -> bytes:
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
-def build(out: Path, models: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig")) -> list[Path]:
-    """Build the native FMUs into ``out``; returns their paths."""
+def build(out: Path, models: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig"),
+          win64: bool = True) -> list[Path]:
+    """Build the native FMUs into ``out``; returns their paths. Each has binaries/linux64 and,
+    when ``win64`` and the MinGW-w64 cross compiler is installed, binaries/win64, both from the
+    same sources/."""
     cc = native.compiler()
     if cc is None:
         raise BuildError("the native flavour needs a C compiler (cc/gcc, or $CC) on PATH")
+    cross = cross_compiler() if win64 else None
     headers = fmi_headers()
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -204,20 +231,17 @@ def build(out: Path, models: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig"
             shutil.copyfile(source_dir() / "native" / "fmi2_native.c", src / "fmi2_native.c")
             for header in ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"):
                 shutil.copyfile(headers / header, src / header)
-            library = tmp / model / f"{model}.so"
-            try:
-                run = subprocess.run([cc, *CFLAGS, "-I", str(src), str(src / "fmi2_native.c"),
-                                      "-o", str(library), "-lm"],
-                                     capture_output=True, text=True, check=False)
-            except OSError as err:
-                raise BuildError(f"cannot run the C compiler {cc!r}: {err}") from err
-            if run.returncode != 0:
-                raise BuildError(f"compiling the native {model} failed:\n{run.stderr[:4000]}")
+            libraries = {"linux64": tmp / model / f"{model}.so"}
+            _compile(cc, CFLAGS, src, libraries["linux64"], model)
+            if cross is not None:
+                libraries["win64"] = tmp / model / f"{model}.dll"
+                _compile(cross, WIN64_CFLAGS, src, libraries["win64"], model, libs=())
             target = out / f"{model}.fmu"
             partial = target.with_suffix(".fmu.part")
             with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
                 z.writestr("modelDescription.xml", _native_description(root))
-                z.write(library, f"binaries/linux64/{model}.so")
+                for platform, library in libraries.items():
+                    z.write(library, f"binaries/{platform}/{model}{PLATFORMS[platform]}")
                 for name in SOURCES:
                     z.write(src / name, f"sources/{name}")
             os.replace(partial, target)

@@ -1,0 +1,146 @@
+/*
+ * A minimal FMI 2.0 co-simulation host for the native FMUs' binaries, compiled for Linux
+ * (dlopen) and cross-compiled for Windows (LoadLibrary; run under Wine) by
+ * tests/test_native_platforms.py, so the same steps run through both binaries of an FMU.
+ *
+ *   fmi2_host LIBRARY GUID STEPS H SET RAMP GET
+ *
+ * SET  "vr=value,..." Real values set before initialisation ("-" for none); "bvr=1" sets
+ *      a Boolean (e.g. WheelTerrain's quasi_static);
+ * RAMP "vr=start+slope,..." Real inputs set to start + slope*t before every step ("-");
+ * GET  "vr,..." Real values printed after every step, with t, as %.17g.
+ * Exit status 0 if every call returned fmi2OK, else 1 (the failing call is printed).
+ */
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi2Functions.h"
+
+#ifdef _WIN32
+#include <windows.h>
+typedef HMODULE Library;
+static Library open_library(const char *path) { return LoadLibraryA(path); }
+static void *symbol(Library lib, const char *name) { return (void *)GetProcAddress(lib, name); }
+#else
+#include <dlfcn.h>
+typedef void *Library;
+static Library open_library(const char *path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
+static void *symbol(Library lib, const char *name) { return dlsym(lib, name); }
+#endif
+
+#define MAX_VARS 64
+
+static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
+                   fmi2String category, fmi2String message, ...) {
+    (void)env;
+    fprintf(stderr, "[%s] %s (status %d): %s\n", category, name, (int)status, message);
+}
+
+/* "vr=a+b,vr=c+d" or "vr=a,..." or "vr,vr": value references and up to two numbers each */
+static int parse(const char *text, fmi2ValueReference *vr, double *a, double *b, int *boolean) {
+    int n = 0;
+    const char *p = text;
+    if (strcmp(text, "-") == 0) return 0;
+    while (*p && n < MAX_VARS) {
+        char *end;
+        boolean[n] = *p == 'b';
+        if (boolean[n]) p++;
+        vr[n] = (fmi2ValueReference)strtoul(p, &end, 10);
+        p = end;
+        if (*p == '=') {
+            a[n] = strtod(p + 1, &end);
+            p = end;
+            if (*p == '+') {
+                b[n] = strtod(p + 1, &end);
+                p = end;
+            }
+        }
+        n++;
+        if (*p == ',') p++;
+    }
+    return n;
+}
+
+#define CHECK(call)                                                                          \
+    do {                                                                                     \
+        if ((call) != fmi2OK) {                                                              \
+            fprintf(stderr, "%s failed\n", #call);                                           \
+            return 1;                                                                        \
+        }                                                                                    \
+    } while (0)
+
+int main(int argc, char **argv) {
+    fmi2ValueReference set_vr[MAX_VARS], ramp_vr[MAX_VARS], get_vr[MAX_VARS];
+    double set_value[MAX_VARS], ramp_start[MAX_VARS], ramp_slope[MAX_VARS], unused[MAX_VARS];
+    double out[MAX_VARS], t = 0.0, h;
+    int n_set, n_ramp, n_get, steps, boolean[MAX_VARS];
+    fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
+    Library lib;
+    fmi2Component c;
+
+    if (argc != 8) {
+        fprintf(stderr, "usage: %s LIBRARY GUID STEPS H SET RAMP GET\n", argv[0]);
+        return 2;
+    }
+    lib = open_library(argv[1]);
+    if (!lib) {
+        fprintf(stderr, "cannot load %s\n", argv[1]);
+        return 1;
+    }
+    {
+        fmi2InstantiateTYPE *instantiate = (fmi2InstantiateTYPE *)symbol(lib, "fmi2Instantiate");
+        fmi2SetupExperimentTYPE *setup = (fmi2SetupExperimentTYPE *)symbol(lib,
+                                                                           "fmi2SetupExperiment");
+        fmi2EnterInitializationModeTYPE *enter =
+            (fmi2EnterInitializationModeTYPE *)symbol(lib, "fmi2EnterInitializationMode");
+        fmi2ExitInitializationModeTYPE *leave =
+            (fmi2ExitInitializationModeTYPE *)symbol(lib, "fmi2ExitInitializationMode");
+        fmi2SetRealTYPE *set_real = (fmi2SetRealTYPE *)symbol(lib, "fmi2SetReal");
+        fmi2SetBooleanTYPE *set_boolean = (fmi2SetBooleanTYPE *)symbol(lib, "fmi2SetBoolean");
+        fmi2GetRealTYPE *get_real = (fmi2GetRealTYPE *)symbol(lib, "fmi2GetReal");
+        fmi2DoStepTYPE *do_step = (fmi2DoStepTYPE *)symbol(lib, "fmi2DoStep");
+        fmi2TerminateTYPE *terminate = (fmi2TerminateTYPE *)symbol(lib, "fmi2Terminate");
+        fmi2FreeInstanceTYPE *free_instance = (fmi2FreeInstanceTYPE *)symbol(lib,
+                                                                             "fmi2FreeInstance");
+        if (!instantiate || !setup || !enter || !leave || !set_real || !set_boolean ||
+            !get_real || !do_step ||
+            !terminate || !free_instance) {
+            fprintf(stderr, "%s lacks an fmi2 function\n", argv[1]);
+            return 1;
+        }
+        steps = atoi(argv[3]);
+        h = strtod(argv[4], NULL);
+        n_ramp = parse(argv[6], ramp_vr, ramp_start, ramp_slope, boolean);
+        n_get = parse(argv[7], get_vr, unused, unused, boolean);
+        n_set = parse(argv[5], set_vr, set_value, unused, boolean);
+        c = instantiate("host", fmi2CoSimulation, argv[2], "", &callbacks, fmi2False, fmi2False);
+        if (!c) {
+            fprintf(stderr, "fmi2Instantiate failed\n");
+            return 1;
+        }
+        CHECK(setup(c, fmi2False, 0.0, 0.0, fmi2False, 0.0));
+        CHECK(enter(c));
+        for (int i = 0; i < n_set; i++) {
+            fmi2Boolean on = set_value[i] != 0.0;
+            if (boolean[i]) CHECK(set_boolean(c, &set_vr[i], 1, &on));
+            else CHECK(set_real(c, &set_vr[i], 1, &set_value[i]));
+        }
+        CHECK(leave(c));
+        for (int k = 0; k < steps; k++) {
+            double ramp[MAX_VARS];
+            for (int i = 0; i < n_ramp; i++) ramp[i] = ramp_start[i] + ramp_slope[i] * t;
+            if (n_ramp) CHECK(set_real(c, ramp_vr, (size_t)n_ramp, ramp));
+            CHECK(do_step(c, t, h, fmi2True));
+            t = (k + 1) * h;
+            CHECK(get_real(c, get_vr, (size_t)n_get, out));
+            printf("%.17g", t);
+            for (int i = 0; i < n_get; i++) printf(" %.17g", out[i]);
+            printf("\n");
+        }
+        CHECK(terminate(c));
+        free_instance(c);
+    }
+    return 0;
+}

@@ -1,0 +1,107 @@
+"""The native FMUs' win64 binary, run for real: a small C host (tests/fmi2_host.c),
+cross-compiled with MinGW-w64 like the DLL, loads it under Wine and steps it; the same host
+compiled for Linux steps the linux64 binary of the same FMU with the same inputs. Both
+binaries come from the same sources/, so their outputs agree to 1e-12."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+from fmpy import extract, read_model_description
+
+from wheelterrain.fmu import build_native as nativebuild
+from wheelterrain.fmu import compiled as native
+
+HERE = Path(__file__).resolve().parent
+WINE = shutil.which("wine") or shutil.which("wine64")
+
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.skipif(nativebuild.cross_compiler() is None or WINE is None
+                       or native.compiler() is None,
+                       reason="needs gcc-mingw-w64-x86-64, wine and a C compiler "
+                              "(.ci/run installs them)"),
+]
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    root = tmp_path_factory.mktemp("platforms")
+    fmus = nativebuild.build(root / "fmus")
+    hosts = {"linux64": root / "fmi2_host", "win64": root / "fmi2_host.exe"}
+    headers = str(nativebuild.fmi_headers())
+    subprocess.run([native.compiler(), "-O1", "-Wall", "-Werror", "-I", headers,
+                    str(HERE / "fmi2_host.c"), "-o", str(hosts["linux64"]), "-ldl"], check=True)
+    subprocess.run([nativebuild.cross_compiler(), "-O1", "-Wall", "-Werror", "-I", headers,
+                    str(HERE / "fmi2_host.c"), "-o", str(hosts["win64"])], check=True)
+    unzip = {fmu.stem: extract(str(fmu)) for fmu in fmus}
+    yield {"fmus": {fmu.stem: fmu for fmu in fmus}, "unzip": unzip, "hosts": hosts,
+           "prefix": root / "wineprefix"}
+    for d in unzip.values():
+        shutil.rmtree(d, ignore_errors=True)
+
+
+def _run(built, platform: str, model: str, steps: int, h: float, set_: str, ramp: str,
+         get: str) -> list[list[float]]:
+    binary = {"linux64": f"{model}.so", "win64": f"{model}.dll"}[platform]
+    library = Path(built["unzip"][model]) / "binaries" / platform / binary
+    guid = read_model_description(str(built["fmus"][model])).guid
+    args = [str(library), guid, str(steps), repr(h), set_, ramp, get]
+    if platform == "win64":
+        command = [WINE, str(built["hosts"]["win64"]), *args]
+        env = {**os.environ, "WINEPREFIX": str(built["prefix"]), "WINEDEBUG": "-all"}
+    else:
+        command, env = [str(built["hosts"]["linux64"]), *args], None
+    run = subprocess.run(command, capture_output=True, text=True, check=False, env=env,
+                         timeout=600)
+    assert run.returncode == 0, run.stderr[-3000:]
+    return [[float(x) for x in line.split()] for line in run.stdout.splitlines()]
+
+
+def _vrs(built, model: str) -> dict[str, int]:
+    md = read_model_description(str(built["fmus"][model]))
+    return {v.name: v.valueReference for v in md.modelVariables}
+
+
+def _scripts(built):
+    t = _vrs(built, "WheelTerrain")
+    r = _vrs(built, "SingleWheelRig")
+    terrain_out = ",".join(str(t[n]) for n in ("normal_force", "drawbar_pull", "torque",
+                                                 "entry_angle", "wheel_angle"))
+    rig_out = ",".join(str(r[n]) for n in ("sinkage", "sinkage_rate", "wheel_speed",
+                                             "carriage_speed", "motor_torque"))
+    return {
+        # dynamic contact: the sinkage ramps from 10 to 20 mm while the wheel turns
+        "WheelTerrain dynamic": ("WheelTerrain", 500, 2e-3, f"{t['soil.phi']}=0.6",
+                                 f"{t['sinkage']}=0.01+0.02,{t['wheel_speed']}=0.6+0,"
+                                 f"{t['carriage_speed']}=0.024+0", terrain_out),
+        # quasi-static: the Newton solve for the sinkage that carries a ramping load
+        "WheelTerrain quasi-static": ("WheelTerrain", 50, 1e-2,
+                                      f"b{t['quasi_static']}=1,{t['soil.phi']}=0.6",
+                                      f"{t['load']}=40+40,{t['wheel_speed']}=0.6+0,"
+                                      f"{t['carriage_speed']}=0.02+0", terrain_out),
+        # the rig under held soil forces: the speed loop and the vertical motion
+        "SingleWheelRig": ("SingleWheelRig", 300, 1e-3, "-",
+                           f"{r['normal_force']}=55+10,{r['drawbar_pull']}=5+0,"
+                           f"{r['torque']}=0.4+0.2", rig_out),
+    }
+
+
+@pytest.mark.parametrize("case", ["WheelTerrain dynamic", "WheelTerrain quasi-static",
+                                  "SingleWheelRig"])
+def test_the_win64_binary_under_wine_gives_the_linux64_numbers(built, case):
+    model, *script = _scripts(built)[case]
+    linux = _run(built, "linux64", model, *script)
+    windows = _run(built, "win64", model, *script)
+    assert len(linux) == len(windows) == script[0]
+    worst = 0.0
+    for a, b in zip(linux, windows, strict=True):
+        for x, y in zip(a, b, strict=True):
+            worst = max(worst, abs(x - y) / max(abs(x), 1e-300) if x != y else 0.0)
+    print(f"\n{case}: max relative difference win64 vs linux64 {worst:.3g}")
+    assert worst <= 1e-12, worst
+    assert len({tuple(row[1:]) for row in linux}) > 1  # the outputs moved: a real run
