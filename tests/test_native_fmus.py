@@ -26,6 +26,7 @@ from wheelterrain.cosim import ssp
 from wheelterrain.fmu import build_native as nativebuild
 from wheelterrain.fmu import build_pythonfmu as fmubuild
 from wheelterrain.fmu import compiled as native
+from wheelterrain.fmu import variables
 from wheelterrain.fmu.instance import Instance
 from wheelterrain.parameters import TABLE
 
@@ -57,11 +58,19 @@ def test_validate_reports_no_problems(flavours, name):
 
 @pytest.mark.parametrize("name", NAMES)
 def test_same_model_description_as_the_pythonfmu_flavour(flavours, name):
+    """The same variables with the same value references; the native one adds, after them,
+    the state derivatives of its model-exchange interface."""
     a = read_model_description(str(flavours["root"] / "pythonfmu" / f"{name}.fmu"))
     b = read_model_description(str(flavours["root"] / "native" / f"{name}.fmu"))
     rows = [[(v.name, v.valueReference, v.causality, v.unit, v.declaredType.name, v.min, v.max)
              for v in md.modelVariables] for md in (a, b)]
-    assert rows[0] == rows[1]
+    assert rows[1][:len(rows[0])] == rows[0]
+    states = variables.continuous_states(name)
+    assert [r[0] for r in rows[1][len(rows[0]):]] == [f"der({s})" for s in states]
+    assert [d.variable.name for d in b.derivatives] == [f"der({s})" for s in states]
+    assert [d.variable.derivative.name for d in b.derivatives] == list(states)
+    assert b.modelExchange is not None
+    assert b.numberOfContinuousStates == len(states)
     assert [o.variable.name for o in a.outputs] == [o.variable.name for o in b.outputs]
     assert b.coSimulation.needsExecutionTool is False
     with zipfile.ZipFile(flavours["root"] / "native" / f"{name}.fmu") as z:
@@ -150,6 +159,102 @@ def test_flavours_give_the_same_c1_c4_means(flavours):
             means.append(r.means)
         for key in ("drawbar_pull", "normal_force", "sinkage"):
             assert means[1][key] == pytest.approx(means[0][key], rel=1e-9), (case, key)
+
+
+# ---- model exchange ---------------------------------------------------------------------
+
+
+def test_model_exchange_rig_under_cvode_is_what_co_simulation_converges_to(flavours):
+    """The rig alone under held soil forces (it sinks, its speed loop settles on a torque):
+    fmpy integrates the model-exchange interface with CVode (relative tolerance 1e-9); the
+    co-simulation interface steps the same equations with first-order steps. The stated
+    tolerance is the co-simulation's own step error: the difference shrinks tenfold with a
+    tenfold smaller step (to within 15 %), for every state and the motor torque, which it
+    would not if the two interfaces integrated different equations."""
+    from fmpy import simulate_fmu
+
+    fmu = str(flavours["root"] / "native" / "SingleWheelRig.fmu")
+    forces = {"normal_force": 55.0, "drawbar_pull": 2.0, "torque": 0.3}
+    names = ["sinkage", "sinkage_rate", "wheel_speed", "speed_error_integral", "motor_torque"]
+    me = simulate_fmu(fmu, fmi_type="ModelExchange", solver="CVode", stop_time=1.0,
+                      output_interval=1e-3, start_values=forces, relative_tolerance=1e-9,
+                      output=names)
+    errors = {}
+    for h in (1e-3, 1e-4):
+        cs = simulate_fmu(fmu, fmi_type="CoSimulation", stop_time=1.0, output_interval=h,
+                          start_values=forces, output=names)
+        every = round(1e-3 / h)
+        errors[h] = {n: np.max(np.abs(cs[n][::every] - me[n])) for n in names}
+    for n in names:
+        span = np.ptp(me[n])
+        assert span > 0, n  # the signal moves
+        if errors[1e-3][n] > 1e-9 * span:  # (the sinkage rate of a constant fall is exact)
+            assert errors[1e-4][n] <= 0.15 * errors[1e-3][n], (n, errors)
+
+
+def test_model_exchange_terrain_integrates_the_wheel_angle_and_serves_the_cs_forces(flavours):
+    from fmpy import simulate_fmu
+
+    fmu = str(flavours["root"] / "native" / "WheelTerrain.fmu")
+    inputs = {"sinkage": 0.015, "wheel_speed": 0.6, "carriage_speed": 0.02}
+    names = ["wheel_angle", "normal_force", "drawbar_pull", "torque"]
+    runs = {kind: simulate_fmu(fmu, fmi_type=kind, stop_time=0.5, output_interval=1e-3,
+                               start_values=inputs, output=names, relative_tolerance=1e-10)
+            for kind in ("ModelExchange", "CoSimulation")}
+    me, cs = runs["ModelExchange"], runs["CoSimulation"]
+    assert me["wheel_angle"] == pytest.approx(0.6 * me["time"], rel=1e-8, abs=1e-12)
+    for n in ("normal_force", "drawbar_pull", "torque"):  # the ripple follows the angle
+        assert np.ptp(me[n]) > 0, n
+        assert me[n] == pytest.approx(cs[n], rel=1e-7, abs=1e-9), n
+
+
+@pytest.mark.slow
+def test_the_pair_through_model_exchange_gives_the_co_simulation_c1_c4_means(flavours):
+    """The C1-C4 master run through model exchange (it integrates both FMUs' states with RK4 at
+    the 1 ms step) against co-simulation (each FMU steps itself): the same means to 1e-4."""
+    ps = presets.load(presets.DEFAULT_PRESET)
+    unz = {n: flavours["unzip"][("native", n)] for n in NAMES}
+    for case, slip in (("C1", 0.0), ("C2", 0.25), ("C3", 0.5), ("C4", 0.75)):
+        means = {iface: cosim.run_case(flavours["root"] / "native", ps, slip, 62.0, 0.03, case,
+                                       stop=14.0, unzipped=unz, settle=8.0,
+                                       interface=iface).means for iface in ("cs", "me")}
+        for key in ("drawbar_pull", "normal_force", "sinkage"):
+            assert means["me"][key] == pytest.approx(means["cs"][key], rel=1e-4), (case, key)
+
+
+def test_model_exchange_calls_are_checked(flavours):
+    from ctypes import c_double, c_int, c_void_p
+
+    path = flavours["root"] / "native" / "SingleWheelRig.fmu"
+    rig = Instance(path, flavours["unzip"][("native", "SingleWheelRig")], "me", log=True,
+                   interface="me").start({})
+    try:
+        x = (c_double * 6)()
+        with pytest.raises(FMICallException):  # five states, not six
+            rig.fmu.getDerivatives(x, 6)
+        assert any("has 5 continuous states" in m for m in rig.errors())
+        do_step = rig.fmu.dll.fmi2DoStep  # (fmpy binds it for co-simulation only)
+        do_step.argtypes, do_step.restype = [c_void_p, c_double, c_double, c_int], c_int
+        assert do_step(rig.fmu.component, 0.0, 1e-3, 1) == 3  # fmi2Error: ME does not step
+        assert any("fmi2DoStep: illegal call sequence" in m for m in rig.errors())
+        nan = (c_double * 5)(*[float("nan")] * 5)
+        with pytest.raises(FMICallException):
+            rig.fmu.setContinuousStates(nan, 5)
+        # a state below the rig's floor: its derivatives and outputs are refused, not served
+        deep = (c_double * 5)(2.0, 0.0, 0.6, 0.0, 0.02)
+        rig.fmu.setContinuousStates(deep, 5)
+        with pytest.raises(FMICallException):
+            rig.fmu.getDerivatives(x, 5)
+        with pytest.raises(FMICallException):
+            rig.value("sinkage")
+        assert any("left the rig's range" in m for m in rig.errors())
+        good = (c_double * 5)(0.01, 0.0, 0.6, 0.0, 0.02)
+        rig.fmu.setContinuousStates(good, 5)
+        rig.fmu.getDerivatives(x, 5)
+        assert rig.value("sinkage") == 0.01
+        assert np.isfinite(np.ctypeslib.as_array(x, shape=(6,))[:5]).all()
+    finally:
+        rig.close()
 
 
 def test_only_declared_log_categories_are_accepted(flavours):

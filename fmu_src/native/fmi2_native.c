@@ -1,5 +1,5 @@
 /*
- * FMI 2.0 co-simulation wrapper of the native wheelterrain FMUs.
+ * FMI 2.0 wrapper of the native wheelterrain FMUs: co-simulation and model exchange.
  *
  * One translation unit per FMU: this file includes model_vars.h, which `wheelterrain build
  * --flavor native` generates for WheelTerrain or SingleWheelRig (the variable table, the GUID,
@@ -8,6 +8,11 @@
  * model's hooks (terrain_hooks.c or rig_hooks.c beside this file: model_work, model_reset,
  * model_initialize, model_refresh, model_step, copying values in and out of those Functions).
  * No arithmetic of the model is written by hand.
+ *
+ * Model exchange: the continuous states are the ones the co-simulation step advances (the
+ * rig's states, the terrain's wheel angle); their derivatives come from the same Functions
+ * (model_derivatives: rig_rates, or the wheel speed), listed in model_vars.h (STATE_VRS,
+ * DER_VRS, NOMINALS). No event indicators, no discrete states.
  *
  * What this wrapper adds: the FMI 2 call-sequence state machine, the GUID check, logging
  * categories (errors are always reported, whether logging is on or not), checks of every set
@@ -37,7 +42,7 @@ __asm__(".symver pow,pow@GLIBC_2.2.5");
 #include "fmi2Functions.h"
 
 typedef enum { T_REAL, T_INTEGER, T_BOOLEAN } VarType;
-typedef enum { C_PARAMETER, C_INPUT, C_OUTPUT } Causality;
+typedef enum { C_PARAMETER, C_INPUT, C_OUTPUT, C_LOCAL } Causality;
 
 typedef struct {
     const char *name;
@@ -55,6 +60,8 @@ typedef enum {
     S_STEP_COMPLETE = 4,
     S_TERMINATED = 8,
     S_ERROR = 16,
+    S_EVENT = 32,      /* model exchange: event mode */
+    S_CONTINUOUS = 64, /* model exchange: continuous-time mode */
 } ModeBit;
 
 #define MAX_MESSAGE 512
@@ -81,6 +88,7 @@ typedef struct Instance {
     Block b;
     fmi2CallbackFunctions cb;
     char *name;
+    int model_exchange; /* instantiated as fmi2ModelExchange (else co-simulation) */
     int logging_on;
     int log_categories; /* bit k: category k enabled */
     casadi_int *iw;
@@ -189,13 +197,18 @@ static int any_invalid(Instance *c, int report) {
 }
 
 static void refresh(Instance *c) {
+    double dx[N_CONTINUOUS];
     if (!c->b.dirty || any_invalid(c, 0)) return;
     c->b.dirty = 0;
     c->b.operating_error = 0;
-    if (model_refresh(c, c->b.operating_message) != 0) {
+    /* the derivatives first: in model exchange the rig's motor torque output comes with them */
+    if (model_derivatives(c, dx, c->b.operating_message) != 0 ||
+        model_refresh(c, c->b.operating_message) != 0) {
         c->b.operating_error = 1;
         LOG_ERROR(c, "%s: %s", MODEL_NAME, c->b.operating_message);
+        return;
     }
+    for (int k = 0; k < N_CONTINUOUS; k++) c->b.v[DER_VRS[k]] = dx[k];
 }
 
 /* ---- common functions ------------------------------------------------------------------- */
@@ -259,9 +272,10 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
     strcpy(c->name, name ? name : "");
     c->logging_on = loggingOn;
     c->log_categories = loggingOn ? ~0 : 0;
-    if (type != fmi2CoSimulation) {
-        LOG_ERROR(c, "fmi2Instantiate: %s is a co-simulation FMU (fmuType %d requested)",
-                  MODEL_NAME, (int)type);
+    c->model_exchange = type == fmi2ModelExchange;
+    if (type != fmi2CoSimulation && type != fmi2ModelExchange) {
+        LOG_ERROR(c, "fmi2Instantiate: %s has no interface of fmuType %d", MODEL_NAME,
+                  (int)type);
         functions->freeMemory(c->name);
         functions->freeMemory(c);
         return NULL;
@@ -327,7 +341,7 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component comp) {
 fmi2Status fmi2ExitInitializationMode(fmi2Component comp) {
     Instance *c = (Instance *)comp;
     if (!allowed(c, "fmi2ExitInitializationMode", S_INITIALIZATION)) return fmi2Error;
-    c->b.mode = S_STEP_COMPLETE;
+    c->b.mode = c->model_exchange ? S_EVENT : S_STEP_COMPLETE;
     if (!any_invalid(c, 0)) model_initialize(c);
     c->b.dirty = 1;
     return fmi2OK;
@@ -335,7 +349,8 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component comp) {
 
 fmi2Status fmi2Terminate(fmi2Component comp) {
     Instance *c = (Instance *)comp;
-    if (!allowed(c, "fmi2Terminate", S_STEP_COMPLETE | S_ERROR)) return fmi2Error;
+    if (!allowed(c, "fmi2Terminate", S_STEP_COMPLETE | S_EVENT | S_CONTINUOUS | S_ERROR))
+        return fmi2Error;
     c->b.mode = S_TERMINATED;
     return fmi2OK;
 }
@@ -349,8 +364,9 @@ fmi2Status fmi2Reset(fmi2Component comp) {
 
 /* ---- get and set ------------------------------------------------------------------------ */
 
-#define GETTABLE (S_INITIALIZATION | S_STEP_COMPLETE | S_TERMINATED | S_ERROR)
-#define SETTABLE (S_INSTANTIATED | S_INITIALIZATION | S_STEP_COMPLETE)
+#define GETTABLE (S_INITIALIZATION | S_STEP_COMPLETE | S_EVENT | S_CONTINUOUS | S_TERMINATED | \
+                  S_ERROR)
+#define SETTABLE (S_INSTANTIATED | S_INITIALIZATION | S_STEP_COMPLETE | S_EVENT | S_CONTINUOUS)
 
 static int check_vr(Instance *c, const char *function, fmi2ValueReference vr, VarType type) {
     if (vr >= N_VARS || VARS[vr].type != type) {
@@ -368,7 +384,13 @@ static fmi2Status get_values(Instance *c, const char *function, const fmi2ValueR
     for (size_t i = 0; i < n; i++) {
         if (!check_vr(c, function, vr[i], type)) return fmi2Error;
         out[i] = c->b.v[vr[i]];
-        if (VARS[vr[i]].causality == C_OUTPUT) stale = 1;
+        if (VARS[vr[i]].causality == C_OUTPUT || VARS[vr[i]].causality == C_LOCAL) stale = 1;
+    }
+    /* model exchange has no last step: outputs at a refused point are an error */
+    if (stale && c->model_exchange && (c->b.operating_error || any_invalid(c, 0))) {
+        LOG_ERROR(c, "%s: %s: the outputs at this point are refused: %s", MODEL_NAME, function,
+                  c->b.operating_error ? c->b.operating_message : "an invalid value");
+        return fmi2Error;
     }
     /* outputs while the current inputs are refused are those of the last valid point: served,
        but not as OK (fmi2Warning, with the reason when logging is on) */
@@ -384,8 +406,9 @@ static fmi2Status get_values(Instance *c, const char *function, const fmi2ValueR
 static fmi2Status set_value(Instance *c, const char *function, fmi2ValueReference vr,
                             VarType type, double value) {
     if (!check_vr(c, function, vr, type)) return fmi2Error;
-    if (VARS[vr].causality == C_OUTPUT) {
-        LOG_ERROR(c, "%s: %s is an output and cannot be set", function, VARS[vr].name);
+    if (VARS[vr].causality == C_OUTPUT || VARS[vr].causality == C_LOCAL) {
+        LOG_ERROR(c, "%s: %s is computed by the model and cannot be set", function,
+                  VARS[vr].name);
         return fmi2Error;
     }
     c->b.v[vr] = value;
@@ -633,4 +656,124 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component comp, const fmi2StatusKind s, fmi2
 fmi2Status fmi2GetStringStatus(fmi2Component comp, const fmi2StatusKind s, fmi2String *v) {
     (void)comp, (void)s, (void)v;
     return fmi2Discard;
+}
+
+/* ---- model exchange ------------------------------------------------------------------------ */
+
+#define ME_MODES (S_EVENT | S_CONTINUOUS)
+
+static int check_size(Instance *c, const char *function, size_t n, size_t expected) {
+    if (n == expected) return 1;
+    LOG_ERROR(c, "%s: %s has %u continuous states (and no event indicators); %u asked for",
+              function, MODEL_NAME, (unsigned)expected, (unsigned)n);
+    return 0;
+}
+
+fmi2Status fmi2EnterEventMode(fmi2Component comp) {
+    Instance *c = (Instance *)comp;
+    if (!allowed(c, "fmi2EnterEventMode", ME_MODES)) return fmi2Error;
+    c->b.mode = S_EVENT;
+    return fmi2OK;
+}
+
+fmi2Status fmi2NewDiscreteStates(fmi2Component comp, fmi2EventInfo *info) {
+    Instance *c = (Instance *)comp;
+    if (!allowed(c, "fmi2NewDiscreteStates", S_EVENT)) return fmi2Error;
+    info->newDiscreteStatesNeeded = fmi2False;
+    info->terminateSimulation = fmi2False;
+    info->nominalsOfContinuousStatesChanged = fmi2False;
+    info->valuesOfContinuousStatesChanged = fmi2False;
+    info->nextEventTimeDefined = fmi2False;
+    info->nextEventTime = 0.0;
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component comp) {
+    Instance *c = (Instance *)comp;
+    if (!allowed(c, "fmi2EnterContinuousTimeMode", S_EVENT)) return fmi2Error;
+    c->b.mode = S_CONTINUOUS;
+    return fmi2OK;
+}
+
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component comp, fmi2Boolean noSetPrior,
+                                       fmi2Boolean *enterEventMode,
+                                       fmi2Boolean *terminateSimulation) {
+    Instance *c = (Instance *)comp;
+    (void)noSetPrior;
+    if (!allowed(c, "fmi2CompletedIntegratorStep", S_CONTINUOUS)) return fmi2Error;
+    *enterEventMode = fmi2False;
+    *terminateSimulation = fmi2False;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetTime(fmi2Component comp, fmi2Real time) {
+    Instance *c = (Instance *)comp;
+    if (!allowed(c, "fmi2SetTime", S_INSTANTIATED | S_INITIALIZATION | ME_MODES))
+        return fmi2Error;
+    if (!isfinite(time)) {
+        LOG_ERROR(c, "fmi2SetTime: time %g must be finite", time);
+        return fmi2Error;
+    }
+    c->b.time = time; /* the model is autonomous: time changes no value */
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetContinuousStates(fmi2Component comp, const fmi2Real x[], size_t nx) {
+    Instance *c = (Instance *)comp;
+    if (!allowed(c, "fmi2SetContinuousStates", S_INITIALIZATION | ME_MODES)) return fmi2Error;
+    if (!check_size(c, "fmi2SetContinuousStates", nx, N_CONTINUOUS)) return fmi2Error;
+    for (size_t k = 0; k < nx; k++) {
+        if (!isfinite(x[k])) {
+            LOG_ERROR(c, "fmi2SetContinuousStates: %s = %g must be finite",
+                      VARS[STATE_VRS[k]].name, x[k]);
+            return fmi2Error;
+        }
+    }
+    for (size_t k = 0; k < nx; k++) c->b.s[k] = x[k];
+    c->b.dirty = 1;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetDerivatives(fmi2Component comp, fmi2Real dx[], size_t nx) {
+    Instance *c = (Instance *)comp;
+    if (!allowed(c, "fmi2GetDerivatives", GETTABLE)) return fmi2Error;
+    if (!check_size(c, "fmi2GetDerivatives", nx, N_CONTINUOUS)) return fmi2Error;
+    refresh(c);
+    if (any_invalid(c, 0) || c->b.operating_error) {
+        LOG_ERROR(c, "%s: fmi2GetDerivatives: refused: %s", MODEL_NAME,
+                  c->b.operating_error ? c->b.operating_message
+                                       : "a value set is invalid (see the error logged then)");
+        return fmi2Error;
+    }
+    for (size_t k = 0; k < nx; k++) dx[k] = c->b.v[DER_VRS[k]];
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetEventIndicators(fmi2Component comp, fmi2Real indicators[], size_t ni) {
+    Instance *c = (Instance *)comp;
+    (void)indicators;
+    if (!allowed(c, "fmi2GetEventIndicators", GETTABLE)) return fmi2Error;
+    if (ni != 0) {
+        LOG_ERROR(c, "fmi2GetEventIndicators: %s has no event indicators; %u asked for",
+                  MODEL_NAME, (unsigned)ni);
+        return fmi2Error;
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetContinuousStates(fmi2Component comp, fmi2Real x[], size_t nx) {
+    Instance *c = (Instance *)comp;
+    if (!allowed(c, "fmi2GetContinuousStates", GETTABLE)) return fmi2Error;
+    if (!check_size(c, "fmi2GetContinuousStates", nx, N_CONTINUOUS)) return fmi2Error;
+    for (size_t k = 0; k < nx; k++) x[k] = c->b.s[k];
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component comp, fmi2Real x_nominal[],
+                                             size_t nx) {
+    Instance *c = (Instance *)comp;
+    if (c == NULL) return fmi2Error;
+    if (!check_size(c, "fmi2GetNominalsOfContinuousStates", nx, N_CONTINUOUS)) return fmi2Error;
+    for (size_t k = 0; k < nx; k++) x_nominal[k] = NOMINALS[k];
+    return fmi2OK;
 }

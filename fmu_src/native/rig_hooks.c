@@ -3,7 +3,7 @@
  *
  * Values in and out of the CasADi Functions rig_step / rig_outputs / rig_initial
  * (wheelterrain.model.rig, wheelterrain.fmu.functions). States 0..N_X-1 are the rig's states
- * (wheelterrain.model.rig.STATES); state N_X holds the motor torque of the last step. Sizes and
+ * (wheelterrain.model.rig.RIG_STATES, the continuous states of model exchange); state N_X holds the motor torque of the last step. Sizes and
  * value references come from the generated model_vars.h: IN_VRS, OUT_VRS, P_VRS, N_X, N_U, N_P,
  * N_OUT. */
 
@@ -12,6 +12,7 @@ static void model_work(casadi_int *sz_arg, casadi_int *sz_res, casadi_int *sz_iw
     cover(rig_step_work, sz_arg, sz_res, sz_iw, sz_w);
     cover(rig_outputs_work, sz_arg, sz_res, sz_iw, sz_w);
     cover(rig_initial_work, sz_arg, sz_res, sz_iw, sz_w);
+    cover(rig_rates_work, sz_arg, sz_res, sz_iw, sz_w);
 }
 
 static void load_params(Instance *c, casadi_real *p) {
@@ -56,6 +57,20 @@ static int state_problem(const Instance *c, char *message) {
                  RIG_SINKAGE_LIMIT);
         return 1;
     }
+    return 0;
+}
+
+/* The rig's continuous equations (rig_rates: wheelterrain.model.rig.rates) at the current
+   state. In model exchange the motor torque output is the one of this state and these
+   commands (state N_X); in co-simulation it stays the torque of the last step. */
+static int model_derivatives(Instance *c, double *dx, char *message) {
+    casadi_real u[N_U], p[N_P], torque;
+    if (state_problem(c, message)) return 1;
+    bind_state_inputs_params(c, u, p);
+    c->res[0] = dx;
+    c->res[1] = &torque;
+    rig_rates(c->arg, c->res, c->iw, c->w, 0);
+    if (c->model_exchange) c->b.s[N_X] = torque;
     return 0;
 }
 

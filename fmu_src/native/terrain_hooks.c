@@ -5,7 +5,8 @@
  * grouser ripple follows the wheel's rotation. Everything model-specific that is a list of names
  * (value references, sizes, status codes and their messages) comes from the generated
  * model_vars.h, itself generated from the one variables table: IN_VRS, OUT_VRS, P_VRS, N_IN,
- * N_OUT, N_P, VR_*, STATUS_*, MESSAGE_*. */
+ * N_OUT, N_P, VR_*, STATUS_*, MESSAGE_*. The wheel angle is the one continuous state of
+ * model exchange. */
 
 static void model_work(casadi_int *sz_arg, casadi_int *sz_res, casadi_int *sz_iw,
                        casadi_int *sz_w) {
@@ -59,6 +60,13 @@ static int model_refresh(Instance *c, char *message) {
     }
     for (k = 0; k < N_OUT; k++) c->b.v[OUT_VRS[k]] = y[k];
     c->b.v[VR_WHEEL_ANGLE] = c->b.s[0];
+    return 0;
+}
+
+/* d(wheel_angle)/dt = wheel_speed (model exchange; the co-simulation step integrates it) */
+static int model_derivatives(Instance *c, double *dx, char *message) {
+    (void)message;
+    dx[0] = c->b.v[VR_WHEEL_SPEED];
     return 0;
 }
 

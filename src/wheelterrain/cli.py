@@ -323,8 +323,12 @@ def build(out: str, flavor: str) -> None:
               help="Communication step [s].")
 @click.option("--stop", default=30.0, show_default=True, type=click.FloatRange(12.0, 3600.0),
               help="Simulated time per case [s] (averages start after 10 s).")
+@click.option("--interface", type=click.Choice(["cs", "me"]), default="cs", show_default=True,
+              help="cs: FMI co-simulation, each FMU steps itself. me: model exchange, the "
+              "master integrates both FMUs' states (classical Runge-Kutta at --step); needs "
+              "the native FMUs (--fmu-dir build/native).")
 def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_target: str | None,
-              out: str, step: float, stop: float) -> None:
+              out: str, step: float, stop: float, interface: str) -> None:
     """Reproduce the paper's C1-C4 by co-simulating the two FMUs with fmpy.
 
     \b
@@ -346,10 +350,12 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_targ
     out_dir = Path(out)
     paper = cosim.table3()
     try:
-        with click.progressbar(length=len(paper["cases"]), label="co-simulating C1-C4",
+        label = "co-simulating C1-C4" if interface == "cs" else "integrating C1-C4 (ME)"
+        with click.progressbar(length=len(paper["cases"]), label=label,
                                file=sys.stderr) as bar:
             results = cosim.reproduce(Path(fmu_dir), ps, step=step, stop=stop,
-                                      progress=lambda case: bar.update(1))
+                                      progress=lambda case: bar.update(1),
+                                      interface=interface)
     except (FileNotFoundError, FMUError) as err:
         click.echo(f"error: {err}", err=True)
         sys.exit(EXIT_USAGE)
@@ -359,7 +365,8 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_targ
     fitted_on = presets.read(preset)["provenance"].get("fitted_on") if not assignments else None
     text = json_target != "-"  # --json alone: the JSON document replaces the text
     say = click.echo if text else (lambda *a, **k: None)
-    say(f"C1-C4 co-simulation, preset {name}, step {step:g} s, {stop:g} s per case "
+    how = "co-simulation" if interface == "cs" else "model exchange (RK4)"
+    say(f"C1-C4 {how}, preset {name}, step {step:g} s, {stop:g} s per case "
         f"(wall time {sum(r.wall_time for r in results):.1f} s)")
     say(cosim.format_table(rows, mae))
     if fitted_on:
@@ -374,7 +381,8 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_targ
     plots.means_bar_chart(rows, out_dir / "means.png", preset)
     say(f"wrote {out_dir}/C1..C4.csv, C1..C4.png, means.png, C1..C4.ssp")
     if json_target:  # the JSON document: replacing the text, or beside it in a file
-        payload = {"preset": preset, "set": list(assignments), "step": step, "stop": stop,
+        payload = {"preset": preset, "set": list(assignments), "interface": interface,
+                   "step": step, "stop": stop,
                    "in_sample": bool(fitted_on),
                    "averaging_windows": {r.case: list(r.window) for r in results},
                    "cases": [{"case": row["case"], "slip_paper": row["slip_paper"],

@@ -76,12 +76,15 @@ def averaging_window(ps: ParameterSet, rim_speed: float, stop: float,
 
 
 def start_pair(paths: dict[str, Path], unzipped: dict[str, str], ps: ParameterSet,
-               rig_values: dict[str, float], stop: float | None = None) -> tuple:
+               rig_values: dict[str, float], stop: float | None = None,
+               interface: str = "cs") -> tuple:
     """(terrain, rig) instances, initialised: the table parameters ``ps`` on WheelTerrain in
-    dynamic mode, ``rig_values`` on SingleWheelRig."""
-    terrain = Instance(paths["WheelTerrain"], unzipped["WheelTerrain"], "terrain")
+    dynamic mode, ``rig_values`` on SingleWheelRig; co-simulation or model exchange."""
+    terrain = Instance(paths["WheelTerrain"], unzipped["WheelTerrain"], "terrain",
+                       interface=interface)
     try:
-        rig_fmu = Instance(paths["SingleWheelRig"], unzipped["SingleWheelRig"], "rig")
+        rig_fmu = Instance(paths["SingleWheelRig"], unzipped["SingleWheelRig"], "rig",
+                           interface=interface)
     except BaseException:
         terrain.close()
         raise
@@ -146,10 +149,74 @@ def _extra(names, io, coupled) -> tuple[str, ...]:
     return tuple(n for n in names if n in outputs and n not in coupled)
 
 
+def _cosimulate(pair: Coupling, where: list[int], n: int, step: float) -> np.ndarray:
+    """Co-simulation: exchange, record, then both FMUs step (rows: t, then RECORD)."""
+    exchange, advance = pair.exchange, pair.step
+    data = np.empty((n + 1, len(where) + 1))
+    for k in range(n + 1):
+        t = k * step
+        x, y = exchange()
+        xy = x + y
+        data[k, 0] = t
+        data[k, 1:] = [xy[j] for j in where]
+        if k < n:
+            advance(t, step)
+    return data
+
+
+def _integrate(pair: Coupling, where: list[int], n: int, step: float) -> np.ndarray:
+    """Model exchange: the master integrates the states of both FMUs together with the
+    classical fourth-order Runge-Kutta method at the communication step, exchanging the wheel
+    states and the forces at every stage (rows as :func:`_cosimulate`)."""
+    from ctypes import POINTER, c_double
+
+    terrain, rig_fmu = pair.terrain.fmu, pair.rig.fmu
+    nt = pair.terrain.md.numberOfContinuousStates
+    nr = pair.rig.md.numberOfContinuousStates
+    state, rate = np.zeros(nt + nr), np.zeros(nt + nr)
+
+    def pointer(a: np.ndarray, offset: int):
+        return a[offset:].ctypes.data_as(POINTER(c_double))
+
+    terrain.getContinuousStates(pointer(state, 0), nt)
+    rig_fmu.getContinuousStates(pointer(state, nt), nr)
+
+    def rates(t: float, x: np.ndarray) -> tuple[np.ndarray, list[float]]:
+        state[:] = x
+        for fmu, offset, size in ((terrain, 0, nt), (rig_fmu, nt, nr)):
+            fmu.setTime(t)
+            fmu.setContinuousStates(pointer(state, offset), size)
+        xs, ys = pair.exchange()
+        terrain.getDerivatives(pointer(rate, 0), nt)
+        rig_fmu.getDerivatives(pointer(rate, nt), nr)
+        return rate.copy(), xs + ys
+
+    data = np.empty((n + 1, len(where) + 1))
+    x = state.copy()
+    for k in range(n + 1):
+        t = k * step
+        k1, xy = rates(t, x)
+        data[k, 0] = t
+        data[k, 1:] = [xy[j] for j in where]
+        if k < n:
+            k2 = rates(t + step / 2, x + step / 2 * k1)[0]
+            k3 = rates(t + step / 2, x + step / 2 * k2)[0]
+            k4 = rates(t + step, x + step * k3)[0]
+            x = x + step / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return data
+
+
+INTERFACES = {"cs": _cosimulate, "me": _integrate}
+"""How the pair runs: FMI co-simulation (each FMU steps itself) or model exchange (the master
+integrates the FMUs' states)."""
+
+
 def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, rim_speed: float,
              case: str = "", stop: float = STOP_TIME, step: float = STEP,
-             unzipped: dict[str, str] | None = None, settle: float = SETTLE_TIME) -> CaseResult:
-    """Co-simulate one rig case; returns means over the averaging window and the series."""
+             unzipped: dict[str, str] | None = None, settle: float = SETTLE_TIME,
+             interface: str = "cs") -> CaseResult:
+    """Run one rig case through ``interface`` (:data:`INTERFACES`); returns means over the
+    averaging window and the series."""
     from fmpy import extract
 
     paths = fmu_paths(fmu_dir)
@@ -157,23 +224,13 @@ def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, ri
     unzipped = unzipped or {name: extract(str(p)) for name, p in paths.items()}
     started = time.perf_counter()
     terrain, rig_fmu = start_pair(paths, unzipped, ps,
-                                  rig_parameters(ps, slip_paper, load, rim_speed), stop)
+                                  rig_parameters(ps, slip_paper, load, rim_speed), stop,
+                                  interface)
     try:
         pair = Coupling(terrain, rig_fmu,
                         rig_extra=_extra(RECORD, RIG_IO, COUPLED_STATES),
                         terrain_extra=_extra(RECORD, TERRAIN_IO, COUPLED_FORCES))
-        exchange, advance = pair.exchange, pair.step
-        where = pair.positions(RECORD)
-        n = round(stop / step)
-        data = np.empty((n + 1, len(RECORD) + 1))
-        for k in range(n + 1):
-            t = k * step
-            x, y = exchange()
-            xy = x + y
-            data[k, 0] = t
-            data[k, 1:] = [xy[j] for j in where]
-            if k < n:
-                advance(t, step)
+        data = INTERFACES[interface](pair, pair.positions(RECORD), round(stop / step), step)
     finally:
         terrain.close()
         rig_fmu.close()
@@ -203,8 +260,9 @@ def table3() -> dict:
 
 
 def reproduce(fmu_dir: Path, ps: ParameterSet, step: float = STEP, stop: float = STOP_TIME,
-              progress: Callable[[str], None] | None = None) -> list[CaseResult]:
-    """C1-C4 as co-simulations (one extraction of each FMU reused for all cases).
+              progress: Callable[[str], None] | None = None,
+              interface: str = "cs") -> list[CaseResult]:
+    """C1-C4 through ``interface`` (one extraction of each FMU reused for all cases).
     ``progress(case)`` is called as each case finishes."""
     from fmpy import extract
 
@@ -215,7 +273,7 @@ def reproduce(fmu_dir: Path, ps: ParameterSet, step: float = STEP, stop: float =
         for row in paper["cases"]:
             results.append(run_case(fmu_dir, ps, row["slip_paper"], paper["load_N"],
                                     paper["wheel_speed_m_per_s"], row["case"], stop, step,
-                                    unzipped))
+                                    unzipped, interface=interface))
             if progress:
                 progress(row["case"])  # this case is done
         return results

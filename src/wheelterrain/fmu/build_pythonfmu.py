@@ -48,6 +48,8 @@ BASE_UNITS: dict[str, dict[str, int]] = {
     "m/s": {"m": 1, "s": -1},
     "rad": {"rad": 1},
     "rad/s": {"rad": 1, "s": -1},
+    "m/s2": {"m": 1, "s": -2},
+    "rad/s2": {"rad": 1, "s": -2},
     "kg": {"kg": 1},
     "kg.m2": {"kg": 1, "m": 2},
     "N": {"kg": 1, "m": 1, "s": -2},
@@ -57,7 +59,8 @@ BASE_UNITS: dict[str, dict[str, int]] = {
     "N.s/m": {"kg": 1, "s": -1},
 }
 DISPLAY_UNITS = {"rad": {"deg": 57.29577951308232}, "m": {"mm": 1000.0}}
-MODELICA_SI = {"Length", "Velocity", "Angle", "AngularVelocity", "Mass", "MomentOfInertia",
+MODELICA_SI = {"Length", "Velocity", "Angle", "AngularVelocity", "Acceleration",
+               "AngularAcceleration", "Mass", "MomentOfInertia",
                "Force", "Torque", "Pressure", "TranslationalDampingConstant",
                "DimensionlessRatio"}
 NON_SI_QUANTITY = {"N/m3": "WeightDensity"}
@@ -200,11 +203,32 @@ def fix_exit_crash(binary: bytes) -> bytes:
 
 def finish_model_description(fmu: Path, model: str) -> None:
     """Rewrite modelDescription.xml inside ``fmu`` (see the module docstring)."""
-    variables = {v.name: v for v in VARIABLES[model]()}
     with zipfile.ZipFile(fmu) as z:
         root = ET.fromstring(z.read("modelDescription.xml"))
         members = {info.filename: z.read(info.filename) for info in z.infolist()}
+    describe(root, model, VARIABLES[model]())
+    members["modelDescription.xml"] = pretty(root)
+    for name in members:
+        if name.startswith("binaries/linux64/") and name.endswith(".so"):
+            members[name] = fix_exit_crash(members[name])
+    partial = fmu.with_suffix(".rewrite")
+    with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
+        for name, data in members.items():
+            z.writestr(name, data)
+    os.replace(partial, fmu)
 
+
+def pretty(root: ET.Element) -> bytes:
+    text = minidom.parseString(ET.tostring(root, encoding="unicode")).toprettyxml(indent="  ")
+    return "\n".join(line for line in text.splitlines() if line.strip()).encode("utf-8")
+
+
+def describe(root: ET.Element, model: str, rows: list[variables.Var],
+             states: tuple[str, ...] = ()) -> None:
+    """Write the units, types, attributes, structure and GUID of ``rows`` (every variable of
+    ``root``, in order) into ``root``. With ``states`` (model exchange), the outputs' dependencies
+    include the states and the state derivatives (``der(...)`` rows) are listed."""
+    variables = {v.name: v for v in rows}
     for tag in ("UnitDefinitions", "TypeDefinitions"):
         for old in root.findall(tag):
             root.remove(old)
@@ -259,6 +283,8 @@ def finish_model_description(fmu: Path, model: str) -> None:
             cast = _fmt if v.type == "Real" else (lambda x: str(int(x)))
             typed.set("min", cast(v.min))
             typed.set("max", cast(v.max))
+        if v.nominal is not None:
+            typed.set("nominal", _fmt(v.nominal))
         if v.causality in ("parameter", "input") and v.start is not None:
             if v.type == "Boolean":
                 typed.set("start", "true" if v.start else "false")
@@ -272,28 +298,22 @@ def finish_model_description(fmu: Path, model: str) -> None:
     structure = root.find("ModelStructure")
     structure.clear()
     outputs = ET.SubElement(structure, "Outputs")
+    derivatives = ET.SubElement(structure, "Derivatives") if states else None
     initial = ET.SubElement(structure, "InitialUnknowns")
     for sv in scalars:
         v = variables[sv.get("name")]
-        if v.causality != "output":
+        if v.causality == "output":
+            # inputs it depends on directly, then (model exchange) every continuous state: a
+            # conservative superset, as FMI allows
+            known = [*(v.depends_on or ()), *(s for s in states if s not in (v.depends_on or ()))]
+            deps = " ".join(str(index[d]) for d in known)
+            attrs = {"index": str(index[v.name]), "dependencies": deps}
+            if deps:
+                attrs["dependenciesKind"] = " ".join("dependent" for _ in known)
+            ET.SubElement(outputs, "Unknown", attrs)
+        elif v.derivative_of and derivatives is not None:
+            ET.SubElement(derivatives, "Unknown", index=str(index[v.name]))  # depends on all
+        else:
             continue
-        deps = " ".join(str(index[d]) for d in (v.depends_on or ()))
-        kinds = " ".join("dependent" for _ in (v.depends_on or ()))
-        attrs = {"index": str(index[v.name]), "dependencies": deps}
-        if deps:
-            attrs["dependenciesKind"] = kinds
-        ET.SubElement(outputs, "Unknown", attrs)
         ET.SubElement(initial, "Unknown", index=str(index[v.name]))
-
     _identify(root)
-    text = minidom.parseString(ET.tostring(root, encoding="unicode")).toprettyxml(indent="  ")
-    text = "\n".join(line for line in text.splitlines() if line.strip())
-    members["modelDescription.xml"] = text.encode("utf-8")
-    for name in members:
-        if name.startswith("binaries/linux64/") and name.endswith(".so"):
-            members[name] = fix_exit_crash(members[name])
-    partial = fmu.with_suffix(".rewrite")
-    with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
-        for name, data in members.items():
-            z.writestr(name, data)
-    os.replace(partial, fmu)

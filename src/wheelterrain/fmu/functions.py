@@ -225,3 +225,17 @@ def rig_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
     initial = ca.Function("rig_initial", [p], [ca.vertcat(*rig.initial_state(named))], ["p"],
                           ["x0"])
     return rig.build(), outputs, initial
+
+
+@lru_cache(maxsize=1)
+def rig_rates_function() -> ca.Function:
+    """``rig_rates(x, u, p) -> (xdot, motor_torque)``: the rig's continuous equations
+    (:func:`wheelterrain.model.rig.rates`, the ones its co-simulation step integrates) and the
+    motor torque in that state, for the model-exchange interface."""
+    x, u = ca.SX.sym("x", len(rig.RIG_STATES)), ca.SX.sym("u", len(rig.INPUTS))
+    p = ca.SX.sym("p", len(rig.RIG_NAMES))
+    named = rig.named(p)
+    xs, us = tuple(x[k] for k in range(x.numel())), tuple(u[k] for k in range(u.numel()))
+    return ca.Function("rig_rates", [x, u, p],
+                       [ca.vertcat(*rig.rates(xs, us, named)), rig.motor_torque(xs, us, named)],
+                       ["x", "u", "p"], ["xdot", "motor_torque"])

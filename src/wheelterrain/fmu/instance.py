@@ -39,7 +39,9 @@ def set_values(fmu, vr: Mapping[str, int], types: Mapping[str, str], values: Map
 
 
 class Instance:
-    """An instantiated FMI 2.0 co-simulation FMU.
+    """An instantiated FMI 2.0 FMU: co-simulation (``interface="cs"``, :attr:`fmu` an fmpy
+    FMU2Slave) or model exchange (``"me"``, an FMU2Model; :meth:`start` leaves it in
+    continuous-time mode).
 
     ``unzip`` is the folder the FMU was extracted to (None: extract it here and remove it on
     :meth:`close`). With ``log=True`` every message the FMU logs is kept in :attr:`log` as
@@ -47,12 +49,18 @@ class Instance:
     """
 
     def __init__(self, path: str | Path, unzip: str | None = None, name: str = "instance",
-                 log: bool = False) -> None:
+                 log: bool = False, interface: str = "cs") -> None:
         from fmpy import extract, read_model_description
-        from fmpy.fmi2 import FMU2Slave
+        from fmpy.fmi2 import FMU2Model, FMU2Slave
 
         self.path = Path(path)
         self.md = read_model_description(str(path))
+        self.interface = interface
+        kind = {"cs": self.md.coSimulation, "me": self.md.modelExchange}[interface]
+        if kind is None:
+            which = "model-exchange" if interface == "me" else "co-simulation"
+            raise FMUError(f"{path} has no {which} interface (the native FMUs have both: "
+                           "`wheelterrain build --flavor native` writes them to build/native)")
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.types = {v.name: v.type for v in self.md.modelVariables}
         self.log: list[tuple[int, str]] = []
@@ -61,9 +69,9 @@ class Instance:
         self.unzip = extract(str(path)) if unzip is None else unzip
         try:
             self._callbacks = self._logging_callbacks() if log else None
-            self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzip,
-                                 modelIdentifier=self.md.coSimulation.modelIdentifier,
-                                 instanceName=name)
+            make = FMU2Slave if interface == "cs" else FMU2Model
+            self.fmu = make(guid=self.md.guid, unzipDirectory=self.unzip,
+                            modelIdentifier=kind.modelIdentifier, instanceName=name)
             self.fmu.instantiate(callbacks=self._callbacks, loggingOn=log)
         except BaseException:
             self._remove_unzip()
@@ -97,6 +105,10 @@ class Instance:
             self.set(values)
         self.fmu.exitInitializationMode()
         self.running = True
+        if self.interface == "me":  # event iteration, then continuous-time mode
+            while self.fmu.newDiscreteStates()[0]:  # newDiscreteStatesNeeded
+                pass
+            self.fmu.enterContinuousTimeMode()
         return self
 
     def set(self, values: Mapping) -> None:

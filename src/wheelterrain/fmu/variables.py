@@ -28,7 +28,7 @@ class Var:
     """One FMU variable, as the slave registers it and as modelDescription.xml describes it."""
 
     name: str
-    causality: str  # parameter | input | output
+    causality: str  # parameter | input | output | local (a state derivative)
     description: str
     unit: str = "1"
     quantity: str | None = None
@@ -42,6 +42,11 @@ class Var:
     choices: Mapping[int, str] | None = None
     """A mode switch: its values and their names. Registered with pythonfmu as an Integer,
     described in modelDescription.xml as an Enumeration of these items."""
+    nominal: float | None = None
+    """A continuous state's typical magnitude: a model-exchange host scales its error
+    tolerance with it (absolute tolerance = relative tolerance * nominal)."""
+    derivative_of: str | None = None
+    """For a state derivative (model exchange): the state it is the time derivative of."""
 
 
 def _outputs(rows: list[Var], inputs: tuple[str, ...]) -> list[Var]:
@@ -108,7 +113,8 @@ TERRAIN_IO: tuple[Var, ...] = (
             "quasi-static mode)", "Pa", "Pressure"),
     ], _TERRAIN_INPUTS),
     Var("wheel_angle", "output", "Wheel rotation angle, integrated from wheel_speed (phase of "
-        "the grouser ripple)", "rad", "Angle", "deg", depends_on=(), integrated=True),
+        "the grouser ripple)", "rad", "Angle", "deg", depends_on=(), integrated=True,
+        nominal=1.0),
 )
 
 RIG_IO: tuple[Var, ...] = (
@@ -127,18 +133,21 @@ RIG_IO: tuple[Var, ...] = (
         "(torque-command)", "N.m", "Torque", start=0.0, min=-1.0e4, max=1.0e4),
     Var("sinkage", "output", "Wheel sinkage (state of the vertical motion), positive down; "
         "a step that takes it outside its range is the rig's last (the next is refused)",
-        "m", "Length", "mm", min=SINKAGE_RANGE[0], max=SINKAGE_RANGE[1], depends_on=()),
+        "m", "Length", "mm", min=SINKAGE_RANGE[0], max=SINKAGE_RANGE[1], depends_on=(),
+        nominal=0.01),
     Var("sinkage_rate", "output", "Sinkage rate, positive down", "m/s", "Velocity",
-        depends_on=()),
+        depends_on=(), nominal=0.01),
     Var("wheel_speed", "output", "Wheel angular velocity (state of the speed loop)", "rad/s",
-        "AngularVelocity", depends_on=()),
+        "AngularVelocity", depends_on=(), nominal=1.0),
     Var("carriage_speed", "output", "Carriage speed: rim_speed/(1 + s) when kinematic, "
         "the state of the free carriage's motion otherwise", "m/s", "Velocity",
-        depends_on=()),
-    Var("motor_torque", "output", "Torque the wheel motor applied over the last step (the "
-        "speed loop's, or the torque command)", "N.m", "Torque", depends_on=()),
+        depends_on=(), nominal=0.01),
+    Var("motor_torque", "output", "Torque of the wheel motor (the speed loop's, or the "
+        "torque command): over the last step in co-simulation, at the current state and "
+        "commands in model exchange", "N.m", "Torque",
+        depends_on=("wheel_speed_command", "motor_torque_command")),
     Var("speed_error_integral", "output", "Integral of the speed loop's error (state of "
-        "its PI controller)", "rad", "Angle", depends_on=()),
+        "its PI controller)", "rad", "Angle", depends_on=(), nominal=0.001),
     Var("sensor.drawbar_pull", "output", "Drawbar pull the rig's force sensor reads", "N",
         "Force", depends_on=("drawbar_pull",)),
     Var("sensor.normal_force", "output", "Normal force the rig's force sensor reads", "N",
@@ -196,6 +205,35 @@ def rig_variables() -> list[Var]:
     """SingleWheelRig.fmu's variables in value-reference order: the parameter table's rig rows,
     then :data:`RIG_IO`."""
     return [*(parameter_var(p, p.default) for p in ROWS if p.fmu == RIG_FMU), *RIG_IO]
+
+
+_DERIVATIVE_QUANTITY = {"Length": "Velocity", "Velocity": "Acceleration",
+                        "Angle": "AngularVelocity", "AngularVelocity": "AngularAcceleration"}
+
+
+def continuous_states(model: str) -> tuple[str, ...]:
+    """The continuous states of ``model``'s model-exchange interface, in the order of its state
+    vector: the terrain's wheel angle; the rig's states (:data:`wheelterrain.model.rig.RIG_STATES`,
+    the very states its co-simulation step advances). Each is an output of the FMU."""
+    if model == TERRAIN_FMU:
+        return ("wheel_angle",)
+    from wheelterrain.model import rig
+
+    return rig.RIG_STATES
+
+
+def derivative_variables(model: str) -> list[Var]:
+    """``der(<state>)`` for each continuous state: the local variables model exchange adds
+    after the co-simulation variables (their value references follow)."""
+    rows = {v.name: v for v in (terrain_variables() if model == TERRAIN_FMU
+                                else rig_variables())}
+    out = []
+    for name in continuous_states(model):
+        state = rows[name]
+        unit = state.unit[:-2] + "/s2" if state.unit.endswith("/s") else state.unit + "/s"
+        out.append(Var(f"der({name})", "local", f"Time derivative of {name} (model exchange)",
+                       unit, _DERIVATIVE_QUANTITY[state.quantity], derivative_of=name))
+    return out
 
 
 def units() -> dict[str, str]:
