@@ -41,6 +41,8 @@ def flavours(tmp_path_factory):
     nativebuild.build(root / "native")
     unzip = {(f, n): extract(str(root / f / f"{n}.fmu")) for f in ("pythonfmu", "native")
              for n in NAMES}
+    unzip.update({("fmi3", n): extract(str(root / "native" / "fmi3" / f"{n}.fmu"))
+                  for n in NAMES})
     yield {"root": root, "unzip": unzip}
     for d in unzip.values():
         shutil.rmtree(d, ignore_errors=True)
@@ -255,6 +257,109 @@ def test_model_exchange_calls_are_checked(flavours):
         assert np.isfinite(np.ctypeslib.as_array(x, shape=(6,))[:5]).all()
     finally:
         rig.close()
+
+
+# ---- FMI 3.0 ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_fmi3_fmus_validate_and_carry_the_fmi2_variables(flavours, name):
+    path = flavours["root"] / "native" / "fmi3" / f"{name}.fmu"
+    assert validate_fmu(str(path)) == []
+    a = read_model_description(str(flavours["root"] / "native" / f"{name}.fmu"))
+    b = read_model_description(str(path))
+    rows = [{v.name: (v.valueReference, v.causality, v.unit, v.min, v.max, v.start, v.nominal)
+             for v in md.modelVariables} for md in (a, b)]
+    assert rows[1].pop("time")[1] == "independent"
+    assert rows[1] == rows[0]
+    assert b.guid == a.guid  # the instantiation token: one model, one token
+    assert b.modelExchange is not None
+    assert b.coSimulation is not None
+    assert [d.variable.name for d in b.derivatives] == [d.variable.name for d in a.derivatives]
+    assert [o.variable.name for o in b.outputs] == [o.variable.name for o in a.outputs]
+    with zipfile.ZipFile(path) as z:
+        names = set(z.namelist())
+    assert {f"binaries/x86_64-linux/{name}.so", "sources/buildDescription.xml",
+            "sources/fmi3_native.c"} <= names
+
+
+def test_fmi3_sources_build_as_the_build_description_says(flavours, tmp_path):
+    """What an importer does with sources/buildDescription.xml: compile the source files it
+    lists as C99 (with every warning an error), and the library answers fmi3GetVersion."""
+    import ctypes
+    from xml.etree import ElementTree as ET
+
+    sources = Path(flavours["unzip"][("fmi3", "WheelTerrain")]) / "sources"
+    config = ET.parse(sources / "buildDescription.xml").getroot().find("BuildConfiguration")
+    assert config.get("modelIdentifier") == "WheelTerrain"
+    files = [str(sources / f.get("name")) for f in config.iter("SourceFile")]
+    library = tmp_path / "WheelTerrain.so"
+    run = subprocess.run([native.compiler(), "-std=c99", "-pedantic-errors", "-shared", "-fPIC",
+                          "-Wall", "-Wextra", "-Werror", "-I", str(sources), *files, "-o",
+                          str(library), "-lm"],
+                         capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr[-3000:]
+    lib = ctypes.CDLL(str(library))
+    lib.fmi3GetVersion.restype = ctypes.c_char_p
+    assert lib.fmi3GetVersion() == b"3.0"
+
+
+@pytest.mark.parametrize("kind", ["CoSimulation", "ModelExchange"])
+def test_fmpy_simulates_fmi3_as_fmi2(flavours, kind):
+    from fmpy import simulate_fmu
+
+    inputs = {"normal_force": 55.0, "drawbar_pull": 2.0, "torque": 0.3}
+    names = ["sinkage", "wheel_speed", "motor_torque", "sensor.slip_paper"]
+    options = {"solver": "CVode", "relative_tolerance": 1e-9} if kind == "ModelExchange" else {}
+    runs = [simulate_fmu(str(path), fmi_type=kind, stop_time=0.5, output_interval=1e-3,
+                         start_values=inputs, output=names, **options)
+            for path in (flavours["root"] / "native" / "SingleWheelRig.fmu",
+                         flavours["root"] / "native" / "fmi3" / "SingleWheelRig.fmu")]
+    assert len(runs[0]) == len(runs[1]) == 501
+    for n in names:
+        assert np.ptp(runs[0][n]) > 0 or n == "sensor.slip_paper", n
+        assert runs[1][n] == pytest.approx(runs[0][n], rel=1e-12, abs=1e-15), n
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("interface", ["cs", "me"])
+def test_the_pair_through_fmi3_gives_the_fmi2_c1_c4_means(flavours, interface):
+    """The C1-C4 master through fmpy's FMI 3 API against FMI 2, same interface: the same
+    means to 1e-9 (the FMI 3 functions are a layer over the same wrapper and model)."""
+    ps = presets.load(presets.DEFAULT_PRESET)
+    for case, slip in (("C1", 0.0), ("C2", 0.25), ("C3", 0.5), ("C4", 0.75)):
+        means = []
+        for fmi, folder in (("native", flavours["root"] / "native"),
+                            ("fmi3", flavours["root"] / "native" / "fmi3")):
+            unz = {n: flavours["unzip"][(fmi, n)] for n in NAMES}
+            means.append(cosim.run_case(folder, ps, slip, 62.0, 0.03, case, stop=12.0,
+                                        unzipped=unz, settle=8.0, interface=interface).means)
+        for key in ("drawbar_pull", "normal_force", "sinkage"):
+            assert means[1][key] == pytest.approx(means[0][key], rel=1e-9), (case, key)
+
+
+def test_fmi3_refuses_a_wrong_token_and_reports_through_its_log_callback(flavours):
+    from fmpy.fmi3 import FMU3Slave
+
+    path = flavours["root"] / "native" / "fmi3" / "WheelTerrain.fmu"
+    md = read_model_description(str(path))
+    messages = []
+    fmu = FMU3Slave(guid="{not-this-model}", unzipDirectory=flavours["unzip"][
+        ("fmi3", "WheelTerrain")], modelIdentifier=md.coSimulation.modelIdentifier)
+    with pytest.raises(Exception, match="Failed to instantiate"):
+        fmu.instantiate(logMessage=lambda env, status, category, message:
+                        messages.append(message.decode()))
+    assert any("wrong GUID '{not-this-model}'" in m for m in messages), messages
+    # a value out of range: fmi3Error with the reason, through the FMI 3 log callback
+    inst = Instance(path, flavours["unzip"][("fmi3", "WheelTerrain")], "t3", log=True)
+    try:
+        inst.fmu.setupExperiment(0.0)
+        inst.fmu.enterInitializationMode()
+        with pytest.raises(FMICallException):
+            inst.fmu.setReal([inst.vr["soil.phi"]], [5.0])
+        assert any("soil.phi = 5 is out of range" in m for m in inst.errors()), inst.log
+    finally:
+        inst.fmu.freeInstance()
 
 
 def test_only_declared_log_categories_are_accepted(flavours):
@@ -676,11 +781,14 @@ def test_sources_build_as_all_c_files_and_the_result_loads(flavours, name, tmp_p
 
 @pytest.mark.skipif(shutil.which("objdump") is None, reason="needs objdump (binutils)")
 @pytest.mark.parametrize("name", NAMES)
-def test_the_binary_loads_on_glibc_2_17_and_exports_only_the_fmi2_api(flavours, name):
+@pytest.mark.parametrize("api", ["fmi2", "fmi3"])
+def test_the_binary_loads_on_glibc_2_17_and_exports_only_the_fmi_api(flavours, name, api):
     """`objdump -T`: no GLIBC symbol version above 2.17 (exp and pow are bound to their
-    2.2.5 versions; they were 2.29), and every defined global symbol is an fmi2 function
-    (there were ~70 internal ones). The binary is stripped."""
-    binary = next((Path(flavours["unzip"][("native", name)]) / "binaries").rglob("*.so"))
+    2.2.5 versions; they were 2.29), and every defined global symbol is a function of the
+    FMU's FMI version (there were ~70 internal ones; the FMI 3 binary keeps the FMI 2 layer
+    it is built on internal). The binary is stripped."""
+    flavour = "native" if api == "fmi2" else "fmi3"
+    binary = next((Path(flavours["unzip"][(flavour, name)]) / "binaries").rglob("*.so"))
     table = subprocess.run(["objdump", "-T", str(binary)], capture_output=True, text=True,
                            check=True).stdout
     versions = {tuple(int(x) for x in v.split(".")) for v in
@@ -690,8 +798,8 @@ def test_the_binary_loads_on_glibc_2_17_and_exports_only_the_fmi2_api(flavours, 
     exported = sorted({line.split()[-1] for line in table.splitlines()
                        if re.match(r"^[0-9a-f]+ g +DF? +\.text", line)})
     assert exported, table[:2000]
-    assert all(sym.startswith("fmi2") for sym in exported), exported
-    assert "fmi2DoStep" in exported
+    assert all(sym.startswith(api) for sym in exported), exported
+    assert f"{api}DoStep" in exported
     symtab = subprocess.run(["objdump", "-t", str(binary)], capture_output=True, text=True,
                             check=True).stdout
     assert "no symbols" in symtab.lower() or "model_refresh" not in symtab

@@ -31,7 +31,7 @@ pytestmark = [
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
     root = tmp_path_factory.mktemp("platforms")
-    fmus = nativebuild.build(root / "fmus")
+    fmus = [f for f in nativebuild.build(root / "fmus") if f.parent.name != "fmi3"]
     hosts = {"linux64": root / "fmi2_host", "win64": root / "fmi2_host.exe"}
     headers = str(nativebuild.fmi_headers())
     subprocess.run([native.compiler(), "-O1", "-Wall", "-Werror", "-I", headers,

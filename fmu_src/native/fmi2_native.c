@@ -39,7 +39,14 @@ __asm__(".symver log2,log2@GLIBC_2.2.5");
 __asm__(".symver pow,pow@GLIBC_2.2.5");
 #endif
 
+#ifdef WHEELTERRAIN_FMI2_INTERNAL
+/* included by fmi3_native.c: the FMI 2 types only, so the fmi2 functions stay internal to the
+   FMI 3 binary (not exported) */
+#include "fmi2FunctionTypes.h"
+#define fmi2Version "2.0"
+#else
 #include "fmi2Functions.h"
+#endif
 
 typedef enum { T_REAL, T_INTEGER, T_BOOLEAN } VarType;
 typedef enum { C_PARAMETER, C_INPUT, C_OUTPUT, C_LOCAL } Causality;

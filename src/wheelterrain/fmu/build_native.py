@@ -27,6 +27,7 @@ from xml.etree import ElementTree as ET
 
 import casadi as ca
 
+from wheelterrain.fmu import build_fmi3 as fmi3
 from wheelterrain.fmu import compiled as native
 from wheelterrain.fmu import functions as fmu_model
 from wheelterrain.fmu.build_pythonfmu import VARIABLES, BuildError, describe, pretty, source_dir
@@ -56,9 +57,10 @@ def cross_compiler() -> str | None:
     return os.environ.get("WHEELTERRAIN_WIN64_CC") or shutil.which(WIN64_CC)
 
 
-def _compile(cc: str, flags, src: Path, library: Path, model: str, libs=("-lm",)) -> None:
+def _compile(cc: str, flags, src: Path, library: Path, model: str, libs=("-lm",),
+             source: str = "fmi2_native.c") -> None:
     try:
-        run = subprocess.run([cc, *flags, "-I", str(src), str(src / "fmi2_native.c"),
+        run = subprocess.run([cc, *flags, "-I", str(src), str(src / source),
                               "-o", str(library), *libs],
                              capture_output=True, text=True, check=False)
     except OSError as err:
@@ -237,9 +239,9 @@ def _native_description(root: ET.Element, model: str) -> ET.Element:
 
 def build(out: Path, models: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig"),
           win64: bool = True) -> list[Path]:
-    """Build the native FMUs into ``out``; returns their paths. Each has binaries/linux64 and,
-    when ``win64`` and the MinGW-w64 cross compiler is installed, binaries/win64, both from the
-    same sources/."""
+    """Build the native FMUs into ``out`` (FMI 2.0) and ``out/fmi3`` (FMI 3.0); returns their
+    paths, per model the FMI 2 then the FMI 3 one. Each has Linux binaries and, when ``win64``
+    and the MinGW-w64 cross compiler is installed, Windows ones, all from the same sources."""
     cc = native.compiler()
     if cc is None:
         raise BuildError("the native flavour needs a C compiler (cc/gcc, or $CC) on PATH")
@@ -277,4 +279,37 @@ def build(out: Path, models: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig"
                     z.write(src / name, f"sources/{name}")
             os.replace(partial, target)
             built.append(target)
+            built.append(_build_fmi3(model, root, src, tmp / model, out / "fmi3", cc, cross))
     return built
+
+
+def _build_fmi3(model: str, root: ET.Element, src2: Path, work: Path, out: Path, cc: str,
+                cross: str | None) -> Path:
+    """The FMI 3.0 FMU of ``model`` from the FMI 2 build's description and sources."""
+    src = work / "sources3"
+    src.mkdir()
+    for name in ("model_vars.h", "model_hooks.inc", "casadi_functions.inc"):
+        shutil.copyfile(src2 / name, src / name)
+    shutil.copyfile(source_dir() / "native" / fmi3.SOURCE, src / fmi3.SOURCE)
+    shutil.copyfile(source_dir() / "native" / "fmi2_native.c", src / fmi3.FMI2_INCLUDED)
+    for header in fmi3.HEADERS:
+        shutil.copyfile(fmi_headers() / header, src / header)
+    (src / "buildDescription.xml").write_bytes(fmi3.build_description(model))
+    libraries = {"linux64": work / f"{model}.fmi3.so"}
+    _compile(cc, CFLAGS, src, libraries["linux64"], model, source=fmi3.SOURCE)
+    if cross is not None:
+        libraries["win64"] = work / f"{model}.fmi3.dll"
+        _compile(cross, WIN64_CFLAGS, src, libraries["win64"], model, libs=(),
+                 source=fmi3.SOURCE)
+    out.mkdir(parents=True, exist_ok=True)
+    target = out / f"{model}.fmu"
+    partial = target.with_suffix(".fmu.part")
+    with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("modelDescription.xml", pretty(fmi3.description(root)))
+        for platform, library in libraries.items():
+            z.write(library, f"binaries/{fmi3.PLATFORMS[platform]}/{model}"
+                             f"{PLATFORMS[platform]}")
+        for path in sorted(src.iterdir()):
+            z.write(path, f"sources/{path.name}")
+    os.replace(partial, target)
+    return target

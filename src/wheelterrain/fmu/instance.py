@@ -30,18 +30,66 @@ def set_values(fmu, vr: Mapping[str, int], types: Mapping[str, str], values: Map
             "`--flavor native` for the native FMUs)")
     for name, value in values.items():
         kind = types[name]
-        if kind == "Real":
+        if kind in ("Real", "Float64"):
             fmu.setReal([vr[name]], [float(value)])
-        elif kind in ("Integer", "Enumeration"):
+        elif kind in ("Integer", "Int32", "Enumeration"):
             fmu.setInteger([vr[name]], [round(value)])
         else:
             fmu.setBoolean([vr[name]], [bool(value)])
 
 
+class _Fmi3:
+    """An fmpy FMI 3.0 instance (FMU3Slave or FMU3Model) behind the FMI 2 method names the
+    callers use (getReal, setReal, setInteger, doStep, getDerivatives, ...), so the C1-C4
+    master, the coupling and the tests run either standard unchanged."""
+
+    def __init__(self, fmu, md) -> None:
+        self.raw, self.component = fmu, None
+        self._enumerations = {v.valueReference for v in md.modelVariables
+                              if v.type == "Enumeration"}
+
+    def __getattr__(self, name):
+        return getattr(self.raw, name)
+
+    def instantiate(self, callbacks=None, loggingOn=False) -> None:
+        self.raw.instantiate(loggingOn=loggingOn, logMessage=callbacks)
+        self.component = self.raw.component
+
+    def setupExperiment(self, startTime=0.0, stopTime=None) -> None:
+        self._experiment = (startTime, stopTime)
+
+    def enterInitializationMode(self) -> None:
+        start, stop = getattr(self, "_experiment", (0.0, None))
+        self.raw.enterInitializationMode(startTime=start, stopTime=stop)
+
+    def exitInitializationMode(self) -> None:
+        self.raw.exitInitializationMode()
+
+    def getReal(self, vrs):
+        return self.raw.getFloat64(vrs)
+
+    def setReal(self, vrs, values) -> None:
+        self.raw.setFloat64(vrs, values)
+
+    def setInteger(self, vrs, values) -> None:
+        for vr, value in zip(vrs, values, strict=True):
+            (self.raw.setInt64 if vr in self._enumerations else self.raw.setInt32)([vr], [value])
+
+    def doStep(self, t: float, h: float) -> None:
+        self.raw.doStep(t, h)
+
+    def newDiscreteStates(self):
+        return self.raw.updateDiscreteStates()
+
+    def getDerivatives(self, dx, nx) -> None:
+        self.raw.getContinuousStateDerivatives(dx, nx)
+
+
 class Instance:
-    """An instantiated FMI 2.0 FMU: co-simulation (``interface="cs"``, :attr:`fmu` an fmpy
-    FMU2Slave) or model exchange (``"me"``, an FMU2Model; :meth:`start` leaves it in
-    continuous-time mode).
+    """An instantiated FMI 2.0 or 3.0 FMU: co-simulation (``interface="cs"``, :attr:`fmu` an
+    fmpy FMU2Slave) or model exchange (``"me"``, an FMU2Model; :meth:`start` leaves it in
+    continuous-time mode). An FMI 3.0 FMU is driven through fmpy's FMI 3 API behind the same
+    method names (:class:`_Fmi3`).
 
     ``unzip`` is the folder the FMU was extracted to (None: extract it here and remove it on
     :meth:`close`). With ``log=True`` every message the FMU logs is kept in :attr:`log` as
@@ -52,6 +100,7 @@ class Instance:
                  log: bool = False, interface: str = "cs") -> None:
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Model, FMU2Slave
+        from fmpy.fmi3 import FMU3Model, FMU3Slave
 
         self.path = Path(path)
         self.md = read_model_description(str(path))
@@ -68,14 +117,25 @@ class Instance:
         self._own_unzip = unzip is None
         self.unzip = extract(str(path)) if unzip is None else unzip
         try:
-            self._callbacks = self._logging_callbacks() if log else None
-            make = FMU2Slave if interface == "cs" else FMU2Model
+            fmi3 = self.md.fmiVersion.startswith("3")
+            if fmi3:
+                self._callbacks = self._log_message if log else None
+                make = FMU3Slave if interface == "cs" else FMU3Model
+            else:
+                self._callbacks = self._logging_callbacks() if log else None
+                make = FMU2Slave if interface == "cs" else FMU2Model
             self.fmu = make(guid=self.md.guid, unzipDirectory=self.unzip,
                             modelIdentifier=kind.modelIdentifier, instanceName=name)
+            if fmi3:
+                self.fmu = _Fmi3(self.fmu, self.md)
             self.fmu.instantiate(callbacks=self._callbacks, loggingOn=log)
         except BaseException:
             self._remove_unzip()
             raise
+
+    def _log_message(self, environment, status, category, message) -> None:
+        """FMI 3's log callback."""
+        self.log.append((status, message.decode("utf-8", "replace")))
 
     def _logging_callbacks(self):
         from fmpy import calloc, free
