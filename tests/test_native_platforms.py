@@ -1,7 +1,8 @@
-"""The native FMUs' win64 binary, run for real: a small C host (tests/fmi2_host.c),
-cross-compiled with MinGW-w64 like the DLL, loads it under Wine and steps it; the same host
-compiled for Linux steps the linux64 binary of the same FMU with the same inputs. Both
-binaries come from the same sources/, so their outputs agree to 1e-12."""
+"""The native FMUs' Windows binaries, run for real: a small C host (tests/fmi_host.c),
+cross-compiled with MinGW-w64 like the DLLs, loads them under Wine and steps them; the same
+host compiled for Linux steps the Linux binary of the same FMU with the same inputs, through
+FMI 2.0 and through FMI 3.0. Both binaries come from the same sources/, so their outputs agree
+to 1e-12."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from pathlib import Path
 import pytest
 from fmpy import extract, read_model_description
 
+from wheelterrain.fmu import build_fmi3 as fmi3
 from wheelterrain.fmu import build_native as nativebuild
 from wheelterrain.fmu import compiled as native
 
@@ -31,26 +33,27 @@ pytestmark = [
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
     root = tmp_path_factory.mktemp("platforms")
-    fmus = [f for f in nativebuild.build(root / "fmus") if f.parent.name != "fmi3"]
-    hosts = {"linux64": root / "fmi2_host", "win64": root / "fmi2_host.exe"}
+    built = nativebuild.build(root / "fmus")
+    fmus = {("3" if f.parent.name == "fmi3" else "2", f.stem): f for f in built}
+    hosts = {"linux64": root / "fmi_host", "win64": root / "fmi_host.exe"}
     headers = str(nativebuild.fmi_headers())
     subprocess.run([native.compiler(), "-O1", "-Wall", "-Werror", "-I", headers,
-                    str(HERE / "fmi2_host.c"), "-o", str(hosts["linux64"]), "-ldl"], check=True)
+                    str(HERE / "fmi_host.c"), "-o", str(hosts["linux64"]), "-ldl"], check=True)
     subprocess.run([nativebuild.cross_compiler(), "-O1", "-Wall", "-Werror", "-I", headers,
-                    str(HERE / "fmi2_host.c"), "-o", str(hosts["win64"])], check=True)
-    unzip = {fmu.stem: extract(str(fmu)) for fmu in fmus}
-    yield {"fmus": {fmu.stem: fmu for fmu in fmus}, "unzip": unzip, "hosts": hosts,
-           "prefix": root / "wineprefix"}
+                    str(HERE / "fmi_host.c"), "-o", str(hosts["win64"])], check=True)
+    unzip = {key: extract(str(fmu)) for key, fmu in fmus.items()}
+    yield {"fmus": fmus, "unzip": unzip, "hosts": hosts, "prefix": root / "wineprefix"}
     for d in unzip.values():
         shutil.rmtree(d, ignore_errors=True)
 
 
-def _run(built, platform: str, model: str, steps: int, h: float, set_: str, ramp: str,
-         get: str) -> list[list[float]]:
+def _run(built, platform: str, fmi: str, model: str, steps: int, h: float, set_: str,
+         ramp: str, get: str) -> list[list[float]]:
     binary = {"linux64": f"{model}.so", "win64": f"{model}.dll"}[platform]
-    library = Path(built["unzip"][model]) / "binaries" / platform / binary
-    guid = read_model_description(str(built["fmus"][model])).guid
-    args = [str(library), guid, str(steps), repr(h), set_, ramp, get]
+    folder = {"2": platform, "3": fmi3.PLATFORMS[platform]}[fmi]
+    library = Path(built["unzip"][(fmi, model)]) / "binaries" / folder / binary
+    guid = read_model_description(str(built["fmus"][(fmi, model)])).guid
+    args = [str(library), guid, str(steps), repr(h), set_, ramp, get, fmi]
     if platform == "win64":
         command = [WINE, str(built["hosts"]["win64"]), *args]
         env = {**os.environ, "WINEPREFIX": str(built["prefix"]), "WINEDEBUG": "-all"}
@@ -63,7 +66,7 @@ def _run(built, platform: str, model: str, steps: int, h: float, set_: str, ramp
 
 
 def _vrs(built, model: str) -> dict[str, int]:
-    md = read_model_description(str(built["fmus"][model]))
+    md = read_model_description(str(built["fmus"][("2", model)]))
     return {v.name: v.valueReference for v in md.modelVariables}
 
 
@@ -91,17 +94,18 @@ def _scripts(built):
     }
 
 
+@pytest.mark.parametrize("fmi", ["2", "3"])
 @pytest.mark.parametrize("case", ["WheelTerrain dynamic", "WheelTerrain quasi-static",
                                   "SingleWheelRig"])
-def test_the_win64_binary_under_wine_gives_the_linux64_numbers(built, case):
+def test_the_win64_binary_under_wine_gives_the_linux64_numbers(built, case, fmi):
     model, *script = _scripts(built)[case]
-    linux = _run(built, "linux64", model, *script)
-    windows = _run(built, "win64", model, *script)
+    linux = _run(built, "linux64", fmi, model, *script)
+    windows = _run(built, "win64", fmi, model, *script)
     assert len(linux) == len(windows) == script[0]
     worst = 0.0
     for a, b in zip(linux, windows, strict=True):
         for x, y in zip(a, b, strict=True):
             worst = max(worst, abs(x - y) / max(abs(x), 1e-300) if x != y else 0.0)
-    print(f"\n{case}: max relative difference win64 vs linux64 {worst:.3g}")
+    print(f"\nFMI {fmi} {case}: max relative difference win64 vs linux64 {worst:.3g}")
     assert worst <= 1e-12, worst
     assert len({tuple(row[1:]) for row in linux}) > 1  # the outputs moved: a real run

@@ -1,10 +1,12 @@
 /*
- * A minimal FMI 2.0 co-simulation host for the native FMUs' binaries, compiled for Linux
- * (dlopen) and cross-compiled for Windows (LoadLibrary; run under Wine) by
+ * A minimal FMI co-simulation host for the native FMUs' binaries, compiled for Linux (dlopen)
+ * and cross-compiled for Windows (LoadLibrary; run under Wine) by
  * tests/test_native_platforms.py, so the same steps run through both binaries of an FMU.
  *
- *   fmi2_host LIBRARY GUID STEPS H SET RAMP GET
+ *   fmi_host LIBRARY GUID STEPS H SET RAMP GET [3]
  *
+ * With the last argument 3 the library is an FMI 3.0 binary (the GUID is its instantiation
+ * token); else FMI 2.0.
  * SET  "vr=value,..." Real values set before initialisation ("-" for none); "bvr=1" sets
  *      a Boolean (e.g. WheelTerrain's quasi_static);
  * RAMP "vr=start+slope,..." Real inputs set to start + slope*t before every step ("-");
@@ -17,6 +19,7 @@
 #include <string.h>
 
 #include "fmi2Functions.h"
+#include "fmi3Functions.h"
 
 #ifdef _WIN32
 #include <windows.h>
@@ -65,11 +68,72 @@ static int parse(const char *text, fmi2ValueReference *vr, double *a, double *b,
 
 #define CHECK(call)                                                                          \
     do {                                                                                     \
-        if ((call) != fmi2OK) {                                                              \
+        if ((int)(call) != 0) { /* fmi2OK, fmi3OK */                                     \
             fprintf(stderr, "%s failed\n", #call);                                           \
             return 1;                                                                        \
         }                                                                                    \
     } while (0)
+
+static void logger3(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category,
+                    fmi3String message) {
+    (void)env;
+    fprintf(stderr, "[%s] (status %d): %s\n", category, (int)status, message);
+}
+
+/* The same run through the FMI 3.0 API. */
+static int run3(Library lib, const char *token, int steps, double h, int n_set,
+                const fmi3ValueReference *set_vr, const double *set_value, const int *boolean,
+                int n_ramp, const fmi3ValueReference *ramp_vr, const double *ramp_start,
+                const double *ramp_slope, int n_get, const fmi3ValueReference *get_vr) {
+    fmi3InstantiateCoSimulationTYPE *instantiate =
+        (fmi3InstantiateCoSimulationTYPE *)symbol(lib, "fmi3InstantiateCoSimulation");
+    fmi3EnterInitializationModeTYPE *enter =
+        (fmi3EnterInitializationModeTYPE *)symbol(lib, "fmi3EnterInitializationMode");
+    fmi3ExitInitializationModeTYPE *leave =
+        (fmi3ExitInitializationModeTYPE *)symbol(lib, "fmi3ExitInitializationMode");
+    fmi3SetFloat64TYPE *set_real = (fmi3SetFloat64TYPE *)symbol(lib, "fmi3SetFloat64");
+    fmi3SetBooleanTYPE *set_boolean = (fmi3SetBooleanTYPE *)symbol(lib, "fmi3SetBoolean");
+    fmi3GetFloat64TYPE *get_real = (fmi3GetFloat64TYPE *)symbol(lib, "fmi3GetFloat64");
+    fmi3DoStepTYPE *do_step = (fmi3DoStepTYPE *)symbol(lib, "fmi3DoStep");
+    fmi3TerminateTYPE *terminate = (fmi3TerminateTYPE *)symbol(lib, "fmi3Terminate");
+    fmi3FreeInstanceTYPE *free_instance = (fmi3FreeInstanceTYPE *)symbol(lib,
+                                                                         "fmi3FreeInstance");
+    fmi3Instance c;
+    double out[MAX_VARS], t = 0.0;
+    if (!instantiate || !enter || !leave || !set_real || !set_boolean || !get_real ||
+        !do_step || !terminate || !free_instance) {
+        fprintf(stderr, "the library lacks an fmi3 function\n");
+        return 1;
+    }
+    c = instantiate("host", token, "", fmi3False, fmi3False, fmi3False, fmi3False, NULL, 0,
+                    NULL, logger3, NULL);
+    if (!c) {
+        fprintf(stderr, "fmi3InstantiateCoSimulation failed\n");
+        return 1;
+    }
+    CHECK(enter(c, fmi3False, 0.0, 0.0, fmi3False, 0.0));
+    for (int i = 0; i < n_set; i++) {
+        fmi3Boolean on = set_value[i] != 0.0;
+        if (boolean[i]) CHECK(set_boolean(c, &set_vr[i], 1, &on, 1));
+        else CHECK(set_real(c, &set_vr[i], 1, &set_value[i], 1));
+    }
+    CHECK(leave(c));
+    for (int k = 0; k < steps; k++) {
+        double ramp[MAX_VARS], last;
+        fmi3Boolean event, stop, early;
+        for (int i = 0; i < n_ramp; i++) ramp[i] = ramp_start[i] + ramp_slope[i] * t;
+        if (n_ramp) CHECK(set_real(c, ramp_vr, (size_t)n_ramp, ramp, (size_t)n_ramp));
+        CHECK(do_step(c, t, h, fmi3True, &event, &stop, &early, &last));
+        t = (k + 1) * h;
+        CHECK(get_real(c, get_vr, (size_t)n_get, out, (size_t)n_get));
+        printf("%.17g", t);
+        for (int i = 0; i < n_get; i++) printf(" %.17g", out[i]);
+        printf("\n");
+    }
+    CHECK(terminate(c));
+    free_instance(c);
+    return 0;
+}
 
 int main(int argc, char **argv) {
     fmi2ValueReference set_vr[MAX_VARS], ramp_vr[MAX_VARS], get_vr[MAX_VARS];
@@ -80,8 +144,8 @@ int main(int argc, char **argv) {
     Library lib;
     fmi2Component c;
 
-    if (argc != 8) {
-        fprintf(stderr, "usage: %s LIBRARY GUID STEPS H SET RAMP GET\n", argv[0]);
+    if (argc != 8 && argc != 9) {
+        fprintf(stderr, "usage: %s LIBRARY GUID STEPS H SET RAMP GET [3]\n", argv[0]);
         return 2;
     }
     lib = open_library(argv[1]);
@@ -89,6 +153,14 @@ int main(int argc, char **argv) {
         fprintf(stderr, "cannot load %s\n", argv[1]);
         return 1;
     }
+    steps = atoi(argv[3]);
+    h = strtod(argv[4], NULL);
+    n_ramp = parse(argv[6], ramp_vr, ramp_start, ramp_slope, boolean);
+    n_get = parse(argv[7], get_vr, unused, unused, boolean);
+    n_set = parse(argv[5], set_vr, set_value, unused, boolean);
+    if (argc == 9 && strcmp(argv[8], "3") == 0)
+        return run3(lib, argv[2], steps, h, n_set, set_vr, set_value, boolean, n_ramp, ramp_vr,
+                    ramp_start, ramp_slope, n_get, get_vr);
     {
         fmi2InstantiateTYPE *instantiate = (fmi2InstantiateTYPE *)symbol(lib, "fmi2Instantiate");
         fmi2SetupExperimentTYPE *setup = (fmi2SetupExperimentTYPE *)symbol(lib,
@@ -110,11 +182,6 @@ int main(int argc, char **argv) {
             fprintf(stderr, "%s lacks an fmi2 function\n", argv[1]);
             return 1;
         }
-        steps = atoi(argv[3]);
-        h = strtod(argv[4], NULL);
-        n_ramp = parse(argv[6], ramp_vr, ramp_start, ramp_slope, boolean);
-        n_get = parse(argv[7], get_vr, unused, unused, boolean);
-        n_set = parse(argv[5], set_vr, set_value, unused, boolean);
         c = instantiate("host", fmi2CoSimulation, argv[2], "", &callbacks, fmi2False, fmi2False);
         if (!c) {
             fprintf(stderr, "fmi2Instantiate failed\n");
