@@ -127,10 +127,13 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
     return (fmi3Status)fmi2EnterInitializationMode(INNER(instance));
 }
 
-fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
-    if (instance == NULL) return fmi3Error;
-    return (fmi3Status)fmi2ExitInitializationMode(INNER(instance));
-}
+/* calls that take only the instance and mean the same in FMI 2 */
+#define FORWARD(NAME3, NAME2)                                                              \
+    fmi3Status NAME3(fmi3Instance instance) {                                                \
+        if (instance == NULL) return fmi3Error;                                               \
+        return (fmi3Status)NAME2(INNER(instance));                                            \
+    }
+FORWARD(fmi3ExitInitializationMode, fmi2ExitInitializationMode)
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
     if (instance == NULL) return fmi3Error;
@@ -141,15 +144,9 @@ fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
     return (fmi3Status)fmi2EnterEventMode(INNER(instance));
 }
 
-fmi3Status fmi3Terminate(fmi3Instance instance) {
-    if (instance == NULL) return fmi3Error;
-    return (fmi3Status)fmi2Terminate(INNER(instance));
-}
+FORWARD(fmi3Terminate, fmi2Terminate)
 
-fmi3Status fmi3Reset(fmi3Instance instance) {
-    if (instance == NULL) return fmi3Error;
-    return (fmi3Status)fmi2Reset(INNER(instance));
-}
+FORWARD(fmi3Reset, fmi2Reset)
 
 /* ---- get and set ------------------------------------------------------------------------ */
 
@@ -468,10 +465,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
 
 /* ---- model exchange ------------------------------------------------------------------------ */
 
-fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) {
-    if (instance == NULL) return fmi3Error;
-    return (fmi3Status)fmi2EnterContinuousTimeMode(INNER(instance));
-}
+FORWARD(fmi3EnterContinuousTimeMode, fmi2EnterContinuousTimeMode)
 
 fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance,
                                        fmi3Boolean noSetFMUStatePriorToCurrentPoint,
