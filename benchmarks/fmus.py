@@ -4,6 +4,13 @@ one core, with the fmpy master (Python) for both flavours and with ecos (C++) fo
 
     wheelterrain build --flavor all
     python benchmarks/fmus.py [--fmu-dir build] [--steps 5000] [--repeats 5] [--no-c1-c4]
+    python benchmarks/fmus.py --quick --json      # fewer steps and repeats, one JSON object
+
+``--json`` prints (seconds): ``native_step_c_host_s`` (a WheelTerrain set + doStep + get of
+the native binary from a C host compiled here, no Python in the loop), ``pythonfmu_step_fmpy_s``
+(the same through fmpy on the pythonfmu flavour), ``c1_c4_pythonfmu_fmpy_s`` (C1-C4, fmpy
+master, pythonfmu), ``c1_c4_fastest_s`` and ``c1_c4_fastest_how`` (the fastest path measured in
+the same run), and their ratios; the human-readable report goes to stderr.
 
 The native FMUs are expected in FMU_DIR/native (skipped if absent).
 
@@ -41,7 +48,7 @@ def per_call(fn, n: int, repeats: int) -> float:
     return statistics.median(times) * 1e6
 
 
-def step_figures(fmu_dir: Path, label: str, n: int, k: int) -> None:
+def step_figures(fmu_dir: Path, label: str, n: int, k: int) -> dict[str, float]:
     names = ("WheelTerrain", "SingleWheelRig")
     unzip = {m: extract(str(fmu_dir / f"{m}.fmu")) for m in names}
     try:
@@ -53,37 +60,117 @@ def step_figures(fmu_dir: Path, label: str, n: int, k: int) -> None:
         t_out = [t.vr[x] for x in ("normal_force", "drawbar_pull", "torque")]
         r_in = [r.vr[x] for x in ("normal_force", "drawbar_pull", "torque")]
         r_out = [r.vr[x] for x in ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")]
-        clock = [0.0]
+        clock = {t: 0.0, r: 0.0}  # each instance's time: a step starts where its last ended
 
         def loop(inst, ins, outs, values):
             def run(count):
                 for _ in range(count):
                     inst.fmu.setReal(ins, values)
                     inst.fmu.getReal(outs)
-                    inst.fmu.doStep(clock[0], 1e-3)
-                    clock[0] += 1e-3
+                    inst.fmu.doStep(clock[inst], 1e-3)
+                    clock[inst] += 1e-3
             return run
 
         def bare(inst):
             def run(count):
                 for _ in range(count):
-                    inst.fmu.doStep(clock[0], 1e-3)
-                    clock[0] += 1e-3
+                    inst.fmu.doStep(clock[inst], 1e-3)
+                    clock[inst] += 1e-3
             return run
 
         terrain = loop(t, t_in, t_out, [0.035, 0.0, 0.6, 0.024])
         rig_loop = loop(r, r_in, r_out, [62.0, -30.0, 0.6])
+        terrain_us = per_call(terrain, n, k)
         print(f"{label}: one core, median of {k} x {n} steps, through fmpy (ctypes)")
-        print(f"  WheelTerrain   set+get+doStep : {per_call(terrain, n, k):8.2f} us")
+        print(f"  WheelTerrain   set+get+doStep : {terrain_us:8.2f} us")
         print(f"  WheelTerrain   doStep alone   : {per_call(bare(t), n, k):8.2f} us "
               "(includes the force evaluation at the new wheel angle)")
         print(f"  SingleWheelRig set+get+doStep : {per_call(rig_loop, n, k):8.2f} us")
         print(f"  SingleWheelRig doStep alone   : {per_call(bare(r), n, k):8.2f} us")
         t.close()
         r.close()
+        return {"terrain_step_s": terrain_us * 1e-6}
     finally:
         for d in unzip.values():
             shutil.rmtree(d, ignore_errors=True)
+
+
+C_HOST = r"""
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+#include <dlfcn.h>
+#include "fmi2Functions.h"
+static void logger(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2String c,
+                   fmi2String m, ...) { (void)e; (void)n; (void)s; (void)c; (void)m; }
+int main(int argc, char **argv) {
+    void *lib = dlopen(argv[1], RTLD_NOW);
+    int steps = atoi(argv[3]);
+    fmi2ValueReference in[4] = {IN0, IN1, IN2, IN3}, out[3] = {OUT0, OUT1, OUT2};
+    double u[4] = {0.035, 0.0, 0.6, 0.024}, y[3], t = 0.0, sink = 0.0;
+    fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+    struct timespec a, b;
+    fmi2InstantiateTYPE *inst = (fmi2InstantiateTYPE *)dlsym(lib, "fmi2Instantiate");
+    fmi2SetupExperimentTYPE *setup = (fmi2SetupExperimentTYPE *)dlsym(lib, "fmi2SetupExperiment");
+    fmi2EnterInitializationModeTYPE *enter =
+        (fmi2EnterInitializationModeTYPE *)dlsym(lib, "fmi2EnterInitializationMode");
+    fmi2ExitInitializationModeTYPE *leave =
+        (fmi2ExitInitializationModeTYPE *)dlsym(lib, "fmi2ExitInitializationMode");
+    fmi2SetRealTYPE *set = (fmi2SetRealTYPE *)dlsym(lib, "fmi2SetReal");
+    fmi2GetRealTYPE *get = (fmi2GetRealTYPE *)dlsym(lib, "fmi2GetReal");
+    fmi2DoStepTYPE *step = (fmi2DoStepTYPE *)dlsym(lib, "fmi2DoStep");
+    fmi2Component c = inst("t", fmi2CoSimulation, argv[2], "", &cb, fmi2False, fmi2False);
+    setup(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
+    enter(c);
+    leave(c);
+    clock_gettime(CLOCK_MONOTONIC, &a);
+    for (int k = 0; k < steps; k++) {
+        set(c, in, 4, u);
+        if (step(c, t, 1e-3, fmi2True) != fmi2OK) return 1;
+        t += 1e-3;
+        get(c, out, 3, y);
+        sink += y[0];
+    }
+    clock_gettime(CLOCK_MONOTONIC, &b);
+    printf("%.9g %g\n", ((b.tv_sec - a.tv_sec) + 1e-9 * (b.tv_nsec - a.tv_nsec)) / steps, sink);
+    return 0;
+}
+"""
+
+
+def native_step_c_host(fmu_dir: Path, steps: int, repeats: int) -> float | None:
+    """Seconds per WheelTerrain set + doStep + get of the native binary from a C host (median
+    of ``repeats``), or None without a C compiler."""
+    import subprocess
+
+    from fmpy import read_model_description
+
+    from wheelterrain.fmu import build_native
+    from wheelterrain.fmu import compiled as native
+
+    cc = native.compiler()
+    if cc is None:
+        return None
+    fmu = fmu_dir / "WheelTerrain.fmu"
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    names_in = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")
+    names_out = ("normal_force", "drawbar_pull", "torque")
+    defines = [f"-DIN{k}={vr[n]}" for k, n in enumerate(names_in)]
+    defines += [f"-DOUT{k}={vr[n]}" for k, n in enumerate(names_out)]
+    with tempfile.TemporaryDirectory() as tmp:
+        unzip = extract(str(fmu), unzipdir=str(Path(tmp) / "fmu"))
+        (Path(tmp) / "host.c").write_text(C_HOST)
+        exe = Path(tmp) / "host"
+        subprocess.run([cc, "-O2", *defines, "-I", str(build_native.fmi_headers()),
+                        str(Path(tmp) / "host.c"), "-o", str(exe), "-ldl"], check=True)
+        library = Path(unzip) / "binaries" / "linux64" / "WheelTerrain.so"
+        times = []
+        for _ in range(repeats):
+            run = subprocess.run([str(exe), str(library), md.guid, str(steps)],
+                                 capture_output=True, text=True, check=True)
+            times.append(float(run.stdout.split()[0]))
+    return statistics.median(times)
 
 
 def c1_c4_ecos(fmu_dir: Path, ps) -> float:
@@ -108,7 +195,18 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=5000)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--no-c1-c4", action="store_true")
+    ap.add_argument("--quick", action="store_true",
+                    help="1000 steps x 3 repeats for the per-step figures")
+    ap.add_argument("--json", action="store_true",
+                    help="print one JSON object of figures (the report goes to stderr)")
     args = ap.parse_args()
+    if args.quick:
+        args.steps, args.repeats = min(args.steps, 1000), min(args.repeats, 3)
+    if args.json:  # the report goes to stderr, stdout carries the JSON alone
+        import builtins
+        import functools
+
+        builtins.print = functools.partial(builtins.print, file=sys.stderr)
     dirs = {"pythonfmu": Path(args.fmu_dir), "native": Path(args.fmu_dir) / "native"}
     dirs = {k: d for k, d in dirs.items() if (d / "WheelTerrain.fmu").is_file()
             and (d / "SingleWheelRig.fmu").is_file()}
@@ -122,11 +220,20 @@ def main() -> None:
         for _ in range(count):
             fn(0.035, 0.0, 0.2, 0.1, p)
 
-    for label, d in dirs.items():
-        step_figures(d, label, args.steps, args.repeats)
+    figures: dict = {}
+    steps = {label: step_figures(d, label, args.steps, args.repeats) for label, d in dirs.items()}
+    if "pythonfmu" in steps:
+        figures["pythonfmu_step_fmpy_s"] = steps["pythonfmu"]["terrain_step_s"]
+    if "native" in steps:
+        figures["native_step_fmpy_s"] = steps["native"]["terrain_step_s"]
+        c_host = native_step_c_host(dirs["native"], 20 * args.steps, args.repeats)
+        if c_host is not None:
+            figures["native_step_c_host_s"] = c_host
+            print(f"native: WheelTerrain set+doStep+get from a C host: {c_host * 1e6:.2f} us")
     print(f"baseline: core contact Function call from Python: "
           f"{per_call(core, args.steps, args.repeats):.1f} us")
     if args.no_c1_c4:
+        _emit(args, figures)
         return
     walls = {}
     for label, d in dirs.items():
@@ -146,6 +253,26 @@ def main() -> None:
             if label in walls:
                 print(f"  speed-up {label} vs pythonfmu (fmpy master): "
                       f"{walls['pythonfmu'] / walls[label]:.1f}x (goal >= 20x)")
+        figures["c1_c4_pythonfmu_fmpy_s"] = walls["pythonfmu"]
+    how = {"pythonfmu": "pythonfmu FMUs, fmpy master", "native": "native FMUs, fmpy master",
+           "native+ecos": "native FMUs, ecos master (C++)"}
+    fastest = min(walls, key=walls.get)
+    figures["c1_c4_fastest_s"], figures["c1_c4_fastest_how"] = walls[fastest], how[fastest]
+    _emit(args, figures)
+
+
+def _emit(args, figures: dict) -> None:
+    """The ratios of the figures measured in this run, then the JSON object if asked for."""
+    import json
+
+    if "pythonfmu_step_fmpy_s" in figures and "native_step_c_host_s" in figures:
+        figures["step_ratio_pythonfmu_fmpy_over_native_c_host"] = (
+            figures["pythonfmu_step_fmpy_s"] / figures["native_step_c_host_s"])
+    if "c1_c4_pythonfmu_fmpy_s" in figures:
+        figures["c1_c4_ratio_pythonfmu_over_fastest"] = (
+            figures["c1_c4_pythonfmu_fmpy_s"] / figures["c1_c4_fastest_s"])
+    if args.json:
+        sys.stdout.write(json.dumps(figures, indent=2) + "\n")
 
 
 if __name__ == "__main__":
