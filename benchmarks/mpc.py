@@ -3,6 +3,11 @@ closed loop of the nominal scenario (in-process plant, so only the controller is
 each solver set-up, VM and compiled prediction model, measured in the same run:
 
     python benchmarks/mpc.py [--repeats 3] [--horizon 30] [--scenario nominal]
+    python benchmarks/mpc.py --quick --json     # one repeat, one JSON object on stdout
+
+``--json`` prints ``rows``: [{``setup`` (``ipopt-vm``, ``sqpmethod-vm``, ``ipopt-compiled``,
+``sqpmethod-compiled``), ``median_s``, ``p90_s``, ``slip_rms_error``, ``iterations``,
+``ratio_to_ipopt_vm``}]; the report goes to stderr.
 
 Each figure is the median over repeats of the per-run median (and 90th percentile) of the wall
 time of the solver call. The baseline for the ratios is ipopt on the CasADi VM. Goals
@@ -13,7 +18,9 @@ compiles the prediction model (~30 s, cached).
 from __future__ import annotations
 
 import argparse
+import json
 import statistics
+import sys
 
 from wheelterrain import presets
 from wheelterrain.control import closed_loop, mpc
@@ -27,13 +34,19 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--horizon", type=int, default=30)
     parser.add_argument("--scenario", default="nominal", choices=sorted(closed_loop.SCENARIOS))
+    parser.add_argument("--quick", action="store_true", help="one repeat per set-up")
+    parser.add_argument("--json", action="store_true",
+                        help="print one JSON object of figures (the report goes to stderr)")
     args = parser.parse_args()
+    if args.quick:
+        args.repeats = 1
+    report = sys.stderr if args.json else sys.stdout
     ps = presets.load(presets.DEFAULT_PRESET)
     scenario = closed_loop.SCENARIOS[args.scenario]
     rows = []
     for solver, compiled in SETUPS:
         if compiled and native.compiler() is None:
-            print(f"{solver} compiled: skipped (no C compiler)")
+            print(f"{solver} compiled: skipped (no C compiler)", file=report)
             continue
         settings = mpc.Settings(solver=solver, compiled=compiled, horizon=args.horizon,
                                 objective=scenario.objective)
@@ -49,15 +62,24 @@ def main() -> None:
                      statistics.median(iters), statistics.median(rms)))
         print(f"{solver:10} {'compiled' if compiled else 'VM':8} median "
               f"{1e3 * rows[-1][2]:7.2f} ms  p90 {1e3 * rows[-1][3]:7.2f} ms  "
-              f"iterations {rows[-1][4]:.0f}  slip RMS {rows[-1][5]:.2e}", flush=True)
+              f"iterations {rows[-1][4]:.0f}  slip RMS {rows[-1][5]:.2e}", flush=True,
+              file=report)
     baseline = rows[0][2]
     print(f"\nhorizon {args.horizon} x {mpc.Settings().interval:g} s, scenario {args.scenario}, "
-          f"{args.repeats} repeats; ratio = ipopt VM median / set-up median")
+          f"{args.repeats} repeats; ratio = ipopt VM median / set-up median", file=report)
     for solver, compiled, median, p90, _, _ in rows:
         goal = 2e-3 if compiled else 10e-3
         print(f"  {solver:10} {'compiled' if compiled else 'VM':8} median {1e3 * median:6.2f} ms"
               f" (goal {1e3 * goal:g} ms: {'met' if median <= goal else 'NOT met'}), p90 "
-              f"{1e3 * p90:6.2f} ms, {baseline / median:4.1f}x")
+              f"{1e3 * p90:6.2f} ms, {baseline / median:4.1f}x", file=report)
+    if args.json:
+        print(json.dumps({"scenario": args.scenario, "horizon": args.horizon,
+                          "repeats": args.repeats, "rows": [
+                              {"setup": f"{solver}-{'compiled' if compiled else 'vm'}",
+                               "median_s": median, "p90_s": p90, "slip_rms_error": rms,
+                               "iterations": iterations, "ratio_to_ipopt_vm": baseline / median}
+                              for solver, compiled, median, p90, iterations, rms in rows]},
+                         indent=2))
 
 
 if __name__ == "__main__":
