@@ -95,47 +95,8 @@ def step_figures(fmu_dir: Path, label: str, n: int, k: int) -> dict[str, float]:
             shutil.rmtree(d, ignore_errors=True)
 
 
-C_HOST = r"""
-#include <stdio.h>
-#include <stdlib.h>
-#include <time.h>
-#include <dlfcn.h>
-#include "fmi2Functions.h"
-static void logger(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2String c,
-                   fmi2String m, ...) { (void)e; (void)n; (void)s; (void)c; (void)m; }
-int main(int argc, char **argv) {
-    void *lib = dlopen(argv[1], RTLD_NOW);
-    int steps = atoi(argv[3]);
-    fmi2ValueReference in[4] = {IN0, IN1, IN2, IN3}, out[3] = {OUT0, OUT1, OUT2};
-    double u[4] = {0.035, 0.0, 0.6, 0.024}, y[3], t = 0.0, sink = 0.0;
-    fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
-    struct timespec a, b;
-    fmi2InstantiateTYPE *inst = (fmi2InstantiateTYPE *)dlsym(lib, "fmi2Instantiate");
-    fmi2SetupExperimentTYPE *setup = (fmi2SetupExperimentTYPE *)dlsym(lib, "fmi2SetupExperiment");
-    fmi2EnterInitializationModeTYPE *enter =
-        (fmi2EnterInitializationModeTYPE *)dlsym(lib, "fmi2EnterInitializationMode");
-    fmi2ExitInitializationModeTYPE *leave =
-        (fmi2ExitInitializationModeTYPE *)dlsym(lib, "fmi2ExitInitializationMode");
-    fmi2SetRealTYPE *set = (fmi2SetRealTYPE *)dlsym(lib, "fmi2SetReal");
-    fmi2GetRealTYPE *get = (fmi2GetRealTYPE *)dlsym(lib, "fmi2GetReal");
-    fmi2DoStepTYPE *step = (fmi2DoStepTYPE *)dlsym(lib, "fmi2DoStep");
-    fmi2Component c = inst("t", fmi2CoSimulation, argv[2], "", &cb, fmi2False, fmi2False);
-    setup(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
-    enter(c);
-    leave(c);
-    clock_gettime(CLOCK_MONOTONIC, &a);
-    for (int k = 0; k < steps; k++) {
-        set(c, in, 4, u);
-        if (step(c, t, 1e-3, fmi2True) != fmi2OK) return 1;
-        t += 1e-3;
-        get(c, out, 3, y);
-        sink += y[0];
-    }
-    clock_gettime(CLOCK_MONOTONIC, &b);
-    printf("%.9g %g\n", ((b.tv_sec - a.tv_sec) + 1e-9 * (b.tv_nsec - a.tv_nsec)) / steps, sink);
-    return 0;
-}
-"""
+HOST = Path(__file__).resolve().parents[1] / "tests" / "fmi_host.c"
+"""The FMI host the platform tests use; with "time" it reports the wall time per step."""
 
 
 def native_step_c_host(fmu_dir: Path, steps: int, repeats: int) -> float | None:
@@ -149,25 +110,25 @@ def native_step_c_host(fmu_dir: Path, steps: int, repeats: int) -> float | None:
     from wheelterrain.fmu import compiled as native
 
     cc = native.compiler()
-    if cc is None:
+    if cc is None or not HOST.is_file():
         return None
     fmu = fmu_dir / "WheelTerrain.fmu"
     md = read_model_description(str(fmu))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    names_in = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")
-    names_out = ("normal_force", "drawbar_pull", "torque")
-    defines = [f"-DIN{k}={vr[n]}" for k, n in enumerate(names_in)]
-    defines += [f"-DOUT{k}={vr[n]}" for k, n in enumerate(names_out)]
+    ramp = ",".join(f"{vr[n]}={x}+0" for n, x in (("sinkage", 0.035), ("sinkage_rate", 0.0),
+                                                  ("wheel_speed", 0.6),
+                                                  ("carriage_speed", 0.024)))
+    get = ",".join(str(vr[n]) for n in ("normal_force", "drawbar_pull", "torque"))
     with tempfile.TemporaryDirectory() as tmp:
         unzip = extract(str(fmu), unzipdir=str(Path(tmp) / "fmu"))
-        (Path(tmp) / "host.c").write_text(C_HOST)
         exe = Path(tmp) / "host"
-        subprocess.run([cc, "-O2", *defines, "-I", str(build_native.fmi_headers()),
-                        str(Path(tmp) / "host.c"), "-o", str(exe), "-ldl"], check=True)
+        subprocess.run([cc, "-O2", "-I", str(build_native.fmi_headers()), str(HOST), "-o",
+                        str(exe), "-ldl"], check=True)
         library = Path(unzip) / "binaries" / "linux64" / "WheelTerrain.so"
         times = []
         for _ in range(repeats):
-            run = subprocess.run([str(exe), str(library), md.guid, str(steps)],
+            run = subprocess.run([str(exe), str(library), md.guid, str(steps), "1e-3", "-",
+                                  ramp, get, "2", "time"],
                                  capture_output=True, text=True, check=True)
             times.append(float(run.stdout.split()[0]))
     return statistics.median(times)

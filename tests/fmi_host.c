@@ -3,10 +3,11 @@
  * and cross-compiled for Windows (LoadLibrary; run under Wine) by
  * tests/test_native_platforms.py, so the same steps run through both binaries of an FMU.
  *
- *   fmi_host LIBRARY GUID STEPS H SET RAMP GET [3]
+ *   fmi_host LIBRARY GUID STEPS H SET RAMP GET [FMI [time]]
  *
- * With the last argument 3 the library is an FMI 3.0 binary (the GUID is its instantiation
- * token); else FMI 2.0.
+ * With FMI = 3 the library is an FMI 3.0 binary (the GUID is its instantiation token); else
+ * FMI 2.0. With "time" (FMI 2) nothing is printed per step: the host prints the wall time per
+ * step (set, doStep, get) and a checksum of the outputs (benchmarks/fmus.py).
  * SET  "vr=value,..." Real values set before initialisation ("-" for none); "bvr=1" sets
  *      a Boolean (e.g. WheelTerrain's quasi_static);
  * RAMP "vr=start+slope,..." Real inputs set to start + slope*t before every step ("-");
@@ -26,11 +27,23 @@
 typedef HMODULE Library;
 static Library open_library(const char *path) { return LoadLibraryA(path); }
 static void *symbol(Library lib, const char *name) { return (void *)GetProcAddress(lib, name); }
+static double now(void) {
+    LARGE_INTEGER count, frequency;
+    QueryPerformanceCounter(&count);
+    QueryPerformanceFrequency(&frequency);
+    return (double)count.QuadPart / (double)frequency.QuadPart;
+}
 #else
 #include <dlfcn.h>
+#include <time.h>
 typedef void *Library;
 static Library open_library(const char *path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
 static void *symbol(Library lib, const char *name) { return dlsym(lib, name); }
+static double now(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
 #endif
 
 #define MAX_VARS 64
@@ -139,15 +152,17 @@ int main(int argc, char **argv) {
     fmi2ValueReference set_vr[MAX_VARS], ramp_vr[MAX_VARS], get_vr[MAX_VARS];
     double set_value[MAX_VARS], ramp_start[MAX_VARS], ramp_slope[MAX_VARS], unused[MAX_VARS];
     double out[MAX_VARS], t = 0.0, h;
-    int n_set, n_ramp, n_get, steps, boolean[MAX_VARS];
+    int n_set, n_ramp, n_get, steps, boolean[MAX_VARS], timed;
+    double started, checksum = 0.0;
     fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
     Library lib;
     fmi2Component c;
 
-    if (argc != 8 && argc != 9) {
-        fprintf(stderr, "usage: %s LIBRARY GUID STEPS H SET RAMP GET [3]\n", argv[0]);
+    if (argc < 8 || argc > 10) {
+        fprintf(stderr, "usage: %s LIBRARY GUID STEPS H SET RAMP GET [FMI [time]]\n", argv[0]);
         return 2;
     }
+    timed = argc == 10 && strcmp(argv[9], "time") == 0;
     lib = open_library(argv[1]);
     if (!lib) {
         fprintf(stderr, "cannot load %s\n", argv[1]);
@@ -158,7 +173,7 @@ int main(int argc, char **argv) {
     n_ramp = parse(argv[6], ramp_vr, ramp_start, ramp_slope, boolean);
     n_get = parse(argv[7], get_vr, unused, unused, boolean);
     n_set = parse(argv[5], set_vr, set_value, unused, boolean);
-    if (argc == 9 && strcmp(argv[8], "3") == 0)
+    if (argc >= 9 && strcmp(argv[8], "3") == 0)
         return run3(lib, argv[2], steps, h, n_set, set_vr, set_value, boolean, n_ramp, ramp_vr,
                     ramp_start, ramp_slope, n_get, get_vr);
     {
@@ -195,6 +210,7 @@ int main(int argc, char **argv) {
             else CHECK(set_real(c, &set_vr[i], 1, &set_value[i]));
         }
         CHECK(leave(c));
+        started = now();
         for (int k = 0; k < steps; k++) {
             double ramp[MAX_VARS];
             for (int i = 0; i < n_ramp; i++) ramp[i] = ramp_start[i] + ramp_slope[i] * t;
@@ -202,10 +218,15 @@ int main(int argc, char **argv) {
             CHECK(do_step(c, t, h, fmi2True));
             t = (k + 1) * h;
             CHECK(get_real(c, get_vr, (size_t)n_get, out));
+            if (timed) {
+                for (int i = 0; i < n_get; i++) checksum += out[i];
+                continue;
+            }
             printf("%.17g", t);
             for (int i = 0; i < n_get; i++) printf(" %.17g", out[i]);
             printf("\n");
         }
+        if (timed) printf("%.9g %.17g\n", (now() - started) / steps, checksum);
         CHECK(terminate(c));
         free_instance(c);
     }
