@@ -159,7 +159,7 @@ def _identify(root: ET.Element) -> None:
 # (and may free again) freed memory. The heap is then corrupted and the host aborts at exit
 # ("corrupted double-linked list", "pure virtual method called") in some runs, depending on
 # what else freed memory (upstream note in fmu_src/README.md). The static destructor alone
-# already destroys the state (and on Windows DllMain runs first, so the win64 DLL is right);
+# already destroys the state (on Windows DllMain runs first by the code's order: win64 is left);
 # the fix turns the Linux destructor's call into a plain return, in our copy of the binary.
 _EXIT_FIX_SYMBOL = b"finalizePythonInterpreter"
 _ENDBR64 = bytes.fromhex("f30f1efa")
