@@ -10,9 +10,9 @@
  * No arithmetic of the model is written by hand.
  *
  * Model exchange: the continuous states are the ones the co-simulation step advances (the
- * rig's states, the terrain's wheel angle); their derivatives come from the same Functions
- * (model_derivatives: rig_rates, or the wheel speed), listed in model_vars.h (STATE_VRS,
- * DER_VRS, NOMINALS). No event indicators, no discrete states.
+ * rig's states, the terrain's wheel angle); model_refresh computes their derivatives with the
+ * outputs, from the same Functions (rig_rates, or the wheel speed), listed in model_vars.h
+ * (STATE_VRS, DER_VRS, NOMINALS). No event indicators, no discrete states.
  *
  * What this wrapper adds: the FMI 2 call-sequence state machine, the GUID check, logging
  * categories (errors are always reported, whether logging is on or not), checks of every set
@@ -208,9 +208,7 @@ static void refresh(Instance *c) {
     if (!c->b.dirty || any_invalid(c, 0)) return;
     c->b.dirty = 0;
     c->b.operating_error = 0;
-    /* the derivatives first: in model exchange the rig's motor torque output comes with them */
-    if (model_derivatives(c, dx, c->b.operating_message) != 0 ||
-        model_refresh(c, c->b.operating_message) != 0) {
+    if (model_refresh(c, dx, c->b.operating_message) != 0) {
         c->b.operating_error = 1;
         LOG_ERROR(c, "%s: %s", MODEL_NAME, c->b.operating_message);
         return;

@@ -60,25 +60,19 @@ static int state_problem(const Instance *c, char *message) {
     return 0;
 }
 
-/* The rig's continuous equations (rig_rates: wheelterrain.model.rig.rates) at the current
-   state. In model exchange the motor torque output is the one of this state and these
-   commands (state N_X); in co-simulation it stays the torque of the last step. */
-static int model_derivatives(Instance *c, double *dx, char *message) {
-    casadi_real u[N_U], p[N_P], torque;
+/* The outputs (rig_outputs) and the derivatives of the states (rig_rates:
+   wheelterrain.model.rig.rates) at the current state, inputs and parameters, loaded once. In
+   model exchange the motor torque output is the one of this state and these commands (state
+   N_X, set from rig_rates first); in co-simulation it stays the torque of the last step. */
+static int model_refresh(Instance *c, double *dx, char *message) {
+    casadi_real u[N_U], p[N_P], y[N_OUT], torque;
+    int k;
     if (state_problem(c, message)) return 1;
     bind_state_inputs_params(c, u, p);
     c->res[0] = dx;
     c->res[1] = &torque;
     rig_rates(c->arg, c->res, c->iw, c->w, 0);
     if (c->model_exchange) c->b.s[N_X] = torque;
-    return 0;
-}
-
-static int model_refresh(Instance *c, char *message) {
-    casadi_real u[N_U], p[N_P], y[N_OUT];
-    int k;
-    if (state_problem(c, message)) return 1;
-    bind_state_inputs_params(c, u, p);
     c->arg[3] = &c->b.s[N_X];
     c->res[0] = y;
     rig_outputs(c->arg, c->res, c->iw, c->w, 0);

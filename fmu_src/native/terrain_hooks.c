@@ -18,7 +18,9 @@ static void model_reset(Instance *c) { c->b.s[0] = 0.0; }
 
 static void model_initialize(Instance *c) { (void)c; }
 
-static int model_refresh(Instance *c, char *message) {
+/* The outputs at the current inputs and wheel angle, and d(wheel_angle)/dt = wheel_speed
+   (model exchange; the co-simulation step integrates it). */
+static int model_refresh(Instance *c, double *dx, char *message) {
     casadi_real u[N_IN], p[N_P], y[N_OUT], status = 0.0, info = 0.0, angle = c->b.s[0];
     int k;
     for (k = 0; k < N_IN; k++) u[k] = c->b.v[IN_VRS[k]];
@@ -60,12 +62,6 @@ static int model_refresh(Instance *c, char *message) {
     }
     for (k = 0; k < N_OUT; k++) c->b.v[OUT_VRS[k]] = y[k];
     c->b.v[VR_WHEEL_ANGLE] = c->b.s[0];
-    return 0;
-}
-
-/* d(wheel_angle)/dt = wheel_speed (model exchange; the co-simulation step integrates it) */
-static int model_derivatives(Instance *c, double *dx, char *message) {
-    (void)message;
     dx[0] = c->b.v[VR_WHEEL_SPEED];
     return 0;
 }

@@ -44,26 +44,23 @@ class _Fmi3:
     master, the coupling and the tests run either standard unchanged."""
 
     def __init__(self, fmu, md) -> None:
-        self.raw, self.component = fmu, None
+        self.raw = fmu
+        self._experiment = (0.0, None)  # FMI 3 passes start and stop on entering initialisation
         self._enumerations = {v.valueReference for v in md.modelVariables
                               if v.type == "Enumeration"}
 
-    def __getattr__(self, name):
+    def __getattr__(self, name):  # the calls named alike in both standards
         return getattr(self.raw, name)
 
     def instantiate(self, callbacks=None, loggingOn=False) -> None:
         self.raw.instantiate(loggingOn=loggingOn, logMessage=callbacks)
-        self.component = self.raw.component
 
     def setupExperiment(self, startTime=0.0, stopTime=None) -> None:
         self._experiment = (startTime, stopTime)
 
     def enterInitializationMode(self) -> None:
-        start, stop = getattr(self, "_experiment", (0.0, None))
+        start, stop = self._experiment
         self.raw.enterInitializationMode(startTime=start, stopTime=stop)
-
-    def exitInitializationMode(self) -> None:
-        self.raw.exitInitializationMode()
 
     def getReal(self, vrs):
         return self.raw.getFloat64(vrs)
