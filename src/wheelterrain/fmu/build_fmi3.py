@@ -66,6 +66,8 @@ def description(fmi2: ET.Element) -> ET.Element:
             root.append(copy.deepcopy(fmi2.find(tag)))
 
     scalars = list(fmi2.find("ModelVariables"))
+    if "time" in {s.get("name") for s in scalars}:  # pragma: no cover - a table guard
+        raise ValueError("the FMI 2 description already has a variable named time")
     vr_of_index = {k + 1: sv.get("valueReference") for k, sv in enumerate(scalars)}
     variables = ET.SubElement(root, "ModelVariables")
     ET.SubElement(variables, "Float64", name="time", valueReference=str(len(scalars)),
@@ -91,8 +93,6 @@ def description(fmi2: ET.Element) -> ET.Element:
                     vr_of_index[int(k)] for k in unknown.get("dependencies").split()))
                 if unknown.get("dependenciesKind"):
                     element.set("dependenciesKind", unknown.get("dependenciesKind"))
-    if "time" in {s.get("name") for s in scalars}:  # pragma: no cover - a table guard
-        raise ValueError("the FMI 2 description already has a variable named time")
     units = root.find("UnitDefinitions")
     if units is not None and not any(u.get("name") == "s" for u in units):
         ET.SubElement(ET.SubElement(units, "Unit", name="s"), "BaseUnit", s="1")

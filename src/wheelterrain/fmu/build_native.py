@@ -228,25 +228,24 @@ def _native_description(root: ET.Element, model: str) -> ET.Element:
     root.insert(list(root).index(cs), me)
     scalars = root.find("ModelVariables")
     index = {sv.get("name"): k + 1 for k, sv in enumerate(scalars)}
-    for der in derivative_variables(model):
+    derivatives = derivative_variables(model)
+    for der in derivatives:
         sv = ET.SubElement(scalars, "ScalarVariable", name=der.name,
                            valueReference=str(len(scalars)), causality="local",
                            variability="continuous")
         ET.SubElement(sv, "Real", derivative=str(index[der.derivative_of]))
-    describe(root, model, [*VARIABLES[model](), *derivative_variables(model)],
-             continuous_states(model))
+    describe(root, model, [*VARIABLES[model](), *derivatives], continuous_states(model))
     return root
 
 
-def build(out: Path, models: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig"),
-          win64: bool = True) -> list[Path]:
+def build(out: Path, models: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig")) -> list[Path]:
     """Build the native FMUs into ``out`` (FMI 2.0) and ``out/fmi3`` (FMI 3.0); returns their
-    paths, per model the FMI 2 then the FMI 3 one. Each has Linux binaries and, when ``win64``
-    and the MinGW-w64 cross compiler is installed, Windows ones, all from the same sources."""
+    paths, per model the FMI 2 then the FMI 3 one. Each has Linux binaries and, when the
+    MinGW-w64 cross compiler is installed, Windows ones, all from the same sources."""
     cc = native.compiler()
     if cc is None:
         raise BuildError("the native flavour needs a C compiler (cc/gcc, or $CC) on PATH")
-    cross = cross_compiler() if win64 else None
+    cross = cross_compiler()
     headers = fmi_headers()
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
