@@ -155,7 +155,7 @@ def terrain_functions() -> tuple[ca.Function, ca.Function]:
     dynamic = ca.Function("terrain_dynamic", [u, angle, p], [y, status, info],
                           ["u", "angle", "p"], ["y", "status", "info"])
 
-    steady = dict(zip(contact.STEADY_OUTPUTS, fns.steady_calls(load, safe_slip, p), strict=True))
+    steady = dict(zip(contact.STEADY_OUTPUTS, fns.steady(load, safe_slip, p), strict=True))
     steady.update(contact_sinkage=steady["sinkage"], slip=traction, slip_paper=paper,
                   ripple_amplitude=0)
     y = ca.vertcat(*(steady[k] for k in TERRAIN_OUTPUTS))

@@ -85,7 +85,7 @@ from wheelterrain.parameters import INDEX, NAMES
 
 DEFAULT_NODES = (16, 10)  # per panel: up to the shear reversal, after it
 GRADING = 3
-NEWTON_ITERATIONS = 16  # ~4 suffice when driving; degenerate corners needed up to 16
+NEWTON_ITERATIONS = 16  # at most; ~4 when driving (then it stops), degenerate corners up to 16
 SCAN_POINTS = 12  # bracketing scan of the sinkage solve, log-spaced in the entry angle
 SCAN_MIN = 1e-4  # rad: smallest scanned entry angle (below it the power-law regime holds)
 REVERSAL_ITERATIONS = 10  # safeguarded Newton steps locating the shear reversal
@@ -122,6 +122,23 @@ def _split_rule(split: ca.SX, nodes: tuple[int, int]) -> tuple[ca.SX, ca.SX]:
     return g, weights
 
 
+def _panel_rule(nodes: int) -> tuple[ca.DM, ca.DM]:
+    """Offsets and weights of a whole panel without a shear reversal: the first sub-panel of
+    :func:`_split_rule` at split = 1, without the second, whose weights are then exactly 0 (the
+    same sums, term for term)."""
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    u, w = (x + 1.0) / 2.0, w / 2.0
+    return ca.DM(u**3 * (10 - 15 * u + 6 * u**2)), ca.DM(30 * u**2 * (1 - u) ** 2 * w)
+
+
+def _reverses(theta_f, theta_r, displacement) -> ca.SX:
+    """1 where the shear displacement changes sign on the arc [theta_r, theta_f] (see
+    :func:`_reversal_offset`), else 0."""
+    theta_c = ca.if_else(displacement.ratio < 1, ca.acos(ca.fmin(displacement.ratio, 1)), math.pi)
+    hi = ca.fmin(theta_f - theta_r, theta_f + theta_c)
+    return ca.logic_and(theta_c < theta_f, displacement.along(hi) < 0)
+
+
 def _reversal_offset(theta_f, theta_r, d_front, d_rear, displacement) -> ca.SX:
     """Where the shear displacement j changes sign on the arc, as the offset g in [0, 1] shared by
     both quadrature panels (front: theta = theta_f - d_front*g, rear: theta = theta_r + d_rear*g),
@@ -141,7 +158,7 @@ def _reversal_offset(theta_f, theta_r, d_front, d_rear, displacement) -> ca.SX:
 
     lo = ca.fmax(theta_f - theta_c, 0)  # the peak of j
     hi = ca.fmin(span, theta_f + theta_c)
-    crossing = ca.logic_and(theta_c < theta_f, displacement.along(hi) < 0)
+    crossing = _reverses(theta_f, theta_r, displacement)
     x = hi
     for _ in range(REVERSAL_ITERATIONS):
         f = displacement.along(x)
@@ -198,7 +215,7 @@ class _Displacement:
         return (1 - self.soil) * wheel + self.soil * soil
 
     def along(self, x: ca.SX) -> ca.SX:
-        return self.at(_offset_trig(self.theta_f, x))
+        return self.at(_offset_trig(self.sin_f, self.cos_f, x))
 
     def slope(self, x: ca.SX) -> ca.SX:
         """dj/dx."""
@@ -238,38 +255,57 @@ def shear_function(j: ca.SX, P: _P) -> ca.SX:
     return ca.sign(j) * ((1 - hump) * janosi + hump * wong)
 
 
-def _offset_trig(theta_f: ca.SX, x: ca.SX) -> dict:
+def exit_angle(theta_f: ca.SX, P: _P) -> ca.SX:
+    """theta_r = -arccos(1 - lambda*z/R_c), lambda = ``model.exit_ratio``, written through
+    sin(theta_f/2) (finite derivatives in theta_f at lambda = 0).
+
+    Its derivative in lambda, -theta_f/(2*sqrt(lambda)) near 0, is unbounded at lambda = 0:
+    there the exact Jacobians report the derivative of the lambda = 0 branch, 0, for the
+    exit-ratio column (an infinite entry would turn every other column into NaN wherever the
+    chain rule multiplies it by a zero seed); calibrate lambda from a start above 0."""
+    lam = P["model.exit_ratio"]
+    root = ca.if_else(lam > 0, ca.sqrt(lam), 0)
+    return -2 * ca.asin(root * ca.sin(theta_f / 2))
+
+
+def _offset_trig(sin_f: ca.SX, cos_f: ca.SX, x: ca.SX) -> dict:
     """cos/sin of theta = theta_f - x, sin(x), and the differences cos(theta) - cos(theta_f) and
     sin(theta_f) - sin(theta), through half angles so that no difference cancels at small angles
-    (the plain difference loses ~eps/theta_f**2 relative: 1e-4 at theta_f = 1e-6)."""
-    a, h = theta_f - x / 2, x / 2
-    sa, cs, sh, ch = ca.sin(a), ca.cos(a), ca.sin(h), ca.cos(h)
+    (the plain difference loses ~eps/theta_f**2 relative: 1e-4 at theta_f = 1e-6).
+    ``sin_f``, ``cos_f``: sin and cos of theta_f, shared by every node, so that a node costs one
+    sine and one cosine (of x/2); a = theta_f - x/2 by the addition formulas."""
+    sh, ch = ca.sin(x / 2), ca.cos(x / 2)
+    sa, cs = sin_f * ch - cos_f * sh, cos_f * ch + sin_f * sh
     return {"x": x, "cos": cs * ch + sa * sh, "sin": sa * ch - cs * sh, "sin_x": 2 * sh * ch,
             "cos_drop": 2 * sa * sh, "sin_drop": 2 * cs * sh}
 
 
 def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tuple[int, int],
-              ripple: bool) -> dict:
+              ripple: bool, reversal: bool) -> dict:
     """The arc form: all contact quantities for a given entry angle (no damping).
-    ``ripple=False`` drops the ripple."""
+    ``ripple=False`` drops the ripple. ``reversal=True`` splits the panels at the shear reversal
+    (:func:`_reversal_offset`); ``False`` is the rule without it, exact where
+    :func:`_reverses` is 0 (there the split rule's second sub-panel has zero weight)."""
     Rc, Rs, Rref = _radii(P)
     b = P["wheel.width"]
     c, tan_phi = P["soil.cohesion"], ca.tan(P["soil.phi"])
     n = P["soil.n0"] + P["soil.n1"] * ca.fabs(slip)
     k_eq = (c * P["soil.k_c"] + P["soil.gamma"] * b * P["soil.k_phi"]) * (Rc / b) ** n
 
-    lam = P["model.exit_ratio"]
-    # -arccos(1 - lam*z/R_c) written through sin(theta_f/2): finite derivatives at lam = 0.
-    theta_r = -2 * ca.asin(ca.sqrt(lam) * ca.sin(theta_f / 2))
+    theta_r = exit_angle(theta_f, P)
     theta_m = (P["model.a0"] + P["model.a1"] * slip) * theta_f
 
     displacement = _Displacement(theta_f, slip, P, Rc, Rs, Rref)
     d_front, d_rear = theta_f - theta_m, theta_m - theta_r
-    split = _reversal_offset(theta_f, theta_r, d_front, d_rear, displacement)
-    g, w = _split_rule(split, nodes)
+    if reversal:
+        g, w = _split_rule(_reversal_offset(theta_f, theta_r, d_front, d_rear, displacement),
+                           nodes)
+    else:
+        g, w = _panel_rule(nodes[0])
     # x = theta_f - theta at each node, formed without cancellation
-    front = _offset_trig(theta_f, d_front * g)  # also theta* of the rear nodes
-    rear = _offset_trig(theta_f, (theta_f - theta_r) - d_rear * g)
+    trig_f = displacement.sin_f, displacement.cos_f
+    front = _offset_trig(*trig_f, d_front * g)  # also theta* of the rear nodes
+    rear = _offset_trig(*trig_f, (theta_f - theta_r) - d_rear * g)
     w_front, w_rear = d_front * w, d_rear * w
     cos_f, sin_f, cos_r, sin_r = front["cos"], front["sin"], rear["cos"], rear["sin"]
     sigma0 = k_eq * front["cos_drop"] ** n  # shared by both panels
@@ -417,7 +453,7 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
     n = P["soil.n0"] + P["soil.n1"] * ca.fabs(slip)
     half = ca.sin(theta_f / 2)
     z = 2 * Rc * half**2  # R_c*(1 - cos(theta_f)) without cancellation
-    theta_r = -2 * ca.asin(ca.sqrt(P["model.exit_ratio"]) * half)
+    theta_r = exit_angle(theta_f, P)
     length = Rc * (ca.sin(theta_f) - ca.sin(theta_r))
     modulus = c * P["soil.k_c"] + P["soil.gamma"] * b * P["soil.k_phi"]
     pressure = modulus * (z / b) ** n
@@ -451,15 +487,50 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
     }
 
 
+ARC, ARC_REVERSAL, PATCH = 0, 1, 2  # the cases of the contact switch (:func:`_forms`)
+
+
+@lru_cache(maxsize=8)
+def _forms(nodes: tuple[int, int], ripple: bool) -> tuple[ca.Function, ca.Function]:
+    """``(case, switch)``: every contact quantity at an entry angle, evaluating only the form
+    and the rule that apply.
+
+    ``case(theta_f, slip, p)`` is PATCH when ``model.contact_form`` is 1; for the arc, ARC where
+    the shear displacement keeps its sign on the arc and ARC_REVERSAL where it changes sign
+    (:func:`_reverses`). ``switch(case, theta_f, slip, wheel_angle, p)`` is a CasADi
+    conditional over the three SX Functions: the generated C and the virtual machine run one
+    branch (expanded to SX, all three are evaluated and one is kept, exactly as before the
+    switch). ARC is ARC_REVERSAL's split rule without its zero-weight sub-panel, so the two give
+    the same numbers where no reversal exists; the switch saves the reversal search, the
+    second sub-panel and, for the patch, the whole arc."""
+    th, sl, angle, pp = (ca.SX.sym("theta_f"), ca.SX.sym("slip"), ca.SX.sym("wheel_angle"),
+                         ca.SX.sym("p", len(NAMES)))
+    P = _P(pp)
+    tag = "" if ripple else "_static"
+
+    def kernel(name: str, out: dict) -> ca.Function:
+        return ca.Function(name + tag, [th, sl, angle, pp],
+                           [ca.vertcat(*(out[k] for k in CONTACT_OUTPUTS))], {"cse": True})
+
+    arc = kernel("arc", _arc_form(th, sl, angle, P, nodes, ripple, reversal=False))
+    split = kernel("arc_reversal", _arc_form(th, sl, angle, P, nodes, ripple, reversal=True))
+    patch = kernel("patch", _patch_form(th, sl, angle, P, ripple))
+
+    Rc, Rs, Rref = _radii(P)
+    reverses = _reverses(th, exit_angle(th, P), _Displacement(th, sl, P, Rc, Rs, Rref))
+    case = ca.Function("contact_case" + tag, [th, sl, pp], [ca.if_else(
+        P["model.contact_form"] == 1, PATCH, ca.if_else(reverses, ARC_REVERSAL, ARC))])
+    return case, ca.Function.conditional("contact_form" + tag, [arc, split], patch)
+
+
 def _at_entry_angle(theta_f, slip, wheel_angle, P: _P, nodes: tuple[int, int],
                     ripple: bool) -> dict:
     """Every contact quantity at entry angle ``theta_f`` in the form ``model.contact_form``
-    selects (0 arc, 1 patch). Both forms are in the expression; the switch picks one exactly
-    (if_else, so neither form's value leaks into the other's)."""
-    arc = _arc_form(theta_f, slip, wheel_angle, P, nodes, ripple)
-    patch = _patch_form(theta_f, slip, wheel_angle, P, ripple)
-    is_patch = P["model.contact_form"] == 1
-    return {k: ca.if_else(is_patch, patch[k], arc[k]) for k in arc}
+    selects (0 arc, 1 patch), through :func:`_forms`' switch: only the selected form is
+    evaluated, so neither form's value leaks into the other's."""
+    case, switch = _forms(nodes, ripple)
+    out = switch(case(theta_f, slip, P.p), theta_f, slip, wheel_angle, P.p)
+    return {k: out[i] for i, k in enumerate(CONTACT_OUTPUTS)}
 
 
 def _contact(z, z_rate, slip, wheel_angle, P: _P, nodes: tuple[int, int], ripple: bool) -> dict:
@@ -489,9 +560,9 @@ class ModelFunctions:
     - ``steady_jacobian(load, slip, p, sinkage)`` -> ``d_inputs`` (4x2: sinkage, normal_force,
       drawbar_pull, torque by load, slip) and ``d_params`` (4 x len(p)), by the implicit function
       theorem at a solved ``sinkage``.
-    - ``steady_calls``: ``steady`` built on MX from the same solve, the arc kept as called
-      Functions instead of inlined: the same numbers, ~10x less generated C (for the compiled
-      and native FMUs; ~15 % slower in the VM, so Python uses ``steady``).
+
+    All are MX graphs over the SX Functions of :func:`_forms`: the contact is a called switch,
+    not inlined, so each evaluation runs the one form and rule that apply.
     """
 
     contact: ca.Function
@@ -500,13 +571,12 @@ class ModelFunctions:
     capacity: ca.Function
     steady: ca.Function
     steady_jacobian: ca.Function
-    steady_calls: ca.Function
     nodes: tuple[int, int]
 
 
 def _symbols():
-    return (ca.SX.sym("sinkage"), ca.SX.sym("sinkage_rate"), ca.SX.sym("slip"),
-            ca.SX.sym("wheel_angle"), ca.SX.sym("p", len(NAMES)))
+    return (ca.MX.sym("sinkage"), ca.MX.sym("sinkage_rate"), ca.MX.sym("slip"),
+            ca.MX.sym("wheel_angle"), ca.MX.sym("p", len(NAMES)))
 
 
 def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int]):
@@ -522,7 +592,9 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int]):
        theta_f**(2n+1)), and of moderate size where braking shear makes Fz negative (a plain
        (Fz - W)/W there is huge next to the log branch and stalls regula falsi); a step that
        leaves the bracket is replaced by Illinois regula falsi on the bracket (whose end
-       residuals are tracked), bisection if that fails. Unrolled: a pure CasADi expression.
+       residuals are tracked), bisection if that fails. Unrolled to NEWTON_ITERATIONS
+       iterations, each a switch that is the identity once a Newton step was below NEWTON_STOP
+       (:func:`_newton_iteration`): a pure CasADi expression that stops when it has converged.
 
     Returns sinkage, entry angle, the relative residual of the final iterate, the size of the last
     step in log(theta_f) and the capacity (Fz_static fully buried). Callers must check
@@ -530,14 +602,13 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int]):
     root pinned in theta_f when the load is a vanishing fraction of force terms that cancel)
     (``model.steady_state`` does); convergence is a checked output, not an assumption.
     """
-    fz_fun, fz_only, _ = _static_functions(nodes)
-    const = type(load)  # SX or MX: with MX symbols the arc stays one called Function (compact C)
+    _, fz_only, _ = _static_functions(nodes)
+    const = type(load)
 
     w_safe = ca.fmax(load, 1e-300)
-    offset = math.asinh(1.0)
 
-    def residual_of(f):  # monotone in F, zero at F = W, ~log(F/W) for F >> W, finite for F <= 0
-        return ca.asinh(f / w_safe) - offset
+    def residual_of(f):
+        return _residual(f, w_safe)
 
     scan = np.concatenate([[THETA_MIN], np.geomspace(SCAN_MIN, FULL_BURIAL, SCAN_POINTS)])
     values = [fz_only(t, slip, P.p) for t in scan]
@@ -551,34 +622,16 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int]):
         lo, h_lo = (ca.if_else(reached, a, b) for a, b in
                     ((math.log(scan[k - 1]), lo), (residual_of(values[k - 1]), h_lo)))
 
-    def fallback(lo, hi, h_lo, h_hi):
-        """Regula falsi on the bracket (an end with zero residual is the root itself);
-        bisection if it would leave the bracket."""
-        rf = lo - h_lo * (hi - lo) / ca.fmax(h_hi - h_lo, 1e-300)
-        return ca.if_else(ca.logic_and(rf >= lo, rf <= hi), rf, (lo + hi) / 2)
-
-    y = fallback(lo, hi, h_lo, h_hi)
-    last_step = const(math.inf)
-    last_below = const(-1)  # which end the previous iterate replaced: 1 lo, 0 hi, -1 none
+    y = _fallback(lo, hi, h_lo, h_hi)
+    # state: y, bracket (lo, hi, h_lo, h_hi), which end the previous iterate replaced (1 lo,
+    # 0 hi, -1 none), the last step, converged
+    state = ca.vertcat(y, lo, hi, h_lo, h_hi, -1, math.inf, 0)
+    iteration = _newton_iteration(nodes)
     for _ in range(NEWTON_ITERATIONS):
-        theta = ca.exp(y)
-        f, df = fz_fun(theta, slip, P.p)
-        h = residual_of(f)
-        slope = theta * df / (w_safe * ca.sqrt(1 + (f / w_safe) ** 2))
-        below = h <= 0
-        # Illinois: an end kept twice in a row has its residual halved, so regula falsi
-        # cannot stagnate against it.
-        h_hi = ca.if_else(ca.logic_and(below, last_below == 1), h_hi / 2, h_hi)
-        h_lo = ca.if_else(ca.logic_and(1 - below, last_below == 0), h_lo / 2, h_lo)
-        last_below = below
-        lo, h_lo = ca.if_else(below, y, lo), ca.if_else(below, h, h_lo)
-        hi, h_hi = ca.if_else(below, hi, y), ca.if_else(below, h_hi, h)
-        step = y - h / ca.fmax(slope, 1e-12)  # F' <= 0 (non-monotone corner): fall back
-        inside = ca.logic_and(step >= lo, step <= hi)
-        y_next = ca.if_else(inside, step, fallback(lo, hi, h_lo, h_hi))
-        last_step, y = ca.fabs(y_next - y), y_next
+        state = iteration(state[7], state, slip, P.p, w_safe)
+    y, last_step = state[0], state[6]
     theta = ca.if_else(load > 0, ca.exp(y), 0)
-    f, _ = fz_fun(theta, slip, P.p)
+    f = fz_only(theta, slip, P.p)
     Rc, _, _ = _radii(P)
     sinkage = 2 * Rc * ca.sin(theta / 2) ** 2  # = R_c*(1 - cos(theta)), without cancellation
     residual = ca.if_else(load > 0, (f - load) / w_safe, 0)
@@ -586,12 +639,62 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int]):
     return sinkage, theta, residual, last_step, capacity
 
 
+NEWTON_STOP = 1e-10  # a Newton step in log(theta_f) this small ends the solve: the next would
+# be ~1e-20, below rounding (quadratic convergence); the result is still checked by the caller
+
+
+def _residual(f, w_safe):
+    """asinh(F/W) - asinh(1): monotone in F, zero at F = W, ~log(F/W) for F >> W, finite for
+    F <= 0."""
+    return ca.asinh(f / w_safe) - math.asinh(1.0)
+
+
+def _fallback(lo, hi, h_lo, h_hi):
+    """Regula falsi on the bracket (an end with zero residual is the root itself); bisection if
+    it would leave the bracket."""
+    rf = lo - h_lo * (hi - lo) / ca.fmax(h_hi - h_lo, 1e-300)
+    return ca.if_else(ca.logic_and(rf >= lo, rf <= hi), rf, (lo + hi) / 2)
+
+
+@lru_cache(maxsize=4)
+def _newton_iteration(nodes: tuple[int, int]) -> ca.Function:
+    """One safeguarded Newton iteration of the sinkage solve (:func:`_sinkage_solve_expr`) as a
+    switch on its converged flag: ``iteration(done, state, slip, p, w_safe) -> state``. While
+    ``done`` is 0 it iterates; once a Newton step (not a fallback step) inside the bracket was
+    shorter than NEWTON_STOP, ``done`` is 1 and the remaining iterations are the identity,
+    evaluated as such (no contact evaluation): the solve stops when it has converged."""
+    fz_fun = _static_functions(nodes)[0]
+    state, sl, pp, w_safe = (ca.MX.sym("state", 8), ca.MX.sym("slip"),
+                             ca.MX.sym("p", len(NAMES)), ca.MX.sym("w_safe"))
+    y, lo, hi, h_lo, h_hi, last_below, _, _ = ca.vertsplit(state)
+    theta = ca.exp(y)
+    f, df = fz_fun(theta, sl, pp)
+    h = _residual(f, w_safe)
+    slope = theta * df / (w_safe * ca.sqrt(1 + (f / w_safe) ** 2))
+    below = h <= 0
+    # Illinois: an end kept twice in a row has its residual halved, so regula falsi cannot
+    # stagnate against it.
+    h_hi = ca.if_else(ca.logic_and(below, last_below == 1), h_hi / 2, h_hi)
+    h_lo = ca.if_else(ca.logic_and(1 - below, last_below == 0), h_lo / 2, h_lo)
+    lo, h_lo = ca.if_else(below, y, lo), ca.if_else(below, h, h_lo)
+    hi, h_hi = ca.if_else(below, hi, y), ca.if_else(below, h_hi, h)
+    step = y - h / ca.fmax(slope, 1e-12)  # F' <= 0 (non-monotone corner): fall back
+    inside = ca.logic_and(step >= lo, step <= hi)
+    y_next = ca.if_else(inside, step, _fallback(lo, hi, h_lo, h_hi))
+    last_step = ca.fabs(y_next - y)
+    done = ca.logic_and(inside, last_step <= NEWTON_STOP)
+    args = [state, sl, pp, w_safe]
+    iterate = ca.Function("newton_step", args,
+                          [ca.vertcat(y_next, lo, hi, h_lo, h_hi, below, last_step, done)])
+    converged = ca.Function("newton_converged", args, [state])
+    return ca.Function.conditional("newton_iteration", [iterate], converged)
+
+
 @lru_cache(maxsize=4)
 def _static_functions(nodes: tuple[int, int]) -> tuple[ca.Function, ca.Function, ca.Function]:
-    """SX Functions of the ripple-free arc at entry angle theta_f: (Fz_static and its
-    d/d(theta_f)), Fz_static alone, and every CONTACT_OUTPUT. Called with SX arguments they
-    inline; with MX arguments they stay calls."""
-    th, sl, pp = ca.SX.sym("theta_f"), ca.SX.sym("slip"), ca.SX.sym("p", len(NAMES))
+    """Functions of the ripple-free contact at entry angle theta_f: (Fz_static and its
+    d/d(theta_f)), Fz_static alone, and every CONTACT_OUTPUT."""
+    th, sl, pp = ca.MX.sym("theta_f"), ca.MX.sym("slip"), ca.MX.sym("p", len(NAMES))
     arc = _at_entry_angle(th, sl, 0, _P(pp), nodes, ripple=False)
     fz = arc["normal_force_static"]
     return (ca.Function("fz_static", [th, sl, pp], [fz, ca.jacobian(fz, th)]),
@@ -615,7 +718,7 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
         [ca.jacobian(forces, ca.vertcat(z, z_rate, slip)), ca.jacobian(forces, p)],
         list(CONTACT_INPUTS), ["d_state", "d_params"])
 
-    load = ca.SX.sym("load")
+    load = ca.MX.sym("load")
     sink, theta, residual, last_step, capacity = _sinkage_solve_expr(load, slip, P, nodes)
     sinkage_solve = ca.Function("sinkage_solve", [load, slip, p],
                                 [sink, residual, last_step, capacity], list(STEADY_INPUTS),
@@ -623,10 +726,8 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
     capacity_fn = ca.Function("capacity", [slip, p], [capacity], ["slip", "p"], ["capacity"])
 
     # at the solved angle: no round trip through the sinkage
-    quasi = _at_entry_angle(theta, slip, 0, P, nodes, ripple=False)
-    steady = ca.Function("steady", [load, slip, p],
-                         [sink, *(quasi[k] for k in CONTACT_OUTPUTS), residual, last_step,
-                          capacity],
+    quasi = _static_functions(nodes)[2](theta, slip, p)
+    steady = ca.Function("steady", [load, slip, p], [sink, *quasi, residual, last_step, capacity],
                          list(STEADY_INPUTS), list(STEADY_OUTPUTS))
 
     # Implicit function theorem at a solved sinkage: Fz_static(z, slip, p) = load.
@@ -641,12 +742,5 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
     d_params = ca.vertcat(dz_dp, ca.jacobian(ys, p) + dy_dz @ dz_dp)
     steady_jacobian = ca.Function("steady_jacobian", [load, slip, p, z], [d_inputs, d_params],
                                   [*STEADY_INPUTS, "sinkage"], ["d_inputs", "d_params"])
-    loads, slips, ps = ca.MX.sym("load"), ca.MX.sym("slip"), ca.MX.sym("p", len(NAMES))
-    sink_c, theta_c, residual_c, last_c, capacity_c = _sinkage_solve_expr(loads, slips, _P(ps),
-                                                                          nodes)
-    arc_c = _static_functions(nodes)[2](theta_c, slips, ps)
-    steady_calls = ca.Function("steady_calls", [loads, slips, ps],
-                               [sink_c, *arc_c, residual_c, last_c, capacity_c],
-                               list(STEADY_INPUTS), list(STEADY_OUTPUTS))
     return ModelFunctions(contact, contact_jacobian, sinkage_solve, capacity_fn, steady,
-                          steady_jacobian, steady_calls, nodes)
+                          steady_jacobian, nodes)
