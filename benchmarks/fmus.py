@@ -37,6 +37,7 @@ from wheelterrain import presets
 from wheelterrain.cosim import master as cosim
 from wheelterrain.fmu.instance import Instance
 from wheelterrain.model import contact
+from wheelterrain.parameters import TABLE
 
 
 def per_call(fn, n: int, repeats: int) -> float:
@@ -95,13 +96,17 @@ def step_figures(fmu_dir: Path, label: str, n: int, k: int) -> dict[str, float]:
             shutil.rmtree(d, ignore_errors=True)
 
 
+ARC_PRESET = "paper-table2-arc"  # the C1-C4 runs and the second C-host step figure use it
+
 HOST = Path(__file__).resolve().parents[1] / "tests" / "fmi_host.c"
 """The FMI host the platform tests use; with "time" it reports the wall time per step."""
 
 
-def native_step_c_host(fmu_dir: Path, steps: int, repeats: int) -> float | None:
+def native_step_c_host(fmu_dir: Path, steps: int, repeats: int,
+                       ps=None) -> float | None:
     """Seconds per WheelTerrain set + doStep + get of the native binary from a C host (median
-    of ``repeats``), or None without a C compiler."""
+    of ``repeats``), or None without a C compiler. ``ps``: the table parameters to set (None:
+    the FMU's start values, the default preset's)."""
     import subprocess
 
     from fmpy import read_model_description
@@ -119,6 +124,10 @@ def native_step_c_host(fmu_dir: Path, steps: int, repeats: int) -> float | None:
                                                   ("wheel_speed", 0.6),
                                                   ("carriage_speed", 0.024)))
     get = ",".join(str(vr[n]) for n in ("normal_force", "drawbar_pull", "torque"))
+    kinds = {v.name: v.type for v in md.modelVariables}
+    given = "-" if ps is None else ",".join(
+        f"{vr[p.name]}={ps[p.name]!r}" if kinds[p.name] == "Real"
+        else f"i{vr[p.name]}={round(ps[p.name])}" for p in TABLE)
     with tempfile.TemporaryDirectory() as tmp:
         unzip = extract(str(fmu), unzipdir=str(Path(tmp) / "fmu"))
         exe = Path(tmp) / "host"
@@ -127,7 +136,7 @@ def native_step_c_host(fmu_dir: Path, steps: int, repeats: int) -> float | None:
         library = Path(unzip) / "binaries" / "linux64" / "WheelTerrain.so"
         times = []
         for _ in range(repeats):
-            run = subprocess.run([str(exe), str(library), md.guid, str(steps), "1e-3", "-",
+            run = subprocess.run([str(exe), str(library), md.guid, str(steps), "1e-3", given,
                                   ramp, get, "2", "time"],
                                  capture_output=True, text=True, check=True)
             times.append(float(run.stdout.split()[0]))
@@ -174,7 +183,7 @@ def main() -> None:
     if not dirs:
         sys.exit(f"no FMUs in {args.fmu_dir}: run `wheelterrain build --flavor all "
                  f"--out {args.fmu_dir}`")
-    ps = presets.load("paper-table2-arc")
+    ps = presets.load(ARC_PRESET)
     fn, p = contact.build().contact, ps.vector()
 
     def core(count):
@@ -190,19 +199,31 @@ def main() -> None:
         c_host = native_step_c_host(dirs["native"], 20 * args.steps, args.repeats)
         if c_host is not None:
             figures["native_step_c_host_s"] = c_host
-            print(f"native: WheelTerrain set+doStep+get from a C host: {c_host * 1e6:.2f} us")
+            arc = native_step_c_host(dirs["native"], 20 * args.steps, args.repeats, ps)
+            figures["native_step_c_host_arc_s"] = arc
+            print(f"native: WheelTerrain set+doStep+get from a C host: {c_host * 1e6:.2f} us "
+                  f"(FMU defaults, {presets.DEFAULT_PRESET}: patch form); {arc * 1e6:.2f} us "
+                  f"with {ARC_PRESET}'s parameters (arc form)")
     print(f"baseline: core contact Function call from Python: "
           f"{per_call(core, args.steps, args.repeats):.1f} us")
     if args.no_c1_c4:
         _emit(args, figures)
         return
     walls = {}
-    for label, d in dirs.items():
+    for label, d in dirs.items():  # fmpy's wrappers in the loop, one process: the baseline
         start = time.perf_counter()
-        cosim.reproduce(d, ps)
+        cosim.reproduce(d, ps, direct=False)
         walls[label] = time.perf_counter() - start
         print(f"C1-C4 (4 x 30 s at 1 ms, both FMUs), fmpy master, {label}: "
               f"{walls[label]:.2f} s wall")
+    workers = cosim.default_workers()
+    if "native" in dirs:  # what `wheelterrain reproduce` runs by default
+        for label, count in (("native+direct", 1), ("native+direct+processes", workers)):
+            start = time.perf_counter()
+            cosim.reproduce(dirs["native"], ps, workers=count)
+            walls[label] = time.perf_counter() - start
+            print(f"C1-C4, native, FMI calls straight through ctypes, {count} process(es): "
+                  f"{walls[label]:.2f} s wall")
     if "native" in dirs:
         try:
             walls["native+ecos"] = c1_c4_ecos(dirs["native"], ps)
@@ -210,13 +231,17 @@ def main() -> None:
         except ImportError:
             print("C1-C4 with ecos: ecospy not installed")
     if "pythonfmu" in walls:
-        for label in ("native", "native+ecos"):
+        for label in ("native", "native+ecos", "native+direct", "native+direct+processes"):
             if label in walls:
                 print(f"  speed-up {label} vs pythonfmu (fmpy master): "
                       f"{walls['pythonfmu'] / walls[label]:.1f}x (goal >= 20x)")
         figures["c1_c4_pythonfmu_fmpy_s"] = walls["pythonfmu"]
     how = {"pythonfmu": "pythonfmu FMUs, fmpy master", "native": "native FMUs, fmpy master",
-           "native+ecos": "native FMUs, ecos master (C++)"}
+           "native+ecos": "native FMUs, ecos master (C++; Jacobi coupling, so its means are "
+           "O(step) from ours)",
+           "native+direct": "native FMUs, our master with FMI calls straight through ctypes",
+           "native+direct+processes": "native FMUs, our master with FMI calls straight "
+           f"through ctypes, the four cases in {workers} processes (wheelterrain reproduce)"}
     fastest = min(walls, key=walls.get)
     figures["c1_c4_fastest_s"], figures["c1_c4_fastest_how"] = walls[fastest], how[fastest]
     _emit(args, figures)

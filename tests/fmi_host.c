@@ -9,7 +9,8 @@
  * FMI 2.0. With "time" (FMI 2) nothing is printed per step: the host prints the wall time per
  * step (set, doStep, get) and a checksum of the outputs (benchmarks/fmus.py).
  * SET  "vr=value,..." Real values set before initialisation ("-" for none); "bvr=1" sets
- *      a Boolean (e.g. WheelTerrain's quasi_static);
+ *      a Boolean (e.g. WheelTerrain's quasi_static), "ivr=0" an Integer or, in FMI 3, an
+ *      Enumeration (e.g. model.contact_form);
  * RAMP "vr=start+slope,..." Real inputs set to start + slope*t before every step ("-");
  * GET  "vr,..." Real values printed after every step, with t, as %.17g.
  * Exit status 0 if every call returned fmi2OK, else 1 (the failing call is printed).
@@ -61,7 +62,7 @@ static int parse(const char *text, fmi2ValueReference *vr, double *a, double *b,
     if (strcmp(text, "-") == 0) return 0;
     while (*p && n < MAX_VARS) {
         char *end;
-        boolean[n] = *p == 'b';
+        boolean[n] = *p == 'b' ? 1 : *p == 'i' ? 2 : 0; /* 1 Boolean, 2 Integer, 0 Real */
         if (boolean[n]) p++;
         vr[n] = (fmi2ValueReference)strtoul(p, &end, 10);
         p = end;
@@ -106,6 +107,7 @@ static int run3(Library lib, const char *token, int steps, double h, int n_set,
         (fmi3ExitInitializationModeTYPE *)symbol(lib, "fmi3ExitInitializationMode");
     fmi3SetFloat64TYPE *set_real = (fmi3SetFloat64TYPE *)symbol(lib, "fmi3SetFloat64");
     fmi3SetBooleanTYPE *set_boolean = (fmi3SetBooleanTYPE *)symbol(lib, "fmi3SetBoolean");
+    fmi3SetInt64TYPE *set_integer = (fmi3SetInt64TYPE *)symbol(lib, "fmi3SetInt64");
     fmi3GetFloat64TYPE *get_real = (fmi3GetFloat64TYPE *)symbol(lib, "fmi3GetFloat64");
     fmi3DoStepTYPE *do_step = (fmi3DoStepTYPE *)symbol(lib, "fmi3DoStep");
     fmi3TerminateTYPE *terminate = (fmi3TerminateTYPE *)symbol(lib, "fmi3Terminate");
@@ -113,8 +115,8 @@ static int run3(Library lib, const char *token, int steps, double h, int n_set,
                                                                          "fmi3FreeInstance");
     fmi3Instance c;
     double out[MAX_VARS], t = 0.0;
-    if (!instantiate || !enter || !leave || !set_real || !set_boolean || !get_real ||
-        !do_step || !terminate || !free_instance) {
+    if (!instantiate || !enter || !leave || !set_real || !set_boolean || !set_integer ||
+        !get_real || !do_step || !terminate || !free_instance) {
         fprintf(stderr, "the library lacks an fmi3 function\n");
         return 1;
     }
@@ -127,7 +129,9 @@ static int run3(Library lib, const char *token, int steps, double h, int n_set,
     CHECK(enter(c, fmi3False, 0.0, 0.0, fmi3False, 0.0));
     for (int i = 0; i < n_set; i++) {
         fmi3Boolean on = set_value[i] != 0.0;
-        if (boolean[i]) CHECK(set_boolean(c, &set_vr[i], 1, &on, 1));
+        fmi3Int64 whole = (fmi3Int64)set_value[i];
+        if (boolean[i] == 1) CHECK(set_boolean(c, &set_vr[i], 1, &on, 1));
+        else if (boolean[i] == 2) CHECK(set_integer(c, &set_vr[i], 1, &whole, 1));
         else CHECK(set_real(c, &set_vr[i], 1, &set_value[i], 1));
     }
     CHECK(leave(c));
@@ -186,13 +190,14 @@ int main(int argc, char **argv) {
             (fmi2ExitInitializationModeTYPE *)symbol(lib, "fmi2ExitInitializationMode");
         fmi2SetRealTYPE *set_real = (fmi2SetRealTYPE *)symbol(lib, "fmi2SetReal");
         fmi2SetBooleanTYPE *set_boolean = (fmi2SetBooleanTYPE *)symbol(lib, "fmi2SetBoolean");
+        fmi2SetIntegerTYPE *set_integer = (fmi2SetIntegerTYPE *)symbol(lib, "fmi2SetInteger");
         fmi2GetRealTYPE *get_real = (fmi2GetRealTYPE *)symbol(lib, "fmi2GetReal");
         fmi2DoStepTYPE *do_step = (fmi2DoStepTYPE *)symbol(lib, "fmi2DoStep");
         fmi2TerminateTYPE *terminate = (fmi2TerminateTYPE *)symbol(lib, "fmi2Terminate");
         fmi2FreeInstanceTYPE *free_instance = (fmi2FreeInstanceTYPE *)symbol(lib,
                                                                              "fmi2FreeInstance");
         if (!instantiate || !setup || !enter || !leave || !set_real || !set_boolean ||
-            !get_real || !do_step ||
+            !set_integer || !get_real || !do_step ||
             !terminate || !free_instance) {
             fprintf(stderr, "%s lacks an fmi2 function\n", argv[1]);
             return 1;
@@ -206,7 +211,9 @@ int main(int argc, char **argv) {
         CHECK(enter(c));
         for (int i = 0; i < n_set; i++) {
             fmi2Boolean on = set_value[i] != 0.0;
-            if (boolean[i]) CHECK(set_boolean(c, &set_vr[i], 1, &on));
+            fmi2Integer whole = (fmi2Integer)set_value[i];
+            if (boolean[i] == 1) CHECK(set_boolean(c, &set_vr[i], 1, &on));
+            else if (boolean[i] == 2) CHECK(set_integer(c, &set_vr[i], 1, &whole));
             else CHECK(set_real(c, &set_vr[i], 1, &set_value[i]));
         }
         CHECK(leave(c));

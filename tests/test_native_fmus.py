@@ -163,6 +163,66 @@ def test_flavours_give_the_same_c1_c4_means(flavours):
             assert means[1][key] == pytest.approx(means[0][key], rel=1e-9), (case, key)
 
 
+@pytest.mark.parametrize("flavour", ["pythonfmu", "native"])
+def test_direct_calls_give_the_series_of_fmpys_wrappers(flavours, flavour):
+    """The co-simulation loop that calls the FMI functions straight through ctypes makes the
+    same calls in the same order as the one through fmpy's wrappers: the same series, bit for
+    bit, on both flavours."""
+    ps = presets.load("paper-table2-arc")
+    unz = {n: flavours["unzip"][(flavour, n)] for n in NAMES}
+    runs = [cosim.run_case(flavours["root"] / flavour, ps, 0.5, 62.0, 0.03, "C3", stop=1.5,
+                           step=1e-3, unzipped=unz, settle=0.5, direct=direct)
+            for direct in (False, True)]
+    for key in cosim.RECORD:
+        np.testing.assert_array_equal(runs[1].series[key], runs[0].series[key], err_msg=key)
+
+
+def test_direct_calls_raise_as_fmpys_wrappers_on_a_refused_step(flavours):
+    """A refused call in the direct loop is made again through fmpy, which raises as the
+    wrapper loop does: a load the soil cannot carry sinks the wheel past the rig's range."""
+    ps = presets.load("paper-table2-arc")  # carries ~80 N fully buried; 2000 N sinks it
+    unz = {n: flavours["unzip"][("native", n)] for n in NAMES}
+    errors = []
+    for direct in (False, True):
+        with pytest.raises(FMICallException) as err:
+            cosim.run_case(flavours["root"] / "native", ps, 0.5, 2000.0, 0.03, "C3", stop=5.0,
+                           step=1e-3, unzipped=unz, settle=0.5, direct=direct)
+        errors.append(str(err.value))
+    assert errors[1] == errors[0]
+
+
+def test_reproduce_in_processes_gives_the_serial_results(flavours):
+    ps = presets.load("paper-table2-arc")
+    runs = [cosim.reproduce(flavours["root"] / "native", ps, stop=12.0, step=2e-3,
+                            workers=workers) for workers in (1, 2)]
+    assert [r.case for r in runs[1]] == ["C1", "C2", "C3", "C4"]
+    for serial, parallel in zip(*runs, strict=True):
+        assert parallel.means == serial.means
+        np.testing.assert_array_equal(parallel.series["drawbar_pull"],
+                                      serial.series["drawbar_pull"])
+
+
+def test_reproduce_picks_the_native_pair_when_built(flavours, tmp_path):
+    root = flavours["root"]
+    folder, what = cosim.choose_fmus(None, build=root / "pythonfmu")  # no native/ inside
+    assert folder == root / "pythonfmu"
+    assert what.startswith("pythonfmu")
+    build = tmp_path / "build"
+    (build / "native").mkdir(parents=True)
+    for n in NAMES:
+        shutil.copy(root / "pythonfmu" / f"{n}.fmu", build / f"{n}.fmu")
+        shutil.copy(root / "native" / f"{n}.fmu", build / "native" / f"{n}.fmu")
+    folder, what = cosim.choose_fmus(None, build=build)
+    assert folder == build / "native"
+    assert what.startswith("native")
+    old = build.stat().st_mtime - 3600  # a native pair older than the pythonfmu one: stale
+    for n in NAMES:
+        os.utime(build / "native" / f"{n}.fmu", (old, old))
+    assert cosim.choose_fmus(None, build=build)[0] == build
+    assert cosim.choose_fmus(None, "me", build=build)[0] == build / "native"
+    assert cosim.choose_fmus(root / "pythonfmu")[0] == root / "pythonfmu"  # as given
+
+
 # ---- model exchange ---------------------------------------------------------------------
 
 

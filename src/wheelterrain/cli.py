@@ -11,6 +11,7 @@ import errno
 import json
 import math
 import sys
+import time
 
 import click
 import numpy as np
@@ -312,8 +313,13 @@ def build(out: str, flavor: str) -> None:
               help="Parameter preset (paper-table2 gives the paper's own model and values, "
               "nothing fitted, and adds the comparison with the paper's simulation).")
 @set_option
-@click.option("--fmu-dir", default="build", show_default=True,
-              type=click.Path(file_okay=False), help="Where `wheelterrain build` wrote the FMUs.")
+@click.option("--fmu-dir", default=None, type=click.Path(file_okay=False),
+              help="Where `wheelterrain build` wrote the FMUs. Default: the fastest built "
+              "pair, build/native (native flavour) if `wheelterrain build --flavor all` or "
+              "`--flavor native` wrote it, else build (pythonfmu flavour).")
+@click.option("--workers", type=click.IntRange(1, 64), default=None,
+              help="Processes running the four cases side by side (the results do not "
+              "depend on it). Default: one per case, at most one per core.")
 @json_option("The results (preset, the four cases' means beside the experiment and the "
              "paper's simulation, mean absolute errors)")
 @click.option("--out", default="validation/output", show_default=True,
@@ -326,9 +332,10 @@ def build(out: str, flavor: str) -> None:
 @click.option("--interface", type=click.Choice(["cs", "me"]), default="cs", show_default=True,
               help="cs: FMI co-simulation, each FMU steps itself. me: model exchange, the "
               "master integrates both FMUs' states (classical Runge-Kutta at --step); needs "
-              "the native FMUs (--fmu-dir build/native).")
-def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_target: str | None,
-              out: str, step: float, stop: float, interface: str) -> None:
+              "the native FMUs (build/native).")
+def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str | None,
+              workers: int | None, json_target: str | None, out: str, step: float, stop: float,
+              interface: str) -> None:
     """Reproduce the paper's C1-C4 by co-simulating the two FMUs with fmpy.
 
     \b
@@ -350,12 +357,21 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_targ
     out_dir = Path(out)
     paper = cosim.table3()
     try:
+        folder, flavour = cosim.choose_fmus(None if fmu_dir is None else Path(fmu_dir),
+                                            interface)
+        workers = workers or cosim.default_workers()
         label = "co-simulating C1-C4" if interface == "cs" else "integrating C1-C4 (ME)"
+        click.echo(f"FMUs: {folder}, {flavour}; {workers} worker process"
+                   f"{'es' if workers > 1 else ''}"
+                   f"{', FMI calls straight through ctypes' if interface == 'cs' else ''}",
+                   err=True)
+        started = time.perf_counter()
         with click.progressbar(length=len(paper["cases"]), label=label,
                                file=sys.stderr) as bar:
-            results = cosim.reproduce(Path(fmu_dir), ps, step=step, stop=stop,
+            results = cosim.reproduce(folder, ps, step=step, stop=stop,
                                       progress=lambda case: bar.update(1),
-                                      interface=interface)
+                                      interface=interface, workers=workers)
+        elapsed = time.perf_counter() - started
     except (FileNotFoundError, FMUError) as err:
         click.echo(f"error: {err}", err=True)
         sys.exit(EXIT_USAGE)
@@ -367,7 +383,8 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_targ
     say = click.echo if text else (lambda *a, **k: None)
     how = "co-simulation" if interface == "cs" else "model exchange (RK4)"
     say(f"C1-C4 {how}, preset {name}, step {step:g} s, {stop:g} s per case "
-        f"(wall time {sum(r.wall_time for r in results):.1f} s)")
+        f"(wall time {elapsed:.1f} s, {folder}, {workers} "
+        f"process{'es' if workers > 1 else ''})")
     say(cosim.format_table(rows, mae))
     if fitted_on:
         say(f"in-sample: {preset} was fitted on {', '.join(fitted_on)}; its held-out "
@@ -376,7 +393,7 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_targ
     for r in results:
         cosim.write_csv(out_dir / f"{r.case}.csv", r)
         plots.time_series(r, experiment[r.case], out_dir / f"{r.case}.png")
-        ssp.write(out_dir / f"{r.case}.ssp", Path(fmu_dir), r.case, ps, r.slip_paper,
+        ssp.write(out_dir / f"{r.case}.ssp", folder, r.case, ps, r.slip_paper,
                   paper["load_N"], paper["wheel_speed_m_per_s"], stop, step)
     plots.means_bar_chart(rows, out_dir / "means.png", preset)
     say(f"wrote {out_dir}/C1..C4.csv, C1..C4.png, means.png, C1..C4.ssp")
@@ -394,7 +411,8 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str, json_targ
                                                    ("drawbar_pull", "normal_force", "sinkage")}}
                              for row in rows],
                    "mean_absolute_error": mae,
-                   "wall_time_s": sum(r.wall_time for r in results)}
+                   "fmu_dir": str(folder), "workers": workers,
+                   "wall_time_s": elapsed}
         _emit_json(json_target, payload)
 
 

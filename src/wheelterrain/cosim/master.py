@@ -206,6 +206,72 @@ def _integrate(pair: Coupling, where: list[int], n: int, step: float) -> np.ndar
     return data
 
 
+WARNING = 1  # fmi2Warning: the highest status fmpy's wrappers accept
+
+
+def _direct_calls(pair: Coupling):
+    """The FMI 2 functions one co-simulation step needs, called straight through ctypes on the
+    libraries fmpy loaded, or None when the pair is not two FMI 2 slaves (an FMI 3 pair goes
+    through the adapter's fmpy calls)."""
+    from ctypes import POINTER, c_double, c_int, c_size_t, c_uint, c_void_p
+
+    fmus = (pair.rig.fmu, pair.terrain.fmu)
+    if not all(hasattr(f, "dll") and hasattr(f, "component") for f in fmus):
+        return None
+    calls = []
+    for fmu in fmus:
+        get, put, step = fmu.dll.fmi2GetReal, fmu.dll.fmi2SetReal, fmu.dll.fmi2DoStep
+        for fn in (get, put):
+            fn.argtypes = [c_void_p, POINTER(c_uint), c_size_t, c_void_p]  # values by address
+            fn.restype = c_int
+        step.argtypes, step.restype = [c_void_p, c_double, c_double, c_int], c_int
+        calls.append((fmu.component, get, put, step))
+    return calls
+
+
+def _cosimulate_direct(pair: Coupling, where: list[int], n: int, step: float) -> np.ndarray:
+    """:func:`_cosimulate`'s loop, the same calls in the same order, made straight through
+    ctypes into the FMUs' FMI 2 functions with buffers allocated once: fmpy's wrappers build
+    their argument arrays and check every status in Python, ~20 us per coupled step, more than
+    the native FMUs' own time. A call that does not return fmi2OK is made again through
+    fmpy's wrapper, which raises as in :func:`_cosimulate` (a refused call changes nothing;
+    fmi2Warning passes, as there)."""
+    from ctypes import c_uint
+
+    calls = _direct_calls(pair)
+    if calls is None or len(pair._rig_in) != len(COUPLED_FORCES):  # no commands here
+        return _cosimulate(pair, where, n, step)
+    (rig_c, rig_get, rig_set, rig_step), (ter_c, ter_get, ter_set, ter_step) = calls
+    refs = [(c_uint * len(r))(*r) for r in (pair._rig_out, pair._ter_in, pair._ter_out,
+                                            pair._rig_in)]
+    rig_out, ter_in, ter_out, rig_in = refs
+    n_x, n_y, n_states, n_forces = len(rig_out), len(ter_out), len(ter_in), len(rig_in)
+    # the FMUs read and write the rows of the record in place: no copy per step
+    xs, ys = np.empty((n + 1, n_x)), np.empty((n + 1, n_y))
+    x0, y0 = xs.ctypes.data, ys.ctypes.data
+    dx, dy = xs.strides[0], ys.strides[0]
+    rig, ter = pair.rig.fmu, pair.terrain.fmu
+    for k in range(n + 1):
+        t, x, y = k * step, x0 + k * dx, y0 + k * dy
+        if rig_get(rig_c, rig_out, n_x, x) > WARNING:
+            rig.getReal(pair._rig_out)
+        if ter_set(ter_c, ter_in, n_states, x) > WARNING:
+            ter.setReal(pair._ter_in, list(xs[k, :n_states]))
+        if ter_get(ter_c, ter_out, n_y, y) > WARNING:
+            ter.getReal(pair._ter_out)
+        if rig_set(rig_c, rig_in, n_forces, y) > WARNING:
+            rig.setReal(pair._rig_in, list(ys[k, :n_forces]))
+        if k < n:
+            if rig_step(rig_c, t, step, 1) > WARNING:
+                rig.doStep(t, step)
+            if ter_step(ter_c, t, step, 1) > WARNING:
+                ter.doStep(t, step)
+    data = np.empty((n + 1, len(where) + 1))
+    data[:, 0] = np.arange(n + 1) * step
+    data[:, 1:] = np.hstack([xs, ys])[:, where]
+    return data
+
+
 INTERFACES = {"cs": _cosimulate, "me": _integrate}
 """How the pair runs: FMI co-simulation (each FMU steps itself) or model exchange (the master
 integrates the FMUs' states)."""
@@ -214,9 +280,11 @@ integrates the FMUs' states)."""
 def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, rim_speed: float,
              case: str = "", stop: float = STOP_TIME, step: float = STEP,
              unzipped: dict[str, str] | None = None, settle: float = SETTLE_TIME,
-             interface: str = "cs") -> CaseResult:
+             interface: str = "cs", direct: bool = True) -> CaseResult:
     """Run one rig case through ``interface`` (:data:`INTERFACES`); returns means over the
-    averaging window and the series."""
+    averaging window and the series. ``direct``: co-simulation calls the FMI 2 functions
+    straight through ctypes (:func:`_cosimulate_direct`, the same numbers); False keeps fmpy's
+    wrappers in the loop (the reference the benchmarks compare against)."""
     from fmpy import extract
 
     paths = fmu_paths(fmu_dir)
@@ -230,7 +298,8 @@ def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, ri
         pair = Coupling(terrain, rig_fmu,
                         rig_extra=_extra(RECORD, RIG_IO, COUPLED_STATES),
                         terrain_extra=_extra(RECORD, TERRAIN_IO, COUPLED_FORCES))
-        data = INTERFACES[interface](pair, pair.positions(RECORD), round(stop / step), step)
+        loop = _cosimulate_direct if interface == "cs" and direct else INTERFACES[interface]
+        data = loop(pair, pair.positions(RECORD), round(stop / step), step)
     finally:
         terrain.close()
         rig_fmu.close()
@@ -259,27 +328,93 @@ def table3() -> dict:
     return json.loads(data.path("paper_table3.json").read_text(encoding="utf-8"))
 
 
+def choose_fmus(fmu_dir: Path | None, interface: str = "cs",
+                build: Path = Path("build")) -> tuple[Path, str]:
+    """The folder of the FMU pair to run and what it is, in words. ``fmu_dir`` None: the
+    fastest built flavour, BUILD/native (generated C, no Python at run time) when both its FMUs
+    exist and are no older than BUILD's pythonfmu pair, else BUILD (model exchange: native
+    only). FileNotFoundError, saying how to build them, when there is none."""
+    from fmpy import read_model_description
+
+    if fmu_dir is None:
+        native, python = Path(build) / "native", Path(build)
+
+        def built(folder: Path) -> float | None:
+            paths = [folder / f"{n}.fmu" for n in ("WheelTerrain", "SingleWheelRig")]
+            return min(p.stat().st_mtime for p in paths) if all(
+                p.is_file() for p in paths) else None
+
+        t_native, t_python = built(native), built(python)
+        usable = t_native is not None and (t_python is None or t_native >= t_python - 1.0)
+        fmu_dir = native if usable or interface == "me" else python
+    paths = fmu_paths(fmu_dir)
+    tool = read_model_description(str(paths["WheelTerrain"])).generationTool or ""
+    flavour = ("pythonfmu flavour (Python inside the FMUs; `wheelterrain build --flavor all` "
+               "adds the faster native ones)" if tool.startswith("PythonFMU")
+               else "native flavour (generated C, no Python at run time)")
+    return Path(fmu_dir), flavour
+
+
+def default_workers() -> int:
+    """Worker processes for C1-C4: one per case, at most one per core this process may use."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(len(table3()["cases"]), cores))
+
+
 def reproduce(fmu_dir: Path, ps: ParameterSet, step: float = STEP, stop: float = STOP_TIME,
               progress: Callable[[str], None] | None = None,
-              interface: str = "cs") -> list[CaseResult]:
-    """C1-C4 through ``interface`` (one extraction of each FMU reused for all cases).
-    ``progress(case)`` is called as each case finishes."""
+              interface: str = "cs", workers: int = 1, direct: bool = True
+              ) -> list[CaseResult]:
+    """C1-C4 through ``interface`` (one extraction of each FMU reused for all cases), in
+    ``workers`` processes (1: in this one). The cases are independent runs, so the results do
+    not depend on ``workers`` (nor on ``direct``, see :func:`run_case`). ``progress(case)`` is
+    called as each case finishes."""
     from fmpy import extract
 
     paper = table3()
     unzipped = {name: extract(str(p)) for name, p in fmu_paths(fmu_dir).items()}
+    args = [(fmu_dir, ps, row["slip_paper"], paper["load_N"], paper["wheel_speed_m_per_s"],
+             row["case"], stop, step, unzipped, SETTLE_TIME, interface, direct)
+            for row in paper["cases"]]
     try:
-        results = []
-        for row in paper["cases"]:
-            results.append(run_case(fmu_dir, ps, row["slip_paper"], paper["load_N"],
-                                    paper["wheel_speed_m_per_s"], row["case"], stop, step,
-                                    unzipped, interface=interface))
-            if progress:
-                progress(row["case"])  # this case is done
-        return results
+        if workers <= 1:
+            results = []
+            for a in args:
+                results.append(run_case(*a))
+                if progress:
+                    progress(a[5])  # this case is done
+            return results
+        return _in_processes(args, workers, progress)
     finally:
         for d in unzipped.values():
             shutil.rmtree(d, ignore_errors=True)
+
+
+def _in_processes(args: list[tuple], workers: int,
+                  progress: Callable[[str], None] | None) -> list[CaseResult]:
+    """run_case(*a) for each of ``args`` in a pool of forked processes (forked: a spawned
+    interpreter would spend longer importing than a case takes), in the order of ``args``."""
+    import importlib
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    for module in ("fmpy.fmi2", "fmpy.fmi3"):  # imported once here, not in every worker
+        importlib.import_module(module)
+
+    methods = multiprocessing.get_all_start_methods()
+    context = multiprocessing.get_context("fork" if "fork" in methods else None)
+    with ProcessPoolExecutor(max_workers=min(workers, len(args)), mp_context=context) as pool:
+        futures = {pool.submit(run_case, *a): k for k, a in enumerate(args)}
+        results: list[CaseResult | None] = [None] * len(args)
+        for future in as_completed(futures):
+            k = futures[future]
+            results[k] = future.result()
+            if progress:
+                progress(args[k][5])
+    return results  # type: ignore[return-value]
 
 
 def comparison(results: list[CaseResult]) -> list[dict]:
