@@ -33,10 +33,11 @@ def compiler() -> str | None:
     return os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
 
 
-def compile_function(fn: ca.Function, out_dir: Path, jacobian: bool = False) -> Path:
+def compile_function(fn: ca.Function, out_dir: Path, jacobian: bool = False,
+                     optimisation: str = "-O2") -> Path:
     """Generate C for ``fn`` and compile it to ``out_dir/<name>.so``; returns the library.
     With ``jacobian``, the library also holds ``jac_<name>``, which ``ca.external`` then uses
-    for first derivatives."""
+    for first derivatives. ``optimisation``: the compiler's -O flag."""
     cc = compiler()
     if cc is None:
         raise CompileError("no C compiler (cc/gcc, or $CC) on PATH")
@@ -47,7 +48,8 @@ def compile_function(fn: ca.Function, out_dir: Path, jacobian: bool = False) -> 
         source = _generate(fn, Path(tmp), jacobian)
         partial = Path(tmp) / library.name
         try:
-            run = subprocess.run([cc, *CFLAGS, str(source), "-o", str(partial), "-lm"],
+            flags = [optimisation if flag.startswith("-O") else flag for flag in CFLAGS]
+            run = subprocess.run([cc, *flags, str(source), "-o", str(partial), "-lm"],
                                  capture_output=True, text=True, check=False)
         except OSError as err:
             raise CompileError(f"cannot run the C compiler {cc!r}: {err}") from err
