@@ -210,62 +210,64 @@ WARNING = 1  # fmi2Warning: the highest status fmpy's wrappers accept
 
 
 def _direct_calls(pair: Coupling):
-    """The FMI 2 functions one co-simulation step needs, called straight through ctypes on the
-    libraries fmpy loaded, or None when the pair is not two FMI 2 slaves (an FMI 3 pair goes
-    through the adapter's fmpy calls)."""
-    from ctypes import POINTER, c_double, c_int, c_size_t, c_uint, c_void_p
+    """(component, fmi2GetReal, fmi2SetReal, fmi2DoStep) of the rig and of the terrain: new
+    ctypes function objects on the libraries fmpy loaded, without argument types (ctypes then
+    passes the ctypes objects it is given as they are, the cheapest call it makes; fmpy's own
+    function objects are left as they are). None when the pair is not two FMI 2 slaves (an
+    FMI 3 pair goes through the adapter's fmpy calls)."""
+    from ctypes import c_void_p
 
     fmus = (pair.rig.fmu, pair.terrain.fmu)
     if not all(hasattr(f, "dll") and hasattr(f, "component") for f in fmus):
         return None
     calls = []
     for fmu in fmus:
-        get, put, step = fmu.dll.fmi2GetReal, fmu.dll.fmi2SetReal, fmu.dll.fmi2DoStep
-        for fn in (get, put):
-            fn.argtypes = [c_void_p, POINTER(c_uint), c_size_t, c_void_p]  # values by address
-            fn.restype = c_int
-        step.argtypes, step.restype = [c_void_p, c_double, c_double, c_int], c_int
-        calls.append((fmu.component, get, put, step))
+        dll = fmu.dll
+        component = fmu.component
+        handle = c_void_p(component.value if isinstance(component, c_void_p) else component)
+        calls.append((handle, *(dll._FuncPtr((name, dll)) for name in
+                                ("fmi2GetReal", "fmi2SetReal", "fmi2DoStep"))))
     return calls
 
 
 def _cosimulate_direct(pair: Coupling, where: list[int], n: int, step: float) -> np.ndarray:
     """:func:`_cosimulate`'s loop, the same calls in the same order, made straight through
-    ctypes into the FMUs' FMI 2 functions with buffers allocated once: fmpy's wrappers build
-    their argument arrays and check every status in Python, ~20 us per coupled step, more than
-    the native FMUs' own time. A call that does not return fmi2OK is made again through
-    fmpy's wrapper, which raises as in :func:`_cosimulate` (a refused call changes nothing;
-    fmi2Warning passes, as there)."""
-    from ctypes import c_uint
+    ctypes into the FMUs' FMI 2 functions, the FMUs reading and writing the rows of the record
+    in place: fmpy's wrappers build their argument arrays and check every status in Python,
+    ~20 us per coupled step, more than the native FMUs' own time. A call that does not return
+    fmi2OK is made again through fmpy's wrapper, which raises as in :func:`_cosimulate` (a
+    refused call changes nothing; fmi2Warning passes, as there)."""
+    from ctypes import c_double, c_int, c_size_t, c_uint, c_void_p
 
     calls = _direct_calls(pair)
     if calls is None or len(pair._rig_in) != len(COUPLED_FORCES):  # no commands here
         return _cosimulate(pair, where, n, step)
     (rig_c, rig_get, rig_set, rig_step), (ter_c, ter_get, ter_set, ter_step) = calls
-    refs = [(c_uint * len(r))(*r) for r in (pair._rig_out, pair._ter_in, pair._ter_out,
-                                            pair._rig_in)]
-    rig_out, ter_in, ter_out, rig_in = refs
-    n_x, n_y, n_states, n_forces = len(rig_out), len(ter_out), len(ter_in), len(rig_in)
-    # the FMUs read and write the rows of the record in place: no copy per step
-    xs, ys = np.empty((n + 1, n_x)), np.empty((n + 1, n_y))
+    rig_out, ter_in, ter_out, rig_in = (
+        (c_uint * len(r))(*r) for r in (pair._rig_out, pair._ter_in, pair._ter_out, pair._rig_in))
+    n_x, n_y = c_size_t(len(rig_out)), c_size_t(len(ter_out))
+    n_states, n_forces = c_size_t(len(ter_in)), c_size_t(len(rig_in))
+    xs, ys = np.empty((n + 1, len(rig_out))), np.empty((n + 1, len(ter_out)))
     x0, y0 = xs.ctypes.data, ys.ctypes.data
     dx, dy = xs.strides[0], ys.strides[0]
+    h, no_set_prior = c_double(step), c_int(1)
     rig, ter = pair.rig.fmu, pair.terrain.fmu
     for k in range(n + 1):
-        t, x, y = k * step, x0 + k * dx, y0 + k * dy
+        x, y = c_void_p(x0 + k * dx), c_void_p(y0 + k * dy)
         if rig_get(rig_c, rig_out, n_x, x) > WARNING:
             rig.getReal(pair._rig_out)
         if ter_set(ter_c, ter_in, n_states, x) > WARNING:
-            ter.setReal(pair._ter_in, list(xs[k, :n_states]))
+            ter.setReal(pair._ter_in, list(xs[k, :len(ter_in)]))
         if ter_get(ter_c, ter_out, n_y, y) > WARNING:
             ter.getReal(pair._ter_out)
         if rig_set(rig_c, rig_in, n_forces, y) > WARNING:
-            rig.setReal(pair._rig_in, list(ys[k, :n_forces]))
+            rig.setReal(pair._rig_in, list(ys[k, :len(rig_in)]))
         if k < n:
-            if rig_step(rig_c, t, step, 1) > WARNING:
-                rig.doStep(t, step)
-            if ter_step(ter_c, t, step, 1) > WARNING:
-                ter.doStep(t, step)
+            t = c_double(k * step)
+            if rig_step(rig_c, t, h, no_set_prior) > WARNING:
+                rig.doStep(k * step, step)
+            if ter_step(ter_c, t, h, no_set_prior) > WARNING:
+                ter.doStep(k * step, step)
     data = np.empty((n + 1, len(where) + 1))
     data[:, 0] = np.arange(n + 1) * step
     data[:, 1:] = np.hstack([xs, ys])[:, where]
