@@ -362,9 +362,7 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str | None,
         workers = workers or cosim.default_workers()
         label = "co-simulating C1-C4" if interface == "cs" else "integrating C1-C4 (ME)"
         click.echo(f"FMUs: {folder}, {flavour}; {workers} worker process"
-                   f"{'es' if workers > 1 else ''}"
-                   f"{', FMI calls straight through ctypes' if interface == 'cs' else ''}",
-                   err=True)
+                   f"{'es' if workers > 1 else ''}", err=True)
         started = time.perf_counter()
         with click.progressbar(length=len(paper["cases"]), label=label,
                                file=sys.stderr) as bar:

@@ -217,8 +217,10 @@ def _direct_calls(pair: Coupling):
     FMI 3 pair goes through the adapter's fmpy calls)."""
     from ctypes import c_void_p
 
+    from fmpy.fmi2 import FMU2Slave
+
     fmus = (pair.rig.fmu, pair.terrain.fmu)
-    if not all(hasattr(f, "dll") and hasattr(f, "component") for f in fmus):
+    if not all(isinstance(f, FMU2Slave) for f in fmus):
         return None
     calls = []
     for fmu in fmus:
@@ -350,11 +352,13 @@ def choose_fmus(fmu_dir: Path | None, interface: str = "cs",
         usable = t_native is not None and (t_python is None or t_native >= t_python - 1.0)
         fmu_dir = native if usable or interface == "me" else python
     paths = fmu_paths(fmu_dir)
-    tool = read_model_description(str(paths["WheelTerrain"])).generationTool or ""
+    md = read_model_description(str(paths["WheelTerrain"]))
     flavour = ("pythonfmu flavour (Python inside the FMUs; `wheelterrain build --flavor all` "
-               "adds the faster native ones)" if tool.startswith("PythonFMU")
+               "adds the faster native ones)" if (md.generationTool or "").startswith("PythonFMU")
                else "native flavour (generated C, no Python at run time)")
-    return Path(fmu_dir), flavour
+    how = ("FMI calls straight through ctypes" if interface == "cs" and md.fmiVersion == "2.0"
+           else "FMI calls through fmpy")
+    return Path(fmu_dir), f"{flavour}, FMI {md.fmiVersion}, {how}"
 
 
 def default_workers() -> int:
