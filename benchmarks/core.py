@@ -97,7 +97,8 @@ def main(argv: list[str] | None = None) -> None:
     figures = {"points": n, "repeats": args.repeats, "input_conversion_s": conversion}
 
     say(f"core benchmark: {n} points, median of {args.repeats}, one core, "
-        f"{fns.nodes} nodes per panel, {contact.NEWTON_ITERATIONS} Newton steps")
+        f"{fns.nodes} nodes per panel, at most {contact.NEWTON_ITERATIONS} Newton steps (the "
+        "solve stops once converged)")
     single = median_time(lambda: [fns.contact(0.03, 0.0, 0.2, 0.0, p) for _ in range(200)],
                          args.repeats) / 200
     say(f"  force eval, one call from Python      : {single * 1e6:9.2f} us")

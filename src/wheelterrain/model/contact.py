@@ -69,6 +69,12 @@ small shear modulus K, a boundary layer of width ~K/|dj/dtheta| on both sides; b
 split at the offset of that reversal (found by safeguarded Newton) into sub-panels graded toward
 it. DEFAULT_NODES = (16, 10) nodes per panel before and after the split; measured against adaptive
 quadrature over the test grid (tests/test_classical.py): ~1e-9 relative driving, ~1e-7 braking.
+
+Evaluation: every Function below calls a CasADi switch over three SX Functions (the arc, the arc
+split at a shear reversal, the patch; :func:`_forms`), so an evaluation runs only the form and
+the rule that apply: no reversal search and no second sub-panel where the shear keeps its sign,
+no arc at all for the patch. A node costs one sine and one cosine. The sinkage solve's Newton
+iterations are switches too and stop once converged (:func:`_newton_iteration`).
 """
 
 from __future__ import annotations
@@ -111,21 +117,20 @@ def _split_rule(split: ca.SX, nodes: tuple[int, int]) -> tuple[ca.SX, ca.SX]:
     singularity at g = 0, the shear reversal at the split); it is the whole panel when the shear
     keeps its sign (split = 1). [split, 1]: u^3 graded toward the reversal.
     """
-    x1, w1 = np.polynomial.legendre.leggauss(nodes[0])
-    u1, w1 = (x1 + 1.0) / 2.0, w1 / 2.0
+    s1, ds1 = _panel_rule(nodes[0])
     x2, w2 = np.polynomial.legendre.leggauss(nodes[1])
     u2, w2 = (x2 + 1.0) / 2.0, w2 / 2.0
-    s1, ds1 = u1**3 * (10 - 15 * u1 + 6 * u1**2), 30 * u1**2 * (1 - u1) ** 2 * w1
     s2, ds2 = u2**GRADING, GRADING * u2 ** (GRADING - 1) * w2
-    g = ca.vertcat(split * ca.DM(s1), split + (1 - split) * ca.DM(s2))
-    weights = ca.vertcat(split * ca.DM(ds1), (1 - split) * ca.DM(ds2))
+    g = ca.vertcat(split * s1, split + (1 - split) * ca.DM(s2))
+    weights = ca.vertcat(split * ds1, (1 - split) * ca.DM(ds2))
     return g, weights
 
 
 def _panel_rule(nodes: int) -> tuple[ca.DM, ca.DM]:
-    """Offsets and weights of a whole panel without a shear reversal: the first sub-panel of
-    :func:`_split_rule` at split = 1, without the second, whose weights are then exactly 0 (the
-    same sums, term for term)."""
+    """Offsets and weights of a whole panel: Gauss-Legendre under the quintic map
+    10u^3 - 15u^4 + 6u^5. The rule where the shear keeps its sign; also the first sub-panel of
+    :func:`_split_rule`, which at split = 1 adds only zero-weight nodes to it (the same sums,
+    term for term)."""
     x, w = np.polynomial.legendre.leggauss(nodes)
     u, w = (x + 1.0) / 2.0, w / 2.0
     return ca.DM(u**3 * (10 - 15 * u + 6 * u**2)), ca.DM(30 * u**2 * (1 - u) ** 2 * w)
