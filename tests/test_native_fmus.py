@@ -23,6 +23,7 @@ from fmpy.validation import validate_fmu
 from wheelterrain import presets
 from wheelterrain.cosim import master as cosim
 from wheelterrain.cosim import ssp
+from wheelterrain.errors import CosimulationError
 from wheelterrain.fmu import build_native as nativebuild
 from wheelterrain.fmu import build_pythonfmu as fmubuild
 from wheelterrain.fmu import compiled as native
@@ -179,16 +180,33 @@ def test_direct_calls_give_the_series_of_fmpys_wrappers(flavours, flavour):
 
 def test_direct_calls_raise_as_fmpys_wrappers_on_a_refused_step(flavours):
     """A refused call in the direct loop is made again through fmpy, which raises as the
-    wrapper loop does: a load the soil cannot carry sinks the wheel past the rig's range."""
+    wrapper loop does (run_case turns it into a CosimulationError naming the case and the
+    call): a load the soil cannot carry sinks the wheel past the rig's range."""
     ps = presets.load("paper-table2-arc")  # carries ~80 N fully buried; 2000 N sinks it
     unz = {n: flavours["unzip"][("native", n)] for n in NAMES}
     errors = []
     for direct in (False, True):
-        with pytest.raises(FMICallException) as err:
+        with pytest.raises(CosimulationError) as err:
             cosim.run_case(flavours["root"] / "native", ps, 0.5, 2000.0, 0.03, "C3", stop=5.0,
                            step=1e-3, unzipped=unz, settle=0.5, direct=direct)
         errors.append(str(err.value))
     assert errors[1] == errors[0]
+    assert errors[0].startswith("case C3: fmi2DoStep failed with status 2 (discard)")
+
+
+def test_reproduce_refused_in_a_worker_is_one_line_and_exit_code_3(flavours, tmp_path):
+    """A soil that cannot carry the rig's load: the worker's refused step reaches the user as
+    one error line naming the case (the FMU logs why), exit code 3, no traceback."""
+    from click.testing import CliRunner
+
+    from wheelterrain.cli import main
+
+    result = CliRunner().invoke(main, [
+        "reproduce", "--fmu-dir", str(flavours["root"] / "native"), "--set", "soil.k_phi=10",
+        "--set", "soil.k_c=0", "--stop", "12", "--workers", "2", "--out", str(tmp_path)])
+    assert result.exit_code == 3, result.output
+    assert "Traceback" not in result.output
+    assert re.search(r"^error: case C\d: fmi2DoStep failed", result.output, re.M), result.output
 
 
 def test_reproduce_in_processes_gives_the_serial_results(flavours):

@@ -19,6 +19,7 @@ import numpy as np
 from wheelterrain import __version__, model, presets
 from wheelterrain.errors import (
     CalibrationError,
+    CosimulationError,
     FMUError,
     InputError,
     LoadTooLargeError,
@@ -373,6 +374,9 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str | None,
     except (FileNotFoundError, FMUError) as err:
         click.echo(f"error: {err}", err=True)
         sys.exit(EXIT_USAGE)
+    except CosimulationError as err:
+        click.echo(f"error: {err}", err=True)
+        sys.exit(EXIT_INFEASIBLE)
     rows = cosim.comparison(results)
     mae = cosim.mean_absolute_errors(rows)
     name = preset if not assignments else f"{preset} with {' '.join(assignments)}"

@@ -43,6 +43,12 @@ class SolveError(WheelTerrainError):
     """The quasi-static sinkage solve did not converge (never returned as a number)."""
 
 
+class CosimulationError(WheelTerrainError):
+    """An FMU refused a call during a co-simulation run (the model left its domain: a load the
+    soil cannot carry, a wheel buried past its axle, ...). The FMU logs the reason; the message
+    names the case and the call."""
+
+
 class FMUError(WheelTerrainError):
     """An FMU given to a master does not fit this version (e.g. built from another table)."""
 

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from wheelterrain import data
+from wheelterrain.errors import CosimulationError
 from wheelterrain.fmu.instance import Instance
 from wheelterrain.fmu.variables import COUPLED_FORCES, COUPLED_STATES, RIG_IO, TERRAIN_IO
 from wheelterrain.model import rig
@@ -290,6 +291,7 @@ def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, ri
     straight through ctypes (:func:`_cosimulate_direct`, the same numbers); False keeps fmpy's
     wrappers in the loop (the reference the benchmarks compare against)."""
     from fmpy import extract
+    from fmpy.fmi1 import FMICallException
 
     paths = fmu_paths(fmu_dir)
     own = unzipped is None
@@ -303,7 +305,11 @@ def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, ri
                         rig_extra=_extra(RECORD, RIG_IO, COUPLED_STATES),
                         terrain_extra=_extra(RECORD, TERRAIN_IO, COUPLED_FORCES))
         loop = _cosimulate_direct if interface == "cs" and direct else INTERFACES[interface]
-        data = loop(pair, pair.positions(RECORD), round(stop / step), step)
+        try:
+            data = loop(pair, pair.positions(RECORD), round(stop / step), step)
+        except FMICallException as err:  # the FMU has logged why
+            raise CosimulationError(f"case {case or slip_paper}: {err} The FMU logged the "
+                                    "reason above.") from None
     finally:
         terrain.close()
         rig_fmu.close()
