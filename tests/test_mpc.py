@@ -4,6 +4,7 @@ the closed loop against the FMU plant and against the same Functions in process.
 from __future__ import annotations
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
@@ -156,6 +157,17 @@ def test_free_carriage_tracks_while_the_vehicle_moves():
     speed = result.series["carriage_speed"]
     assert np.ptp(speed) > 1e-4  # the carriage is a state, not held
     assert result.figures(scenario)["slip_rms_error"] <= 5e-4
+
+
+def test_real_time_iteration_tracks_as_the_full_solve(tmp_path):
+    """`wheelterrain mpc --iterations 1`: one SQP iteration per sample from the shifted warm
+    start (the real-time iteration) tracks the nominal scenario within the same goal."""
+    run = CliRunner().invoke(main, ["mpc", "--plant", "casadi", "--iterations", "1",
+                                    "--out", str(tmp_path), "--json", str(tmp_path / "f.json")])
+    assert run.exit_code == 0, run.output
+    figures = json.loads((tmp_path / "f.json").read_text())
+    assert figures["iterations_median"] == 1
+    assert figures["slip_rms_error"] <= 5e-4
 
 
 def test_cli_rejects_a_bad_interval_with_exit_code_2(tmp_path):
