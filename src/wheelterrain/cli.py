@@ -337,7 +337,7 @@ def build(out: str, flavor: str) -> None:
 def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str | None,
               workers: int | None, json_target: str | None, out: str, step: float, stop: float,
               interface: str) -> None:
-    """Reproduce the paper's C1-C4 by co-simulating the two FMUs with fmpy.
+    """Reproduce the paper's C1-C4 by co-simulating the two FMUs.
 
     \b
     Each case: the rig drives the wheel at 3 cm/s rim speed with the carriage at
@@ -345,6 +345,9 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str | None,
     means are taken over whole grouser periods up to the stop time, and printed against
     the experiment and the paper's own simulation (Table III). Writes OUT/<case>.csv,
     OUT/<case>.png, OUT/means.png and OUT/<case>.ssp.
+    \b
+    Runs the fastest pair built (build/native, else build; --fmu-dir chooses), the cases
+    in parallel processes (--workers), and says which pair and path it used.
     """
     from pathlib import Path
 
