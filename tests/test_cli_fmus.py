@@ -4,6 +4,7 @@ through the installed console script."""
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
@@ -11,9 +12,9 @@ from wheelterrain import model, presets
 from wheelterrain.model.slip import traction_from_paper
 
 
-def wt(*args, cwd):
+def wt(*args, cwd, env=None):
     return subprocess.run([sys.executable, "-m", "wheelterrain.cli", *args], cwd=cwd,
-                          capture_output=True, text=True, check=False)
+                          capture_output=True, text=True, check=False, env=env)
 
 
 def test_build_then_reproduce_writes_the_contract(tmp_path):
@@ -51,3 +52,21 @@ def test_reproduce_without_fmus_says_how_to_build(tmp_path):
     run = wt("reproduce", "--fmu-dir", "nowhere", cwd=tmp_path)
     assert run.returncode == 2
     assert "wheelterrain build" in run.stderr
+
+
+def test_the_main_command_without_a_c_compiler_builds_and_runs_the_pythonfmu_pair(tmp_path):
+    """The README's first command on a machine without a C compiler: `build --flavor all`
+    builds the pythonfmu pair, says the native one needs a compiler, exits 0; `reproduce`
+    then runs the pythonfmu pair and says so."""
+    env = {k: v for k, v in os.environ.items() if k != "CC"}
+    env["PATH"] = str(tmp_path / "no-compiler")  # an empty folder: no cc, no gcc
+    (tmp_path / "no-compiler").mkdir()
+    built = wt("build", "--flavor", "all", cwd=tmp_path, env=env)
+    assert built.returncode == 0, built.stderr
+    assert "no C compiler" in built.stderr
+    assert (tmp_path / "build" / "WheelTerrain.fmu").is_file()
+    assert not (tmp_path / "build" / "native").exists()
+    run = wt("reproduce", "--stop", "12", "--step", "0.002", "--out", "out", cwd=tmp_path,
+             env=env)
+    assert run.returncode == 0, run.stderr
+    assert "FMUs: build, pythonfmu flavour" in run.stderr

@@ -290,12 +290,18 @@ def build(out: str, flavor: str) -> None:
     from wheelterrain.fmu.build_native import build as build_native
     from wheelterrain.fmu.build_pythonfmu import BuildError
     from wheelterrain.fmu.build_pythonfmu import build as build_pythonfmu
+    from wheelterrain.fmu.compiled import compiler as native_compiler
 
     try:
         paths = []
         if flavor in ("pythonfmu", "all"):
             paths += build_pythonfmu(out)
-        if flavor in ("native", "all"):
+        skip_native = flavor == "all" and native_compiler() is None
+        if skip_native:  # all that can be built here: the pythonfmu pair
+            click.echo("note: no C compiler (cc/gcc, or $CC) on PATH, so only the pythonfmu "
+                       "FMUs were built; the native ones need one (Debian/Ubuntu: apt-get "
+                       "install gcc)", err=True)
+        if flavor == "native" or (flavor == "all" and not skip_native):
             paths += build_native(Path(out) / "native")
             if cross_compiler() is None:
                 click.echo(f"note: no {WIN64_CC} on PATH, so the native FMUs have no win64 "
