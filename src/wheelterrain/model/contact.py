@@ -136,12 +136,20 @@ def _panel_rule(nodes: int) -> tuple[ca.DM, ca.DM]:
     return ca.DM(u**3 * (10 - 15 * u + 6 * u**2)), ca.DM(30 * u**2 * (1 - u) ** 2 * w)
 
 
+def _falling_stretch(theta_f, theta_r, displacement) -> tuple[ca.SX, ca.SX]:
+    """(theta_c, the end of the stretch on which j falls, as x = theta_f - theta): the peak of
+    the shear displacement is at theta = theta_c (cos(theta_c) = R_s/v; pi when j never
+    falls), and j falls from there until -theta_c or the exit (see :func:`_reversal_offset`)."""
+    ratio = displacement.ratio  # R_s/v
+    theta_c = ca.if_else(ratio < 1, ca.acos(ca.fmin(ratio, 1)), math.pi)
+    return theta_c, ca.fmin(theta_f - theta_r, theta_f + theta_c)
+
+
 def _reverses(theta_f, theta_r, displacement) -> ca.SX:
     """1 where the shear displacement changes sign on the arc [theta_r, theta_f] (see
     :func:`_reversal_offset`), else 0."""
-    theta_c = ca.if_else(displacement.ratio < 1, ca.acos(ca.fmin(displacement.ratio, 1)), math.pi)
-    hi = ca.fmin(theta_f - theta_r, theta_f + theta_c)
-    return ca.logic_and(theta_c < theta_f, displacement.along(hi) < 0)
+    theta_c, end = _falling_stretch(theta_f, theta_r, displacement)
+    return ca.logic_and(theta_c < theta_f, displacement.along(end) < 0)
 
 
 def _reversal_offset(theta_f, theta_r, d_front, d_rear, displacement) -> ca.SX:
@@ -157,13 +165,10 @@ def _reversal_offset(theta_f, theta_r, d_front, d_rear, displacement) -> ca.SX:
     exit angle past -theta_c under deep braking; it is not split (its kink then costs accuracy,
     not robustness).
     """
-    ratio = displacement.ratio  # R_s/v
-    theta_c = ca.if_else(ratio < 1, ca.acos(ca.fmin(ratio, 1)), math.pi)
     span = theta_f - theta_r
-
+    theta_c, hi = _falling_stretch(theta_f, theta_r, displacement)
     lo = ca.fmax(theta_f - theta_c, 0)  # the peak of j
-    hi = ca.fmin(span, theta_f + theta_c)
-    crossing = _reverses(theta_f, theta_r, displacement)
+    crossing = _reverses(theta_f, theta_r, displacement)  # the same terms: merged by cse
     x = hi
     for _ in range(REVERSAL_ITERATIONS):
         f = displacement.along(x)
