@@ -22,7 +22,7 @@ from pathlib import Path
 
 import casadi as ca
 
-CFLAGS = ("-O2", "-fPIC", "-shared")
+CFLAGS = ("-fPIC", "-shared")  # with the optimisation level compile_function is given
 
 
 class CompileError(RuntimeError):
@@ -48,8 +48,8 @@ def compile_function(fn: ca.Function, out_dir: Path, jacobian: bool = False,
         source = _generate(fn, Path(tmp), jacobian)
         partial = Path(tmp) / library.name
         try:
-            flags = [optimisation if flag.startswith("-O") else flag for flag in CFLAGS]
-            run = subprocess.run([cc, *flags, str(source), "-o", str(partial), "-lm"],
+            run = subprocess.run([cc, optimisation, *CFLAGS, str(source), "-o", str(partial),
+                                  "-lm"],
                                  capture_output=True, text=True, check=False)
         except OSError as err:
             raise CompileError(f"cannot run the C compiler {cc!r}: {err}") from err
