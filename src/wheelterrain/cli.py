@@ -296,12 +296,14 @@ def build(out: str, flavor: str) -> None:
         paths = []
         if flavor in ("pythonfmu", "all"):
             paths += build_pythonfmu(out)
-        skip_native = flavor == "all" and native_compiler() is None
-        if skip_native:  # all that can be built here: the pythonfmu pair
+        # --flavor all builds what this machine can; --flavor native without a compiler is
+        # an error (build_native says so)
+        native = flavor == "native" or (flavor == "all" and native_compiler() is not None)
+        if flavor == "all" and not native:
             click.echo("note: no C compiler (cc/gcc, or $CC) on PATH, so only the pythonfmu "
                        "FMUs were built; the native ones need one (Debian/Ubuntu: apt-get "
                        "install gcc)", err=True)
-        if flavor == "native" or (flavor == "all" and not skip_native):
+        if native:
             paths += build_native(Path(out) / "native")
             if cross_compiler() is None:
                 click.echo(f"note: no {WIN64_CC} on PATH, so the native FMUs have no win64 "
@@ -371,8 +373,8 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str | None,
                                             interface)
         workers = workers or cosim.default_workers()
         label = "co-simulating C1-C4" if interface == "cs" else "integrating C1-C4 (ME)"
-        click.echo(f"FMUs: {folder}, {flavour}; {workers} worker process"
-                   f"{'es' if workers > 1 else ''}", err=True)
+        processes = f"{workers} worker process{'es' if workers > 1 else ''}"
+        click.echo(f"FMUs: {folder}, {flavour}; {processes}", err=True)
         started = time.perf_counter()
         with click.progressbar(length=len(paper["cases"]), label=label,
                                file=sys.stderr) as bar:
@@ -394,8 +396,7 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str | None,
     say = click.echo if text else (lambda *a, **k: None)
     how = "co-simulation" if interface == "cs" else "model exchange (RK4)"
     say(f"C1-C4 {how}, preset {name}, step {step:g} s, {stop:g} s per case "
-        f"(wall time {elapsed:.1f} s, {folder}, {workers} "
-        f"process{'es' if workers > 1 else ''})")
+        f"(wall time {elapsed:.1f} s, {folder}, {processes})")
     say(cosim.format_table(rows, mae))
     if fitted_on:
         say(f"in-sample: {preset} was fitted on {', '.join(fitted_on)}; its held-out "
