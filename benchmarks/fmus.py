@@ -224,14 +224,11 @@ def main() -> None:
             walls[label] = time.perf_counter() - start
             print(f"C1-C4, native, FMI calls straight through ctypes, {count} process(es): "
                   f"{walls[label]:.2f} s wall")
-    from fmpy import read_model_description
+    from wheelterrain.cosim import ssp
 
-    starts = {v.name: v.start for v in read_model_description(
-        str(dirs.get("native", Path(".")) / "WheelTerrain.fmu")).modelVariables} if (
-        "native" in dirs) else {}
-    switched = [p.name for p in TABLE if p.kind == "enum" and "native" in dirs
-                and float(starts[p.name]) != ps[p.name]]
-    if switched:  # ecos applies no Enumeration binding: it would run another model
+    switched = ssp.ecos_would_ignore(dirs["native"] / "WheelTerrain.fmu", ps) if (
+        "native" in dirs) else []
+    if switched:  # ecos would run another model
         print(f"C1-C4 with ecos: skipped, {ARC_PRESET} sets {', '.join(switched)} away from "
               "the FMU's start values and ecos does not apply enumeration parameters")
     elif "native" in dirs:

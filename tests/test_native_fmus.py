@@ -710,17 +710,14 @@ def test_ecos_runs_the_ssp_and_gives_the_fmpy_means(flavours, tmp_path):
         import ecospy  # noqa: F401
     except (ImportError, OSError) as err:
         pytest.skip(f"ecos (PyPI ecospy, needs Debian's libtbb12) cannot be loaded: {err}")
-    # ecos applies no binding to an Enumeration variable (its SSP reader knows ssv:Real,
-    # Integer, Boolean and String; its FMI 2 reader registers Enumerations under no settable
-    # type), so the mode switches must be at the FMU's start values (the default preset's);
-    # the soil values it does set are moved off them.
+    # ecos applies no Enumeration binding, so the mode switches must be at the FMU's start
+    # values (the default preset's); the soil values it does set are moved off them.
     ps = presets.load(presets.DEFAULT_PRESET).with_values({"soil.phi": math.radians(32),
                                                            "soil.k_phi": 600.0})
-    starts = {v.name: v.start for v in read_model_description(
-        str(flavours["root"] / "native" / "WheelTerrain.fmu")).modelVariables}
-    for p in TABLE:
-        if p.kind == "enum":
-            assert ps[p.name] == float(starts[p.name]), p.name
+    assert ssp.ecos_would_ignore(flavours["root"] / "native" / "WheelTerrain.fmu", ps) == []
+    assert ssp.ecos_would_ignore(flavours["root"] / "native" / "WheelTerrain.fmu",
+                                 presets.load("paper-table2-arc")) == ["model.shear_kinematics",
+                                                                       "model.contact_form"]
     stop, step = 11.0, 1e-3
     root = flavours["root"] / "native"
     path = ssp.write(tmp_path / "C3.ssp", root, "C3", ps, 0.5, 62.0, 0.03, stop, step)

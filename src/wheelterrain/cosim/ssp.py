@@ -118,6 +118,18 @@ def simulate_with_fmpy(path: Path, stop: float, step: float):
     return simulate_ssp(str(path), stop_time=stop, step_size=step, parameter_set=merged)
 
 
+def ecos_would_ignore(fmu: Path, ps: ParameterSet) -> list[str]:
+    """The table parameters ecos would not apply to ``fmu`` (a WheelTerrain FMU) for ``ps``:
+    the switches (Enumeration variables) whose value differs from the FMU's start value. ecos
+    applies no binding to an Enumeration (its SSP reader knows ssv:Real, Integer, Boolean and
+    String; its FMI 2 reader registers Enumerations under no settable type), so with any of
+    these it would run another model than ``ps``."""
+    from fmpy import read_model_description
+
+    starts = {v.name: v.start for v in read_model_description(str(fmu)).modelVariables}
+    return [p.name for p in TABLE if p.kind == "enum" and float(starts[p.name]) != ps[p.name]]
+
+
 def simulate_with_ecos(path: Path, case: str, stop: float, step: float, csv: Path,
                        variables: tuple[str, ...]) -> None:
     """Run an SSP written by :func:`write` in ecos (ecospy), applying the case's parameter set,
