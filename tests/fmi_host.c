@@ -49,6 +49,8 @@ static double now(void) {
 
 #define MAX_VARS 64
 
+enum { SET_REAL, SET_BOOLEAN, SET_INTEGER }; /* what a SET entry is: "vr=x", "bvr=x", "ivr=x" */
+
 static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
                    fmi2String category, fmi2String message, ...) {
     (void)env;
@@ -56,14 +58,14 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
 }
 
 /* "vr=a+b,vr=c+d" or "vr=a,..." or "vr,vr": value references and up to two numbers each */
-static int parse(const char *text, fmi2ValueReference *vr, double *a, double *b, int *boolean) {
+static int parse(const char *text, fmi2ValueReference *vr, double *a, double *b, int *kind) {
     int n = 0;
     const char *p = text;
     if (strcmp(text, "-") == 0) return 0;
     while (*p && n < MAX_VARS) {
         char *end;
-        boolean[n] = *p == 'b' ? 1 : *p == 'i' ? 2 : 0; /* 1 Boolean, 2 Integer, 0 Real */
-        if (boolean[n]) p++;
+        kind[n] = *p == 'b' ? SET_BOOLEAN : *p == 'i' ? SET_INTEGER : SET_REAL;
+        if (kind[n] != SET_REAL) p++;
         vr[n] = (fmi2ValueReference)strtoul(p, &end, 10);
         p = end;
         if (*p == '=') {
@@ -88,6 +90,18 @@ static int parse(const char *text, fmi2ValueReference *vr, double *a, double *b,
         }                                                                                    \
     } while (0)
 
+/* The inputs of a step: start + slope*t. */
+static void ramp_at(double t, int n, const double *start, const double *slope, double *values) {
+    for (int i = 0; i < n; i++) values[i] = start[i] + slope[i] * t;
+}
+
+/* One line of output: t and the values got after the step. */
+static void print_row(double t, int n, const double *values) {
+    printf("%.17g", t);
+    for (int i = 0; i < n; i++) printf(" %.17g", values[i]);
+    printf("\n");
+}
+
 static void logger3(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category,
                     fmi3String message) {
     (void)env;
@@ -96,7 +110,7 @@ static void logger3(fmi3InstanceEnvironment env, fmi3Status status, fmi3String c
 
 /* The same run through the FMI 3.0 API. */
 static int run3(Library lib, const char *token, int steps, double h, int n_set,
-                const fmi3ValueReference *set_vr, const double *set_value, const int *boolean,
+                const fmi3ValueReference *set_vr, const double *set_value, const int *kind,
                 int n_ramp, const fmi3ValueReference *ramp_vr, const double *ramp_start,
                 const double *ramp_slope, int n_get, const fmi3ValueReference *get_vr) {
     fmi3InstantiateCoSimulationTYPE *instantiate =
@@ -130,22 +144,20 @@ static int run3(Library lib, const char *token, int steps, double h, int n_set,
     for (int i = 0; i < n_set; i++) {
         fmi3Boolean on = set_value[i] != 0.0;
         fmi3Int64 whole = (fmi3Int64)set_value[i];
-        if (boolean[i] == 1) CHECK(set_boolean(c, &set_vr[i], 1, &on, 1));
-        else if (boolean[i] == 2) CHECK(set_integer(c, &set_vr[i], 1, &whole, 1));
+        if (kind[i] == SET_BOOLEAN) CHECK(set_boolean(c, &set_vr[i], 1, &on, 1));
+        else if (kind[i] == SET_INTEGER) CHECK(set_integer(c, &set_vr[i], 1, &whole, 1));
         else CHECK(set_real(c, &set_vr[i], 1, &set_value[i], 1));
     }
     CHECK(leave(c));
     for (int k = 0; k < steps; k++) {
         double ramp[MAX_VARS], last;
         fmi3Boolean event, stop, early;
-        for (int i = 0; i < n_ramp; i++) ramp[i] = ramp_start[i] + ramp_slope[i] * t;
+        ramp_at(t, n_ramp, ramp_start, ramp_slope, ramp);
         if (n_ramp) CHECK(set_real(c, ramp_vr, (size_t)n_ramp, ramp, (size_t)n_ramp));
         CHECK(do_step(c, t, h, fmi3True, &event, &stop, &early, &last));
         t = (k + 1) * h;
         CHECK(get_real(c, get_vr, (size_t)n_get, out, (size_t)n_get));
-        printf("%.17g", t);
-        for (int i = 0; i < n_get; i++) printf(" %.17g", out[i]);
-        printf("\n");
+        print_row(t, n_get, out);
     }
     CHECK(terminate(c));
     free_instance(c);
@@ -156,7 +168,7 @@ int main(int argc, char **argv) {
     fmi2ValueReference set_vr[MAX_VARS], ramp_vr[MAX_VARS], get_vr[MAX_VARS];
     double set_value[MAX_VARS], ramp_start[MAX_VARS], ramp_slope[MAX_VARS], unused[MAX_VARS];
     double out[MAX_VARS], t = 0.0, h;
-    int n_set, n_ramp, n_get, steps, boolean[MAX_VARS], timed;
+    int n_set, n_ramp, n_get, steps, kind[MAX_VARS], timed;
     double started, checksum = 0.0;
     fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
     Library lib;
@@ -174,11 +186,11 @@ int main(int argc, char **argv) {
     }
     steps = atoi(argv[3]);
     h = strtod(argv[4], NULL);
-    n_ramp = parse(argv[6], ramp_vr, ramp_start, ramp_slope, boolean);
-    n_get = parse(argv[7], get_vr, unused, unused, boolean);
-    n_set = parse(argv[5], set_vr, set_value, unused, boolean);
+    n_ramp = parse(argv[6], ramp_vr, ramp_start, ramp_slope, kind);
+    n_get = parse(argv[7], get_vr, unused, unused, kind);
+    n_set = parse(argv[5], set_vr, set_value, unused, kind);
     if (argc >= 9 && strcmp(argv[8], "3") == 0)
-        return run3(lib, argv[2], steps, h, n_set, set_vr, set_value, boolean, n_ramp, ramp_vr,
+        return run3(lib, argv[2], steps, h, n_set, set_vr, set_value, kind, n_ramp, ramp_vr,
                     ramp_start, ramp_slope, n_get, get_vr);
     {
         fmi2InstantiateTYPE *instantiate = (fmi2InstantiateTYPE *)symbol(lib, "fmi2Instantiate");
@@ -212,15 +224,15 @@ int main(int argc, char **argv) {
         for (int i = 0; i < n_set; i++) {
             fmi2Boolean on = set_value[i] != 0.0;
             fmi2Integer whole = (fmi2Integer)set_value[i];
-            if (boolean[i] == 1) CHECK(set_boolean(c, &set_vr[i], 1, &on));
-            else if (boolean[i] == 2) CHECK(set_integer(c, &set_vr[i], 1, &whole));
+            if (kind[i] == SET_BOOLEAN) CHECK(set_boolean(c, &set_vr[i], 1, &on));
+            else if (kind[i] == SET_INTEGER) CHECK(set_integer(c, &set_vr[i], 1, &whole));
             else CHECK(set_real(c, &set_vr[i], 1, &set_value[i]));
         }
         CHECK(leave(c));
         started = now();
         for (int k = 0; k < steps; k++) {
             double ramp[MAX_VARS];
-            for (int i = 0; i < n_ramp; i++) ramp[i] = ramp_start[i] + ramp_slope[i] * t;
+            ramp_at(t, n_ramp, ramp_start, ramp_slope, ramp);
             if (n_ramp) CHECK(set_real(c, ramp_vr, (size_t)n_ramp, ramp));
             CHECK(do_step(c, t, h, fmi2True));
             t = (k + 1) * h;
@@ -229,9 +241,7 @@ int main(int argc, char **argv) {
                 for (int i = 0; i < n_get; i++) checksum += out[i];
                 continue;
             }
-            printf("%.17g", t);
-            for (int i = 0; i < n_get; i++) printf(" %.17g", out[i]);
-            printf("\n");
+            print_row(t, n_get, out);
         }
         if (timed) printf("%.9g %.17g\n", (now() - started) / steps, checksum);
         CHECK(terminate(c));
