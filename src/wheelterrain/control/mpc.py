@@ -35,11 +35,9 @@ sinkage_limit, 0 <= speed command <= speed_limit.
 from __future__ import annotations
 
 import math
-import os
 import time
 from dataclasses import dataclass, field
 from functools import lru_cache
-from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -166,14 +164,6 @@ def interval_step() -> ca.Function:
                        ["x0", "command", "p_terrain", "p_rig", "h"], ["x1", "y"])
 
 
-def cache_directory() -> Path:
-    """Where compiled prediction models are kept between runs ($WHEELTERRAIN_CACHE, else the
-    user's cache directory)."""
-    root = os.environ.get("WHEELTERRAIN_CACHE") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "wheelterrain")
-    return Path(root)
-
-
 @lru_cache(maxsize=1)
 def compiled_interval() -> ca.Function:
     """:func:`interval_residual` as generated C with its Jacobian, compiled once per model
@@ -191,7 +181,7 @@ def compiled_interval() -> ca.Function:
     fn = ca.Function(f.name(), args, f(*args), f.name_in(), f.name_out(),
                      {"is_diff_in": [name in ("x0", "x1", "command") for name in f.name_in()]})
     digest = native.fingerprint(fn)[:16]
-    place = cache_directory() / "mpc" / digest
+    place = native.cache_directory() / "mpc" / digest
     library = place / f"{fn.name()}.so"
     if not library.is_file():
         native.compile_function(fn, place, jacobian=True, optimisation="-O1")

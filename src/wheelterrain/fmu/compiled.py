@@ -33,6 +33,14 @@ def compiler() -> str | None:
     return os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
 
 
+def cache_directory() -> Path:
+    """Where libraries compiled at run time are kept between runs ($WHEELTERRAIN_CACHE, else
+    the user's cache directory)."""
+    root = os.environ.get("WHEELTERRAIN_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "wheelterrain")
+    return Path(root)
+
+
 def compile_function(fn: ca.Function, out_dir: Path, jacobian: bool = False,
                      optimisation: str = "-O2") -> Path:
     """Generate C for ``fn`` and compile it to ``out_dir/<name>.so``; returns the library.

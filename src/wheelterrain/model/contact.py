@@ -543,15 +543,50 @@ def _at_entry_angle(theta_f, slip, wheel_angle, P: _P, nodes: tuple[int, int],
     return {k: out[i] for i, k in enumerate(CONTACT_OUTPUTS)}
 
 
-def _contact(z, z_rate, slip, wheel_angle, P: _P, nodes: tuple[int, int], ripple: bool) -> dict:
-    """Contact quantities at sinkage z (m, to the contact circle), with damping C_f*dz/dt."""
+def _entry_angle(z, P: _P):
+    """theta_f = arccos(1 - z/R_c) in its half-angle form, accurate for tiny sinkage (1 - z/R_c
+    rounds); 0 for z <= 0."""
     Rc, _, _ = _radii(P)
-    # arccos(1 - z/R_c) in its half-angle form, accurate for tiny sinkage (1 - z/R_c rounds)
-    theta_f = 2 * ca.asin(ca.sqrt(ca.fmax(z, 0) / (2 * Rc)))
-    out = _at_entry_angle(theta_f, slip, wheel_angle, P, nodes, ripple)
+    return 2 * ca.asin(ca.sqrt(ca.fmax(z, 0) / (2 * Rc)))
+
+
+def _contact(z, z_rate, slip, wheel_angle, P: _P, nodes: tuple[int, int], ripple: bool,
+             form: ca.Function | None = None) -> dict:
+    """Contact quantities at sinkage z (m, to the contact circle), with damping C_f*dz/dt.
+    ``form``: one of :func:`_forms`' kernels to use in place of the switch (the lane kernels of
+    :func:`lane_kernels`); by default the switch picks it."""
+    theta_f = _entry_angle(z, P)
+    if form is None:
+        out = _at_entry_angle(theta_f, slip, wheel_angle, P, nodes, ripple)
+    else:
+        values = form(theta_f, slip, wheel_angle, P.p)
+        out = {k: values[i] for i, k in enumerate(CONTACT_OUTPUTS)}
     damping = ca.if_else(z > 0, P["soil.damping"] * z_rate, 0)
     out["normal_force"] = ca.fmax(out["normal_force"] + damping, 0)
     return out
+
+
+@lru_cache(maxsize=4)
+def lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> tuple[ca.Function, tuple]:
+    """The contact (ripple on) as plain SX Functions of CONTACT_INPUTS, for code generators
+    that evaluate many points at once (:mod:`wheelterrain.model.lanes`): ``(case, forms)``.
+    ``case`` gives the switch's case (ARC, ARC_REVERSAL, PATCH) at each point; ``forms[c]`` is
+    the contact with case c's kernel in place of the switch, so at every point where ``case``
+    is c it is the same expression that ``build().contact`` evaluates."""
+    sym = [ca.SX.sym(name) for name in CONTACT_INPUTS[:-1]] + [ca.SX.sym("p", len(NAMES))]
+    P = _P(sym[-1])
+    case, switch = _forms(nodes, True)
+    theta_f = _entry_angle(sym[0], P)
+    case_fn = ca.Function("contact_case", sym, [case(theta_f, sym[2], P.p)],
+                          list(CONTACT_INPUTS), ["case"], {"cse": True})
+    forms = []
+    for name in ("arc", "arc_reversal", "patch"):  # ARC, ARC_REVERSAL, PATCH
+        kernel = switch.find_function(name)
+        out = _contact(*sym[:4], P, nodes, True, form=kernel)
+        forms.append(ca.Function(f"contact_{name}", sym, [ca.vertcat(
+            *(out[name_] for name_ in CONTACT_OUTPUTS))], list(CONTACT_INPUTS), ["out"],
+            {"cse": True}))
+    return case_fn, tuple(forms)
 
 
 @dataclass(frozen=True)
