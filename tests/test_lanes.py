@@ -16,6 +16,7 @@ import pytest
 
 from wheelterrain import presets
 from wheelterrain.fmu import compiled as native
+from wheelterrain.model import api as model_api
 from wheelterrain.model import contact, lanes
 
 pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
@@ -24,12 +25,25 @@ PRESETS = ("paper-table2-arc", "rashid-patch", "paper-table1", "paper-table2", "
 
 
 @pytest.fixture(scope="session")
-def lane_contact(tmp_path_factory):
-    """Compiled once per test session into a fresh cache (the compile path is exercised)."""
+def lane_cache(tmp_path_factory):
+    """A fresh cache for the session, so that the compile path is exercised."""
+    return tmp_path_factory.mktemp("lanes_cache")
+
+
+@pytest.fixture(scope="session")
+def lane_contact(lane_cache):
     with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("WHEELTERRAIN_CACHE", str(tmp_path_factory.mktemp("lanes_cache")))
+        mp.setenv("WHEELTERRAIN_CACHE", str(lane_cache))
         lanes.compiled_contact.cache_clear()
         return lanes.compiled_contact()
+
+
+@pytest.fixture(scope="session")
+def lane_solve(lane_cache):
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("WHEELTERRAIN_CACHE", str(lane_cache))
+        lanes.compiled_solve.cache_clear()
+        return lanes.compiled_solve()
 
 
 def random_points(n: int, seed: int):
@@ -150,3 +164,43 @@ int run(long n, const double* const* in, double* const* out) {
         close = np.isclose(out[k], ref[k], rtol=1e-14, atol=0, equal_nan=True)
         assert np.all(same_nan & close), (exprs[k], xs[~close], ys[~close], out[k][~close],
                                           ref[k][~close])
+
+
+def converged(out: np.ndarray) -> np.ndarray:
+    """model.steady_state's acceptance test, per point."""
+    return (np.abs(out[1]) <= model_api.RESIDUAL_TOLERANCE) | (out[2] <= model_api.STEP_TOLERANCE)
+
+
+@pytest.mark.parametrize("name", PRESETS)
+def test_lane_solve_equals_the_sinkage_solve(lane_solve, name):
+    """Loads from 0 to past the capacity, driving and braking: the same sinkage and capacity
+    to 1e-12 relative, residual and last step (rounding-level numbers) to 1e-12 absolute, and
+    the same convergence verdict at every point."""
+    p = presets.load(name).vector()
+    rng = np.random.default_rng(len(name))
+    n = 1501
+    slip = rng.uniform(-0.6, 0.9, n)
+    capacity = np.array(contact.build().capacity.map(n)(slip, np.tile(p[:, None], (1, n))))
+    load = rng.uniform(0.0, 1.2, n) * capacity.ravel()  # a sixth past the capacity
+    load[:7] = 0.0
+    got = lane_solve(load, slip, p)
+    ref = np.array(contact.build().sinkage_solve.map(n)(
+        load, slip, np.tile(p[:, None], (1, n)))).reshape(4, n)
+    assert np.array_equal(np.isnan(got), np.isnan(ref))
+    for row in (0, 3):  # sinkage, capacity
+        assert np.allclose(got[row], ref[row], rtol=1e-12, atol=0)
+    assert np.max(np.abs(got[1:3] - ref[1:3])) <= 1e-12
+    assert np.array_equal(converged(got), converged(ref))
+    assert np.all(got[0][:7] == 0)
+
+
+def test_lane_solve_with_per_point_parameters(lane_solve):
+    n = 203
+    rng = np.random.default_rng(5)
+    table = np.array([presets.load(name).vector() for name in PRESETS]).T
+    P = np.ascontiguousarray(table[:, rng.integers(0, len(PRESETS), n)])
+    load, slip = rng.uniform(1.0, 120.0, n), rng.uniform(-0.3, 0.8, n)
+    got = lane_solve(load, slip, P)
+    ref = np.array(contact.build().sinkage_solve.map(n)(load, slip, P)).reshape(4, n)
+    assert np.allclose(got[0], ref[0], rtol=1e-12, atol=0)
+    assert np.array_equal(converged(got), converged(ref))

@@ -589,6 +589,46 @@ def lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> tuple[ca.Function, t
     return case_fn, tuple(forms)
 
 
+@lru_cache(maxsize=4)
+def solve_lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> dict:
+    """The sinkage solve (:func:`_sinkage_solve_expr`) in pieces, as plain SX Functions for
+    code generators that solve many points at once (:mod:`wheelterrain.model.lanes`); the
+    generated driver calls them in the order ``build().sinkage_solve`` does.
+
+    - ``case(theta_f, slip, p)``: the switch's case; ``fz[c](theta_f, slip, p)``: Fz_static
+      with case c's kernel; ``fz_d[c]``: Fz_static and its derivative by theta_f.
+    - ``start(load, values)``: (state, capacity, w_safe) from Fz_static at :func:`scan_angles`.
+    - ``newton_angle(state)``: the entry angle of the state's iterate;
+      ``newton_update(state, f, df, w_safe)``: the next state (state[7]: converged).
+    - ``solve_angle(load, state)``, then ``finish(load, state, f, p)``: sinkage, residual,
+      last_step."""
+    th, sl, pp = ca.SX.sym("theta_f"), ca.SX.sym("slip"), ca.SX.sym("p", len(NAMES))
+    P = _P(pp)
+    case, switch = _forms(nodes, False)
+    at = CONTACT_OUTPUTS.index("normal_force_static")
+    fz, fz_d = [], []
+    for name in ("arc", "arc_reversal", "patch"):  # ARC, ARC_REVERSAL, PATCH
+        f = switch.find_function(name + "_static")(th, sl, 0, pp)[at]
+        fz.append(ca.Function(f"fz_{name}", [th, sl, pp], [f], {"cse": True}))
+        fz_d.append(ca.Function(f"fz_d_{name}", [th, sl, pp], [f, ca.jacobian(f, th)],
+                                {"cse": True}))
+    load, values = ca.SX.sym("load"), ca.SX.sym("values", len(scan_angles()))
+    state, f, df, w_safe = (ca.SX.sym("state", 8), ca.SX.sym("f"), ca.SX.sym("df"),
+                            ca.SX.sym("w_safe"))
+    return {
+        "case": ca.Function("static_case", [th, sl, pp], [case(th, sl, pp)]),
+        "fz": tuple(fz), "fz_d": tuple(fz_d),
+        "start": ca.Function("solve_start", [load, values],
+                             list(_solve_start(load, ca.vertsplit(values))), {"cse": True}),
+        "newton_angle": ca.Function("newton_angle", [state], [ca.exp(state[0])]),
+        "newton_update": ca.Function("newton_update", [state, f, df, w_safe],
+                                     [_newton_update(state, f, df, w_safe)], {"cse": True}),
+        "solve_angle": ca.Function("solve_angle", [load, state], [_solve_angle(load, state)]),
+        "finish": ca.Function("solve_finish", [load, state, f, pp],
+                              list(_solve_finish(load, state, f, P)), {"cse": True}),
+    }
+
+
 @dataclass(frozen=True)
 class ModelFunctions:
     """The CasADi Functions of the model, built once per quadrature order.
@@ -648,40 +688,58 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int]):
     (``model.steady_state`` does); convergence is a checked output, not an assumption.
     """
     _, fz_only, _ = _static_functions(nodes)
-    const = type(load)
-
-    w_safe = ca.fmax(load, 1e-300)
-
-    def residual_of(f):
-        return _residual(f, w_safe)
-
-    scan = np.concatenate([[THETA_MIN], np.geomspace(SCAN_MIN, FULL_BURIAL, SCAN_POINTS)])
-    values = [fz_only(t, slip, P.p) for t in scan]
-    capacity = values[-1]
-    lo, hi = const(math.log(scan[0])), const(math.log(scan[-1]))
-    h_lo, h_hi = residual_of(values[0]), residual_of(values[-1])
-    for k in range(len(scan) - 1, 0, -1):  # the last assignment is the shallowest crossing
-        reached = values[k] >= load
-        hi, h_hi = (ca.if_else(reached, a, b) for a, b in
-                    ((math.log(scan[k]), hi), (residual_of(values[k]), h_hi)))
-        lo, h_lo = (ca.if_else(reached, a, b) for a, b in
-                    ((math.log(scan[k - 1]), lo), (residual_of(values[k - 1]), h_lo)))
-
-    y = _fallback(lo, hi, h_lo, h_hi)
-    # state: y, bracket (lo, hi, h_lo, h_hi), which end the previous iterate replaced (1 lo,
-    # 0 hi, -1 none), the last step, converged
-    state = ca.vertcat(y, lo, hi, h_lo, h_hi, -1, math.inf, 0)
+    values = [fz_only(t, slip, P.p) for t in scan_angles()]
+    state, capacity, w_safe = _solve_start(load, values)
     iteration = _newton_iteration(nodes)
     for _ in range(NEWTON_ITERATIONS):
         state = iteration(state[7], state, slip, P.p, w_safe)
-    y, last_step = state[0], state[6]
-    theta = ca.if_else(load > 0, ca.exp(y), 0)
-    f = fz_only(theta, slip, P.p)
-    Rc, _, _ = _radii(P)
-    sinkage = 2 * Rc * ca.sin(theta / 2) ** 2  # = R_c*(1 - cos(theta)), without cancellation
-    residual = ca.if_else(load > 0, (f - load) / w_safe, 0)
-    last_step = ca.if_else(load > 0, last_step, 0)
+    theta = _solve_angle(load, state)
+    sinkage, residual, last_step = _solve_finish(load, state, fz_only(theta, slip, P.p), P)
     return sinkage, theta, residual, last_step, capacity
+
+
+def scan_angles() -> np.ndarray:
+    """The entry angles [rad] of the sinkage solve's bracketing scan: THETA_MIN, then
+    SCAN_POINTS log-spaced from SCAN_MIN to full burial."""
+    return np.concatenate([[THETA_MIN], np.geomspace(SCAN_MIN, FULL_BURIAL, SCAN_POINTS)])
+
+
+def _solve_start(load, values):
+    """The bracket of the sinkage solve from Fz_static at :func:`scan_angles` (``values``):
+    ``(state, capacity, w_safe)``, the Newton state of :func:`_newton_update` at its first
+    iterate."""
+    const = type(load)
+    w_safe = ca.fmax(load, 1e-300)
+    scan = scan_angles()
+    capacity = values[-1]
+    lo, hi = const(math.log(scan[0])), const(math.log(scan[-1]))
+    h_lo, h_hi = _residual(values[0], w_safe), _residual(values[-1], w_safe)
+    for k in range(len(scan) - 1, 0, -1):  # the last assignment is the shallowest crossing
+        reached = values[k] >= load
+        hi, h_hi = (ca.if_else(reached, a, b) for a, b in
+                    ((math.log(scan[k]), hi), (_residual(values[k], w_safe), h_hi)))
+        lo, h_lo = (ca.if_else(reached, a, b) for a, b in
+                    ((math.log(scan[k - 1]), lo), (_residual(values[k - 1], w_safe), h_lo)))
+    y = _fallback(lo, hi, h_lo, h_hi)
+    # state: y, bracket (lo, hi, h_lo, h_hi), which end the previous iterate replaced (1 lo,
+    # 0 hi, -1 none), the last step, converged
+    return ca.vertcat(y, lo, hi, h_lo, h_hi, -1, math.inf, 0), capacity, w_safe
+
+
+def _solve_angle(load, state):
+    """The entry angle the solve ends at (0 for no load)."""
+    return ca.if_else(load > 0, ca.exp(state[0]), 0)
+
+
+def _solve_finish(load, state, f, P: _P):
+    """Sinkage, relative residual and last step at the final angle, where Fz_static is ``f``."""
+    Rc, _, _ = _radii(P)
+    theta = _solve_angle(load, state)
+    sinkage = 2 * Rc * ca.sin(theta / 2) ** 2  # = R_c*(1 - cos(theta)), without cancellation
+    w_safe = ca.fmax(load, 1e-300)
+    residual = ca.if_else(load > 0, (f - load) / w_safe, 0)
+    last_step = ca.if_else(load > 0, state[6], 0)
+    return sinkage, residual, last_step
 
 
 NEWTON_STOP = 1e-10  # a Newton step in log(theta_f) this small ends the solve: the next would
@@ -711,9 +769,19 @@ def _newton_iteration(nodes: tuple[int, int]) -> ca.Function:
     fz_fun = _static_functions(nodes)[0]
     state, sl, pp, w_safe = (ca.MX.sym("state", 8), ca.MX.sym("slip"),
                              ca.MX.sym("p", len(NAMES)), ca.MX.sym("w_safe"))
+    f, df = fz_fun(ca.exp(state[0]), sl, pp)
+    next_state = _newton_update(state, f, df, w_safe)
+    args = [state, sl, pp, w_safe]
+    iterate = ca.Function("newton_step", args, [next_state])
+    converged = ca.Function("newton_converged", args, [state])
+    return ca.Function.conditional("newton_iteration", [iterate], converged)
+
+
+def _newton_update(state, f, df, w_safe):
+    """One safeguarded Newton iteration's algebra: the next state from ``state`` and Fz_static
+    ``f`` and its derivative ``df`` by theta_f at theta_f = exp(state[0])."""
     y, lo, hi, h_lo, h_hi, last_below, _, _ = ca.vertsplit(state)
     theta = ca.exp(y)
-    f, df = fz_fun(theta, sl, pp)
     h = _residual(f, w_safe)
     slope = theta * df / (w_safe * ca.sqrt(1 + (f / w_safe) ** 2))
     below = h <= 0
@@ -728,11 +796,7 @@ def _newton_iteration(nodes: tuple[int, int]) -> ca.Function:
     y_next = ca.if_else(inside, step, _fallback(lo, hi, h_lo, h_hi))
     last_step = ca.fabs(y_next - y)
     done = ca.logic_and(inside, last_step <= NEWTON_STOP)
-    args = [state, sl, pp, w_safe]
-    iterate = ca.Function("newton_step", args,
-                          [ca.vertcat(y_next, lo, hi, h_lo, h_hi, below, last_step, done)])
-    converged = ca.Function("newton_converged", args, [state])
-    return ca.Function.conditional("newton_iteration", [iterate], converged)
+    return ca.vertcat(y_next, lo, hi, h_lo, h_hi, below, last_step, done)
 
 
 @lru_cache(maxsize=4)
