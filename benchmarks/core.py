@@ -16,7 +16,9 @@ Prints the median of repeats for:
 One core: CasADi's serial map; no threads. The mapped figures are the model's time: the
 inputs are converted to CasADi matrices once, and that conversion is reported on its own.
 ``--json`` prints force_eval_s, solve_s (per point, the fastest compiled path; which one in
-force_eval_how and solve_how), force_eval_reference_s, solve_reference_s, their ratios, the
+force_eval_how and solve_how; the solve cold, at unrelated random points), solve_sweep_s (a
+load x slip sweep through model.steady_map, warm-started from neighbouring points),
+force_eval_reference_s, solve_reference_s (the scipy reference solves cold), their ratios, the
 CasADi-C and VM figures and input_conversion_s.
 """
 
@@ -35,7 +37,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from wheelterrain import presets
+from wheelterrain import model, presets
 from wheelterrain.model import contact, lanes
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -148,11 +150,20 @@ def main(argv: list[str] | None = None) -> None:
         t0 = time.perf_counter()
         lane_solve = lanes.compiled_solve()
         lane_build += time.perf_counter() - t0
-        tl_solve = median_time(lambda: lane_solve(load, slip, P), args.repeats) / n
-        solve_check = np.max(np.abs(lane_solve(load, slip, P)[0]
+        tl_solve = median_time(lambda: lane_solve(load, slip, np.nan, P), args.repeats) / n
+        solve_check = np.max(np.abs(lane_solve(load, slip, np.nan, P)[0]
                                     - np.array(c_solve(*solve_in)[0]).ravel()))
+        # a sweep: model.steady_map over loads x slips, warm-started along the loads from
+        # the neighbouring solutions (the whole API path: validation, retries, NaN marking)
+        ps = presets.load("paper-table2-arc")
+        loads, slips = np.linspace(20.0, 60.0, 100), np.linspace(0.0, 0.5, max(1, n // 100))
+        t_sweep = median_time(lambda: model.steady_map(ps, loads, slips),
+                              args.repeats) / (loads.size * slips.size)
         figures.update(force_eval_s=tl_map, force_eval_how=how, force_eval_casadi_c_s=tc_map,
-                       solve_s=tl_solve, solve_how=how, solve_casadi_c_s=tc_solve)
+                       solve_s=tl_solve, solve_how=how + ", cold (13-point scan)",
+                       solve_casadi_c_s=tc_solve, solve_sweep_s=t_sweep,
+                       solve_sweep_how=f"model.steady_map, {loads.size} loads x {slips.size} "
+                       "slips, warm-started along the loads")
         say(f"  force eval, lane-parallel C            : {tl_map * 1e6:9.3f} us/pt "
             f"= {1 / tl_map:10.3g} /s   (goal >= 1e6 /s)")
         say(f"  ({how}; max |DP - DP(VM)| = {lane_check:.1e} N)")
@@ -161,6 +172,8 @@ def main(argv: list[str] | None = None) -> None:
         say(f"  sinkage solve, lane-parallel C         : {tl_solve * 1e6:9.3f} us/pt "
             f"= {1 / tl_solve:10.3g} /s   (goal >= 1e5 /s; max |z - z(CasADi C)| = "
             f"{solve_check:.1e} m; both libraries ready in {lane_build:.1f} s)")
+        say(f"  steady states, sweep (model.steady_map): {t_sweep * 1e6:8.3f} us/pt "
+            f"= {1 / t_sweep:10.3g} /s   ({figures['solve_sweep_how']})")
     else:  # the figures of record are the compiled ones; without a compiler, the VM's
         figures.update(force_eval_s=t_map, solve_s=t_solve)
     figures["compiled"] = not args.no_compile
@@ -175,6 +188,8 @@ def main(argv: list[str] | None = None) -> None:
     figures.update(force_eval_reference_s=t_ref, solve_reference_s=t_ref_solve,
                    force_eval_speedup=t_ref / figures["force_eval_s"],
                    solve_speedup=t_ref_solve / figures["solve_s"])
+    if "solve_sweep_s" in figures:
+        figures["solve_sweep_speedup"] = t_ref_solve / figures["solve_sweep_s"]
     say(f"  baseline: scipy-quad reference, force  : {t_ref * 1e6:9.1f} us "
         f"(mapped VM {t_ref / t_map:6.0f}x faster"
         + ("" if args.no_compile else f", CasADi C {t_ref / tc_map:7.0f}x, lanes "
@@ -182,7 +197,8 @@ def main(argv: list[str] | None = None) -> None:
     say(f"  baseline: scipy reference, solve       : {t_ref_solve * 1e6:9.1f} us "
         f"(mapped VM {t_ref_solve / t_solve:6.0f}x faster"
         + ("" if args.no_compile else f", CasADi C {t_ref_solve / tc_solve:7.0f}x, lanes "
-                                      f"{t_ref_solve / tl_solve:7.0f}x") + ")")
+                                      f"{t_ref_solve / tl_solve:7.0f}x, sweep "
+                                      f"{t_ref_solve / t_sweep:7.0f}x") + ")")
     if args.json:
         print(json.dumps(figures, indent=2))
 

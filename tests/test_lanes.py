@@ -166,32 +166,48 @@ int run(long n, const double* const* in, double* const* out) {
                                           ref[k][~close])
 
 
+ROW = {name: row for row, name in enumerate(contact.STEADY_OUTPUTS)}
+CONTACT_ROWS = slice(ROW["normal_force"], ROW["normal_force_static"] + 1)
+
+
 def converged(out: np.ndarray) -> np.ndarray:
     """model.steady_state's acceptance test, per point."""
-    return (np.abs(out[1]) <= model_api.RESIDUAL_TOLERANCE) | (out[2] <= model_api.STEP_TOLERANCE)
+    return ((np.abs(out[ROW["residual"]]) <= model_api.RESIDUAL_TOLERANCE)
+            | (out[ROW["last_step"]] <= model_api.STEP_TOLERANCE))
+
+
+def steady_reference(load, slip, P: np.ndarray) -> np.ndarray:
+    n = len(load)
+    P = P if P.ndim == 2 else np.tile(P[:, None], (1, n))
+    return np.array(contact.build().steady.map(n)(load, slip, P)).reshape(-1, n)
+
+
+def assert_same_steady_state(got: np.ndarray, ref: np.ndarray) -> None:
+    """Sinkage and capacity to 1e-12 relative, the contact outputs as assert_agrees, residual
+    and last step (rounding-level numbers) to 1e-12 absolute, the same convergence verdict."""
+    assert np.array_equal(np.isnan(got), np.isnan(ref))
+    for name in ("sinkage", "capacity"):
+        assert np.allclose(got[ROW[name]], ref[ROW[name]], rtol=1e-12, atol=0), name
+    assert_agrees(got[CONTACT_ROWS], ref[CONTACT_ROWS])
+    for name in ("residual", "last_step"):
+        assert np.max(np.abs(got[ROW[name]] - ref[ROW[name]])) <= 1e-12, name
+    assert np.array_equal(converged(got), converged(ref))
 
 
 @pytest.mark.parametrize("name", PRESETS)
-def test_lane_solve_equals_the_sinkage_solve(lane_solve, name):
-    """Loads from 0 to past the capacity, driving and braking: the same sinkage and capacity
-    to 1e-12 relative, residual and last step (rounding-level numbers) to 1e-12 absolute, and
-    the same convergence verdict at every point."""
+def test_lane_solve_equals_the_steady_state(lane_solve, name):
+    """Loads from 0 to a sixth past the capacity, driving and braking, solved cold: every
+    output of build().steady."""
     p = presets.load(name).vector()
     rng = np.random.default_rng(len(name))
     n = 1501
     slip = rng.uniform(-0.6, 0.9, n)
     capacity = np.array(contact.build().capacity.map(n)(slip, np.tile(p[:, None], (1, n))))
-    load = rng.uniform(0.0, 1.2, n) * capacity.ravel()  # a sixth past the capacity
+    load = rng.uniform(0.0, 1.2, n) * capacity.ravel()
     load[:7] = 0.0
-    got = lane_solve(load, slip, p)
-    ref = np.array(contact.build().sinkage_solve.map(n)(
-        load, slip, np.tile(p[:, None], (1, n)))).reshape(4, n)
-    assert np.array_equal(np.isnan(got), np.isnan(ref))
-    for row in (0, 3):  # sinkage, capacity
-        assert np.allclose(got[row], ref[row], rtol=1e-12, atol=0)
-    assert np.max(np.abs(got[1:3] - ref[1:3])) <= 1e-12
-    assert np.array_equal(converged(got), converged(ref))
-    assert np.all(got[0][:7] == 0)
+    got = lane_solve(load, slip, np.nan, p)
+    assert_same_steady_state(got, steady_reference(load, slip, p))
+    assert np.all(got[ROW["sinkage"]][:7] == 0)
 
 
 def test_lane_solve_with_per_point_parameters(lane_solve):
@@ -200,7 +216,125 @@ def test_lane_solve_with_per_point_parameters(lane_solve):
     table = np.array([presets.load(name).vector() for name in PRESETS]).T
     P = np.ascontiguousarray(table[:, rng.integers(0, len(PRESETS), n)])
     load, slip = rng.uniform(1.0, 120.0, n), rng.uniform(-0.3, 0.8, n)
-    got = lane_solve(load, slip, P)
-    ref = np.array(contact.build().sinkage_solve.map(n)(load, slip, P)).reshape(4, n)
-    assert np.allclose(got[0], ref[0], rtol=1e-12, atol=0)
-    assert np.array_equal(converged(got), converged(ref))
+    assert_same_steady_state(lane_solve(load, slip, np.nan, P), steady_reference(load, slip, P))
+
+
+@pytest.mark.parametrize("name", PRESETS)
+def test_a_warm_start_reaches_the_cold_solution(lane_solve, name):
+    """Driving (0 <= slip <= 0.8, where Fz_static grows with sinkage and the root is unique),
+    from guesses 0.5x to 2x the solution, from a far one (a tenth of the contact radius) and with
+    no guess (NaN) mixed in one call: the cold solution, to rounding."""
+    p = presets.load(name).vector()
+    rng = np.random.default_rng(17 + len(name))
+    n = 999
+    slip = rng.uniform(0.0, 0.8, n)
+    capacity = np.array(contact.build().capacity.map(n)(slip, np.tile(p[:, None], (1, n))))
+    load = rng.uniform(0.01, 0.9, n) * capacity.ravel()
+    cold = lane_solve(load, slip, np.nan, p)
+    guess = cold[ROW["sinkage"]] * rng.uniform(0.5, 2.0, n)
+    guess[::7] = np.nan
+    guess[3::7] = 0.1 * presets.load(name)["wheel.radius"]
+    warm = lane_solve(load, slip, guess, p)
+    assert np.all(converged(warm))
+    assert np.allclose(warm[ROW["sinkage"]], cold[ROW["sinkage"]], rtol=1e-12, atol=0)
+    assert_agrees(warm[CONTACT_ROWS], cold[CONTACT_ROWS])
+    assert np.array_equal(warm[:, ::7], cold[:, ::7])  # no guess: the cold solve itself
+
+
+def test_steady_states_equals_steady_state_point_by_point(lane_cache, table2):
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("WHEELTERRAIN_CACHE", str(lane_cache))
+        loads = np.array([0.0, 5.0, 30.0, 45.0, 25.0])
+        slips = np.array([-0.4, 0.0, 0.2, 0.4, 0.8])
+        many = model_api.steady_states(table2, loads, slips)
+        for k, (w, i) in enumerate(zip(loads, slips, strict=True)):
+            one = model_api.steady_state(table2, w, i)
+            for name in ("sinkage", "drawbar_pull", "torque", "normal_force", "capacity"):
+                assert many[name][k] == pytest.approx(one[name], rel=1e-12, abs=1e-12), name
+        paper = model_api.steady_states(table2, 30.0, [0.25, 0.5], slip_definition="paper")
+        assert paper["slip"] == pytest.approx([0.2, 1 / 3], rel=1e-15)
+        assert paper["slip_paper"] == pytest.approx([0.25, 0.5], rel=1e-15)
+
+
+def test_steady_states_refuses_bad_inputs_and_overloads(lane_cache, table2):
+    from wheelterrain.errors import InputError, LoadTooLargeError
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("WHEELTERRAIN_CACHE", str(lane_cache))
+        with pytest.raises(InputError, match="load"):
+            model_api.steady_states(table2, [10.0, -1.0], 0.2)
+        with pytest.raises(InputError, match="slip"):
+            model_api.steady_states(table2, 10.0, [0.2, np.nan])
+        with pytest.raises(InputError, match="slip"):
+            model_api.steady_states(table2, 10.0, [0.2, 1.5])
+        with pytest.raises(InputError, match="slip_definition"):
+            model_api.steady_states(table2, 10.0, 0.2, slip_definition="skid")
+        with pytest.raises(InputError, match="over_capacity"):
+            model_api.steady_states(table2, 10.0, 0.2, over_capacity="clip")
+        capacity = model_api.capacity(table2, 0.3)
+        with pytest.raises(LoadTooLargeError):
+            model_api.steady_states(table2, [10.0, 1.5 * capacity], 0.3)
+        out = model_api.steady_states(table2, [10.0, 1.5 * capacity], 0.3, over_capacity="nan")
+        assert np.isfinite(out["sinkage"][0])
+        assert np.isnan(out["sinkage"][1])
+        assert out["capacity"][1] == pytest.approx(capacity, rel=1e-12)
+
+
+def test_steady_map_is_the_cold_solve_on_the_grid(lane_cache, table2):
+    """The continuation (warm starts along the loads, given unsorted) reaches the cold
+    solution at every carried point; NaN exactly where the load exceeds the capacity."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("WHEELTERRAIN_CACHE", str(lane_cache))
+        loads = np.array([40.0, 5.0, 70.0, 20.0, 30.0, 60.0, 50.0, 10.0])
+        slips = np.linspace(0.0, 0.8, 9)
+        grid = model_api.steady_map(table2, loads, slips)
+        L, S = np.meshgrid(loads, slips, indexing="ij")
+        cold = model_api.steady_states(table2, L.ravel(), S.ravel(), over_capacity="nan")
+        for name in ("sinkage", "drawbar_pull", "torque", "capacity"):
+            assert grid[name].shape == (loads.size, slips.size)
+            assert np.allclose(grid[name], cold[name].reshape(L.shape), rtol=1e-12, atol=1e-12,
+                               equal_nan=True), name
+        assert np.array_equal(np.isnan(grid["sinkage"]), grid["capacity"] < L)
+        assert np.any(np.isnan(grid["sinkage"]))
+        assert np.any(np.isfinite(grid["sinkage"]))
+
+
+def test_a_warm_start_that_fails_is_solved_again_cold(monkeypatch, lane_cache, table2):
+    """The policy, with a solver whose warm starts never converge."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("WHEELTERRAIN_CACHE", str(lane_cache))
+        real = lanes.compiled_solve()
+    calls = []
+
+    def failing_when_warm(load, slip, guess, p):
+        out = real(load, slip, guess, p)
+        warm = np.isfinite(guess)
+        calls.append(int(np.sum(warm)))
+        out[contact.STEADY_OUTPUTS.index("residual"), warm] = 1.0
+        out[contact.STEADY_OUTPUTS.index("last_step"), warm] = 1.0
+        return out
+
+    monkeypatch.setattr(model_api, "_steady_many", lambda: failing_when_warm)
+    loads = np.array([10.0, 20.0, 30.0])
+    out = model_api.steady_states(table2, loads, 0.2, guess=[0.01, np.nan, 0.02])
+    assert calls == [2, 0]  # the two warm points, then both again cold
+    for k, w in enumerate(loads):
+        assert out["sinkage"][k] == pytest.approx(model_api.steady_state(table2, w, 0.2)[
+            "sinkage"], rel=1e-12)
+
+
+def test_without_a_c_compiler_steady_states_uses_casadi(monkeypatch, table2):
+    from wheelterrain.fmu.compiled import CompileError
+
+    def no_compiler(*args, **kwargs):
+        raise CompileError("no C compiler (cc/gcc, or $CC) on PATH")
+
+    monkeypatch.setattr(lanes, "compiled_solve", no_compiler)
+    model_api._steady_many.cache_clear()
+    try:
+        out = model_api.steady_states(table2, [10.0, 30.0], [0.1, 0.4], guess=[0.01, np.nan])
+        for k, (w, i) in enumerate(((10.0, 0.1), (30.0, 0.4))):
+            assert out["sinkage"][k] == pytest.approx(
+                model_api.steady_state(table2, w, i)["sinkage"], rel=1e-12)
+    finally:
+        model_api._steady_many.cache_clear()

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from functools import lru_cache
 
 import numpy as np
 
@@ -120,3 +121,137 @@ def steady_jacobian(params: Mapping[str, float] | ParameterSet, load: float, sli
     jac = _contact.build().steady_jacobian(state["load"], state["slip"], ps.vector(),
                                            state["sinkage"])
     return {"d_inputs": np.array(jac[0]), "d_params": np.array(jac[1])}
+
+
+def _traction_array(name: str, values, definition: str) -> np.ndarray:
+    """Validated traction slips from an array in either definition (as :func:`to_traction`)."""
+    to_traction(0.0, definition)  # checks the definition's name
+    values = np.asarray(values, dtype=float)
+    lo, hi = _slip_range(definition)
+    ok = np.isfinite(values) & (values >= lo) & (values <= hi)
+    if not np.all(ok):  # the scalar check words the message (name, range)
+        to_traction(float(values.flat[np.flatnonzero(~ok)[0]]), definition)
+    return values if definition == "traction" else values / (1.0 + values)
+
+
+def _slip_range(definition: str) -> tuple[float, float]:
+    from wheelterrain.model.slip import PAPER_RANGE, TRACTION_RANGE
+
+    return TRACTION_RANGE if definition == "traction" else PAPER_RANGE
+
+
+def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,
+                  slip_definition: str = "traction", guess=None,
+                  over_capacity: str = "raise") -> dict[str, np.ndarray]:
+    """:func:`steady_state` at many points at once: ``load`` and ``slip`` are arrays of one
+    length (or scalars, shared). Returns one array per ``contact.STEADY_OUTPUTS`` key plus
+    ``load``, ``slip`` (traction) and ``slip_paper``.
+
+    Runs the lane-parallel C of :mod:`wheelterrain.model.lanes` (compiled on first use, about
+    100 s, then cached; ~12 us a point cold on one core), or CasADi's virtual machine where no C
+    compiler is found (same numbers to rounding, ~40x slower). ``guess``: sinkage [m] per point
+    to start Newton from (a neighbouring solution in a sweep; NaN for none); a warm start that
+    does not converge is solved again cold. With a guess the solve returns the root Newton
+    reaches from it; cold, the shallowest (they are the same wherever Fz_static grows with
+    sinkage, as for every driving wheel).
+
+    ``over_capacity``: "raise" (LoadTooLargeError for the first load the wheel cannot carry
+    fully buried) or "nan" (those points' outputs are NaN; ``capacity`` is still given).
+    Raises SolveError if a point did not converge (never observed; it is checked).
+    """
+    ps = _params(params)
+    if over_capacity not in ("raise", "nan"):
+        raise InputError("over_capacity", over_capacity, "must be 'raise' or 'nan'")
+    load = np.asarray(load, dtype=float)
+    if load.size and not (np.all(np.isfinite(load)) and np.all(load >= 0)):
+        first = np.flatnonzero(~(np.isfinite(load) & (load >= 0)))[0]
+        _finite("load", float(load.flat[first]), lo=0.0)
+    i = _traction_array("slip", slip, slip_definition)
+    load, i = (np.ascontiguousarray(a, dtype=float).reshape(-1) for a in
+               np.broadcast_arrays(load, i))
+    n = load.size
+    guess_in = np.full(n, np.nan) if guess is None else np.broadcast_to(
+        np.asarray(guess, dtype=float), (n,)).copy()
+    solve = _steady_many()
+    p = ps.vector()
+    out = solve(load, i, guess_in, p)
+    row = {name: k for k, name in enumerate(_contact.STEADY_OUTPUTS)}
+    carried = load <= out[row["capacity"]]
+
+    def converged(o):
+        return ((np.abs(o[row["residual"]]) <= RESIDUAL_TOLERANCE)
+                | (o[row["last_step"]] <= STEP_TOLERANCE))
+
+    retry = np.flatnonzero(np.isfinite(guess_in) & carried & ~converged(out))
+    if retry.size:  # a warm start that failed: the cold solve
+        out[:, retry] = solve(load[retry], i[retry], np.full(retry.size, np.nan), p)
+    if not np.all(carried):
+        first = np.flatnonzero(~carried)[0]
+        if over_capacity == "raise":
+            raise LoadTooLargeError(float(load[first]), float(out[row["capacity"], first]),
+                                    contact_radius(ps))
+        keep = out[row["capacity"]].copy()
+        out[:, ~carried] = np.nan
+        out[row["capacity"]] = keep
+    bad = np.flatnonzero(carried & ~converged(out))
+    if bad.size:
+        k = bad[0]
+        raise SolveError(
+            f"sinkage solve did not converge at {bad.size} of {n} points, first at load "
+            f"{load[k]:g} N, slip {i[k]:g}: relative residual {out[row['residual'], k]:.3g} > "
+            f"{RESIDUAL_TOLERANCE:g} and last step {out[row['last_step'], k]:.3g} > "
+            f"{STEP_TOLERANCE:g} in log(entry angle)")
+    result = {name: out[k] + 0.0 for name, k in row.items()}  # + 0.0: no -0.0
+    with np.errstate(divide="ignore"):
+        result.update(load=load, slip=i, slip_paper=np.where(i == 1.0, np.inf, i / (1.0 - i)))
+    return result
+
+
+def steady_map(params: Mapping[str, float] | ParameterSet, loads, slips, *,
+               slip_definition: str = "traction") -> dict[str, np.ndarray]:
+    """Steady states on the grid loads x slips (two 1-D arrays): each output an array of shape
+    (len(loads), len(slips)); NaN where the wheel cannot carry the load (``capacity`` says
+    what it can carry there).
+
+    A continuation along the loads: the two smallest loads are solved cold, each next one
+    warm-started from the sinkage extrapolated linearly from the two before it, for all slips
+    at once (:func:`steady_states` with ``guess``)."""
+    loads = np.asarray(loads, dtype=float).reshape(-1)
+    slips = np.asarray(slips, dtype=float).reshape(-1)
+    order = np.argsort(loads, kind="stable")
+    rows: list[dict[str, np.ndarray]] = []
+    guess = None
+    for k, at in enumerate(order):
+        rows.append(steady_states(params, loads[at], slips, slip_definition=slip_definition,
+                                  guess=guess, over_capacity="nan"))
+        if k >= 1:
+            w0, w1 = loads[order[k - 1]], loads[at]
+            z0, z1 = rows[-2]["sinkage"], rows[-1]["sinkage"]
+            w2 = loads[order[k + 1]] if k + 1 < len(order) else w1
+            slope = (z1 - z0) / (w1 - w0) if w1 > w0 else 0.0 * z1
+            guess = z1 + slope * (w2 - w1)  # NaN where either was not carried: cold
+    result = {name: np.empty((loads.size, slips.size)) for name in rows[0]} if rows else {}
+    for k, at in enumerate(order):
+        for name, values in rows[k].items():
+            result[name][at] = values
+    return result
+
+
+@lru_cache(maxsize=1)
+def _steady_many():
+    """The lane-parallel steady state, or (no C compiler) CasADi's map of build().steady with
+    the same call (load, slip, guess, p) -> STEADY_OUTPUTS rows; the guess is then unused."""
+    from wheelterrain.fmu.compiled import CompileError
+    from wheelterrain.model import lanes
+
+    try:
+        return lanes.compiled_solve()
+    except CompileError:
+        steady = _contact.build().steady
+
+        def vm(load, slip, guess, p):
+            n = load.size
+            return np.array(steady.map(n)(load, slip, np.tile(p[:, None], (1, n)))).reshape(
+                len(_contact.STEADY_OUTPUTS), n)
+
+        return vm

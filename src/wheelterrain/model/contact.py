@@ -596,8 +596,11 @@ def solve_lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> dict:
     generated driver calls them in the order ``build().sinkage_solve`` does.
 
     - ``case(theta_f, slip, p)``: the switch's case; ``fz[c](theta_f, slip, p)``: Fz_static
-      with case c's kernel; ``fz_d[c]``: Fz_static and its derivative by theta_f.
-    - ``start(load, values)``: (state, capacity, w_safe) from Fz_static at :func:`scan_angles`.
+      with case c's kernel; ``fz_d[c]``: Fz_static and its derivative by theta_f;
+      ``static[c]``: every CONTACT_OUTPUT, ripple-free (the steady state's contact).
+    - ``start(load, values)``: (state, capacity, w_safe) from Fz_static at :func:`scan_angles`;
+      ``start_warm(load, f_first, f_last, guess, p)``: the same from the scan's two ends and a
+      sinkage guess [m] (:func:`_solve_start_warm`).
     - ``newton_angle(state)``: the entry angle of the state's iterate;
       ``newton_update(state, f, df, w_safe)``: the next state (state[7]: converged).
     - ``solve_angle(load, state)``, then ``finish(load, state, f, p)``: sinkage, residual,
@@ -606,20 +609,26 @@ def solve_lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> dict:
     P = _P(pp)
     case, switch = _forms(nodes, False)
     at = CONTACT_OUTPUTS.index("normal_force_static")
-    fz, fz_d = [], []
+    fz, fz_d, static = [], [], []
     for name in ("arc", "arc_reversal", "patch"):  # ARC, ARC_REVERSAL, PATCH
-        f = switch.find_function(name + "_static")(th, sl, 0, pp)[at]
+        out = switch.find_function(name + "_static")(th, sl, 0, pp)
+        static.append(ca.Function(f"static_{name}", [th, sl, pp], [out], {"cse": True}))
+        f = out[at]
         fz.append(ca.Function(f"fz_{name}", [th, sl, pp], [f], {"cse": True}))
         fz_d.append(ca.Function(f"fz_d_{name}", [th, sl, pp], [f, ca.jacobian(f, th)],
                                 {"cse": True}))
     load, values = ca.SX.sym("load"), ca.SX.sym("values", len(scan_angles()))
+    f_first, f_last, guess = ca.SX.sym("f_first"), ca.SX.sym("f_last"), ca.SX.sym("guess")
     state, f, df, w_safe = (ca.SX.sym("state", 8), ca.SX.sym("f"), ca.SX.sym("df"),
                             ca.SX.sym("w_safe"))
     return {
         "case": ca.Function("static_case", [th, sl, pp], [case(th, sl, pp)]),
-        "fz": tuple(fz), "fz_d": tuple(fz_d),
+        "fz": tuple(fz), "fz_d": tuple(fz_d), "static": tuple(static),
         "start": ca.Function("solve_start", [load, values],
                              list(_solve_start(load, ca.vertsplit(values))), {"cse": True}),
+        "start_warm": ca.Function("solve_start_warm", [load, f_first, f_last, guess, pp],
+                                  list(_solve_start_warm(load, f_first, f_last, guess, P)),
+                                  {"cse": True}),
         "newton_angle": ca.Function("newton_angle", [state], [ca.exp(state[0])]),
         "newton_update": ca.Function("newton_update", [state, f, df, w_safe],
                                      [_newton_update(state, f, df, w_safe)], {"cse": True}),
@@ -724,6 +733,21 @@ def _solve_start(load, values):
     # state: y, bracket (lo, hi, h_lo, h_hi), which end the previous iterate replaced (1 lo,
     # 0 hi, -1 none), the last step, converged
     return ca.vertcat(y, lo, hi, h_lo, h_hi, -1, math.inf, 0), capacity, w_safe
+
+
+def _solve_start_warm(load, f_first, f_last, guess, P: _P):
+    """The warm start: the bracket is the whole scan range, its ends' residuals from Fz_static
+    there (``f_first`` at THETA_MIN, ``f_last`` fully buried: the capacity), and the first
+    iterate the entry angle of the sinkage ``guess`` [m] when that lies inside the bracket,
+    else regula falsi on it. ``(state, capacity, w_safe)`` as :func:`_solve_start`."""
+    const = type(load)
+    w_safe = ca.fmax(load, 1e-300)
+    scan = scan_angles()
+    lo, hi = const(math.log(scan[0])), const(math.log(scan[-1]))
+    h_lo, h_hi = _residual(f_first, w_safe), _residual(f_last, w_safe)
+    y = ca.log(ca.fmax(_entry_angle(guess, P), scan[0]))
+    y = ca.if_else(ca.logic_and(y > lo, y < hi), y, _fallback(lo, hi, h_lo, h_hi))
+    return ca.vertcat(y, lo, hi, h_lo, h_hi, -1, math.inf, 0), f_last, w_safe
 
 
 def _solve_angle(load, state):

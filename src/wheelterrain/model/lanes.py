@@ -184,48 +184,66 @@ static void wt_strides(long n, int n_in, const long* shared, long* js, long* is)
 
 
 def solve_source(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> str:
-    """The C of ``wt_solve(n, in, shared, out)``: the sinkage solve at n points (inputs load,
-    slip, p; outputs sinkage, residual, last_step, capacity), in chunks of WT_CHUNK points: the
-    scan, the bracket, at most NEWTON_ITERATIONS Newton iterations for the points not yet
-    converged, the final angle, its Fz_static and the outputs: the order in which
-    ``build().sinkage_solve`` evaluates the same pieces."""
+    """The C of ``wt_solve(n, in, shared, out)``: the steady state at n points (inputs load,
+    slip, guess, p; outputs STEADY_OUTPUTS, as ``build().steady``), in chunks of WT_CHUNK
+    points: the scan, the bracket, at most NEWTON_ITERATIONS Newton iterations for the points
+    not yet converged, the final angle, the ripple-free contact there and the outputs: the
+    order in which ``build().steady`` evaluates the same pieces. A point with a sinkage guess
+    (finite, > 0) starts warm instead (:func:`~wheelterrain.model.contact._solve_start_warm`):
+    the scan's two ends and Newton from the guess."""
     k = _contact.solve_lane_kernels(nodes)
-    singles = ("case", "start", "newton_angle", "newton_update", "solve_angle", "finish")
+    singles = ("case", "start", "start_warm", "newton_angle", "newton_update", "solve_angle",
+               "finish")
     kernels = [kernel_c(k[name], f"k_{name}") for name in singles]
-    kernels += [kernel_c(f, f"k_{f.name()}") for f in (*k["fz"], *k["fz_d"])]
+    kernels += [kernel_c(f, f"k_{f.name()}") for f in (*k["fz"], *k["fz_d"], *k["static"])]
     scan = _contact.scan_angles()
     n_scan = len(scan)
     fz = ", ".join(f"k_{f.name()}" for f in k["fz"])
     fz_d = ", ".join(f"k_{f.name()}" for f in k["fz_d"])
+    static = ", ".join(f"k_{f.name()}" for f in k["static"])
+    rows = {name: row for row, name in enumerate(_contact.STEADY_OUTPUTS)}
+    f_row = rows["normal_force_static"]
     angles = ", ".join(repr(float(a)) for a in scan)
     entry = f"""
 #define WT_CHUNK 256
 int wt_solve(long n, const double* const* in, const long* shared, double* const* out) {{
-  static const wt_kernel fz[3] = {{{fz}}}, fz_d[3] = {{{fz_d}}};
+  static const wt_kernel fz[3] = {{{fz}}}, fz_d[3] = {{{fz_d}}}, contact[3] = {{{static}}};
   static const double scan[{n_scan}] = {{{angles}}};
   double values[{n_scan} * WT_CHUNK], state[8 * WT_CHUNK], next[8 * WT_CHUNK];
   double fd[2 * WT_CHUNK], theta[WT_CHUNK], capacity[WT_CHUNK], w_safe[WT_CHUNK];
-  double f[WT_CHUNK];
-  long active[WT_CHUNK], js[3], is[3];
-  wt_strides(n, 3, shared, js, is);
+  long active[WT_CHUNK], cold[WT_CHUNK], warm[WT_CHUNK], js[4], is[4];
+  wt_strides(n, 4, shared, js, is);
   for (long c0 = 0; c0 < n; c0 += WT_CHUNK) {{
-    long m = n - c0 < WT_CHUNK ? n - c0 : WT_CHUNK, i;
+    long m = n - c0 < WT_CHUNK ? n - c0 : WT_CHUNK, i, n_cold = 0, n_warm = 0;
     const double* load = in[0] + c0 * is[0];
     const double* slip = in[1] + c0 * is[1];
-    const double* p = in[2] + c0 * is[2];
+    const double* guess = in[2] + c0 * is[2];
+    const double* p = in[3] + c0 * is[3];
+    /* a finite, positive sinkage guess starts a point warm; NaN (or <= 0) cold */
+    for (i = 0; i < m; ++i) {{
+      double g = guess[i * is[2]];
+      if (g > 0 && g - g == 0) warm[n_warm++] = i; else cold[n_cold++] = i;
+    }}
     /* at an entry angle per point: theta, slip, p */
     const double* at[3] = {{theta, slip, p}};
-    long at_js[3] = {{1, js[1], js[2]}}, at_is[3] = {{1, is[1], is[2]}};
-    for (int s = 0; s < {n_scan}; ++s) {{
+    long at_js[3] = {{1, js[1], js[3]}}, at_is[3] = {{1, is[1], is[3]}};
+    for (int s = 0; s < {n_scan}; ++s) {{  /* a warm start needs the scan's two ends only */
+      int ends = s == 0 || s == {n_scan} - 1;
       double* o[1] = {{values + s * WT_CHUNK}};
       for (i = 0; i < m; ++i) theta[i] = scan[s];
-      wt_cases(m, NULL, at, at_js, at_is, o, 0, k_case, fz, 3);
+      wt_cases(ends ? m : n_cold, ends ? NULL : cold, at, at_js, at_is, o, 0, k_case, fz, 3);
     }}
     {{
       const double* a[2] = {{load, values}};
       long a_js[2] = {{js[0], WT_CHUNK}}, a_is[2] = {{is[0], 1}};
       double* o[3] = {{state, capacity, w_safe}};
-      wt_each(m, NULL, k_start, a, a_js, a_is, o, WT_CHUNK);
+      wt_each(n_cold, cold, k_start, a, a_js, a_is, o, WT_CHUNK);
+    }}
+    {{
+      const double* a[5] = {{load, values, values + ({n_scan} - 1) * WT_CHUNK, guess, p}};
+      long a_js[5] = {{js[0], 1, 1, js[2], js[3]}}, a_is[5] = {{is[0], 1, 1, is[2], is[3]}};
+      double* o[3] = {{state, capacity, w_safe}};
+      wt_each(n_warm, warm, k_start_warm, a, a_js, a_is, o, WT_CHUNK);
     }}
     for (int iteration = 0; iteration < {_contact.NEWTON_ITERATIONS}; ++iteration) {{
       long n_active = 0, a;
@@ -252,17 +270,18 @@ int wt_solve(long n, const double* const* in, const long* shared, double* const*
       double* o[1] = {{theta}};
       wt_each(m, NULL, k_solve_angle, a, a_js, a_is, o, 0);
     }}
-    {{
-      double* o[1] = {{f}};
-      wt_cases(m, NULL, at, at_js, at_is, o, 0, k_case, fz, 3);
+    {{  /* the ripple-free contact at the final angle, into rows 1.. of the outputs */
+      double* o[1] = {{out[0] + n + c0}};
+      wt_cases(m, NULL, at, at_js, at_is, o, n, k_case, contact, 3);
     }}
     {{
-      const double* a[4] = {{load, state, f, p}};
-      long a_js[4] = {{js[0], WT_CHUNK, 1, js[2]}}, a_is[4] = {{is[0], 1, 1, is[2]}};
-      double* o[3] = {{out[0] + c0, out[0] + n + c0, out[0] + 2 * n + c0}};
+      const double* a[4] = {{load, state, out[0] + {f_row} * n + c0, p}};
+      long a_js[4] = {{js[0], WT_CHUNK, 1, js[3]}}, a_is[4] = {{is[0], 1, 1, is[3]}};
+      double* o[3] = {{out[0] + c0, out[0] + {rows["residual"]} * n + c0,
+                      out[0] + {rows["last_step"]} * n + c0}};
       wt_each(m, NULL, k_finish, a, a_js, a_is, o, 0);
     }}
-    for (i = 0; i < m; ++i) out[0][3 * n + c0 + i] = capacity[i];
+    for (i = 0; i < m; ++i) out[0][{rows["capacity"]} * n + c0 + i] = capacity[i];
   }}
   return 0;
 }}
@@ -416,12 +435,11 @@ def compiled_contact(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> LaneFun
                         len(_contact.NAMES))
 
 
-SOLVE_OUTPUTS = ("sinkage", "residual", "last_step", "capacity")
-
-
 @lru_cache(maxsize=4)
 def compiled_solve(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> LaneFunction:
-    """``solve(load, slip, p)`` -> SOLVE_OUTPUTS, the outputs of ``build().sinkage_solve``,
-    compiled on first use (about two minutes) and cached."""
+    """``solve(load, slip, guess, p)`` -> STEADY_OUTPUTS, those of ``build().steady`` where
+    ``guess`` is NaN, warm-started from the sinkage ``guess`` [m] elsewhere; compiled on first
+    use (about 100 s) and cached."""
     library, vector_math = compile_source(solve_source(nodes), "solve_lanes")
-    return LaneFunction(library, "wt_solve", SOLVE_OUTPUTS, vector_math, len(_contact.NAMES))
+    return LaneFunction(library, "wt_solve", _contact.STEADY_OUTPUTS, vector_math,
+                        len(_contact.NAMES))
