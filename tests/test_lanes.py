@@ -338,3 +338,37 @@ def test_without_a_c_compiler_steady_states_uses_casadi(monkeypatch, table2):
                 model_api.steady_state(table2, w, i)["sinkage"], rel=1e-12)
     finally:
         model_api._steady_many.cache_clear()
+
+
+def test_contact_forces_many_equals_contact_forces(lane_cache, table2, monkeypatch):
+    from wheelterrain.errors import InputError
+    from wheelterrain.fmu.compiled import CompileError
+
+    z = np.array([-0.001, 0.0, 0.004, 0.02, 0.04])
+    slip = np.array([0.1, -0.3, 0.2, 0.5, 0.9])
+    rate, angle = 0.05, np.linspace(0.0, 3.0, 5)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("WHEELTERRAIN_CACHE", str(lane_cache))
+        many = model_api.contact_forces_many(table2, z, slip, sinkage_rate=rate,
+                                             wheel_angle=angle)
+        with pytest.raises(InputError, match="sinkage"):
+            model_api.contact_forces_many(table2, [0.01, 1.0], 0.2)
+        with pytest.raises(InputError, match="wheel_angle"):
+            model_api.contact_forces_many(table2, 0.01, 0.2, wheel_angle=[0.0, np.inf])
+
+    def no_compiler(*args, **kwargs):
+        raise CompileError("no C compiler (cc/gcc, or $CC) on PATH")
+
+    monkeypatch.setattr(lanes, "compiled_contact", no_compiler)
+    model_api._contact_many.cache_clear()
+    try:
+        on_vm = model_api.contact_forces_many(table2, z, slip, sinkage_rate=rate,
+                                              wheel_angle=angle)
+    finally:
+        model_api._contact_many.cache_clear()
+    for k in range(z.size):
+        one = model_api.contact_forces(table2, z[k], slip[k], sinkage_rate=rate,
+                                       wheel_angle=angle[k])
+        for name, value in one.items():
+            assert many[name][k] == pytest.approx(value, rel=1e-12, abs=1e-12), name
+            assert on_vm[name][k] == pytest.approx(value, rel=1e-12, abs=1e-12), name

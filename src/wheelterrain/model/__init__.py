@@ -6,7 +6,8 @@
 - :mod:`.rig`: the single-wheel test rig (carriage, wheel drive, vertical motion).
 - :mod:`.api`: the validated float API, also reachable here: ``model.steady_state``,
   ``model.contact_forces``, ``model.capacity``, ``model.steady_jacobian``, and for many points
-  at once ``model.steady_states`` and ``model.steady_map`` (lane-parallel C, :mod:`.lanes`).
+  at once ``model.steady_states``, ``model.steady_map`` and ``model.contact_forces_many``
+  (lane-parallel C, :mod:`.lanes`).
 
 The float API is loaded on first use, so importing :mod:`.slip` alone (sweep workers) does not
 load CasADi.
@@ -14,8 +15,8 @@ load CasADi.
 
 from __future__ import annotations
 
-_API = ("steady_state", "steady_states", "steady_map", "contact_forces", "capacity",
-        "steady_jacobian", "contact_radius", "RESIDUAL_TOLERANCE", "STEP_TOLERANCE")
+_API = ("steady_state", "steady_states", "steady_map", "contact_forces", "contact_forces_many",
+        "capacity", "steady_jacobian", "contact_radius", "RESIDUAL_TOLERANCE", "STEP_TOLERANCE")
 
 
 def __getattr__(name: str):

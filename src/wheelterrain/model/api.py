@@ -162,10 +162,7 @@ def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,
     ps = _params(params)
     if over_capacity not in ("raise", "nan"):
         raise InputError("over_capacity", over_capacity, "must be 'raise' or 'nan'")
-    load = np.asarray(load, dtype=float)
-    if load.size and not (np.all(np.isfinite(load)) and np.all(load >= 0)):
-        first = np.flatnonzero(~(np.isfinite(load) & (load >= 0)))[0]
-        _finite("load", float(load.flat[first]), lo=0.0)
+    load = _finite_array("load", load, lo=0.0)
     i = _traction_array("slip", slip, slip_definition)
     load, i = (np.ascontiguousarray(a, dtype=float).reshape(-1) for a in
                np.broadcast_arrays(load, i))
@@ -205,6 +202,52 @@ def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,
     with np.errstate(divide="ignore"):
         result.update(load=load, slip=i, slip_paper=np.where(i == 1.0, np.inf, i / (1.0 - i)))
     return result
+
+
+def _finite_array(name: str, values, lo: float = -math.inf, hi: float = math.inf) -> np.ndarray:
+    """As :func:`_finite`, for an array: the first offending value is refused by name."""
+    values = np.asarray(values, dtype=float)
+    ok = np.isfinite(values) & (values >= lo) & (values <= hi)
+    if not np.all(ok):
+        _finite(name, float(values.flat[np.flatnonzero(~ok)[0]]), lo, hi)
+    return values
+
+
+def contact_forces_many(params: Mapping[str, float] | ParameterSet, sinkage, slip, *,
+                        sinkage_rate=0.0, wheel_angle=0.0,
+                        slip_definition: str = "traction") -> dict[str, np.ndarray]:
+    """:func:`contact_forces` at many points at once (arrays of one length, or scalars shared):
+    one array per ``contact.CONTACT_OUTPUTS`` key. Lane-parallel C (:mod:`.lanes`, compiled on
+    first use, about 20 s, then cached; ~0.7 us a point on one core), or CasADi's virtual
+    machine without a C compiler (same numbers to rounding)."""
+    ps = _params(params)
+    z = _finite_array("sinkage", sinkage, hi=contact_radius(ps))
+    rate = _finite_array("sinkage_rate", sinkage_rate)
+    angle = _finite_array("wheel_angle", wheel_angle)
+    i = _traction_array("slip", slip, slip_definition)
+    columns = [np.ascontiguousarray(a, dtype=float).reshape(-1)
+               for a in np.broadcast_arrays(z, rate, i, angle)]
+    out = _contact_many()(*columns, ps.vector())
+    return {name: out[k] + 0.0 for k, name in enumerate(_contact.CONTACT_OUTPUTS)}
+
+
+@lru_cache(maxsize=1)
+def _contact_many():
+    """The lane-parallel contact, or (no C compiler) CasADi's map of build().contact."""
+    from wheelterrain.fmu.compiled import CompileError
+    from wheelterrain.model import lanes
+
+    try:
+        return lanes.compiled_contact()
+    except CompileError:
+        contact = _contact.build().contact
+
+        def vm(z, rate, slip, angle, p):
+            n = z.size
+            return np.array(contact.map(n)(z, rate, slip, angle, np.tile(p[:, None], (1, n)))
+                            ).reshape(len(_contact.CONTACT_OUTPUTS), n)
+
+        return vm
 
 
 def steady_map(params: Mapping[str, float] | ParameterSet, loads, slips, *,
