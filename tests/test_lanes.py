@@ -30,20 +30,22 @@ def lane_cache(tmp_path_factory):
     return tmp_path_factory.mktemp("lanes_cache")
 
 
+def compiled_in(cache, factory):
+    """``factory()`` compiled into ``cache`` (not a library an earlier call kept)."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("WHEELTERRAIN_CACHE", str(cache))
+        factory.cache_clear()
+        return factory()
+
+
 @pytest.fixture(scope="session")
 def lane_contact(lane_cache):
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("WHEELTERRAIN_CACHE", str(lane_cache))
-        lanes.compiled_contact.cache_clear()
-        return lanes.compiled_contact()
+    return compiled_in(lane_cache, lanes.compiled_contact)
 
 
 @pytest.fixture(scope="session")
 def lane_solve(lane_cache):
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("WHEELTERRAIN_CACHE", str(lane_cache))
-        lanes.compiled_solve.cache_clear()
-        return lanes.compiled_solve()
+    return compiled_in(lane_cache, lanes.compiled_solve)
 
 
 def random_points(n: int, seed: int):

@@ -29,6 +29,7 @@ import hashlib
 import os
 import platform
 import subprocess
+import sys
 import tempfile
 from dataclasses import dataclass
 from functools import lru_cache
@@ -354,6 +355,9 @@ def compile_source(source: str, name: str) -> tuple[Path, bool]:
         if library.is_file():
             return library, bool(flags)
     place.mkdir(parents=True, exist_ok=True)
+    # the first use waits for the compiler (20-80 s): say so, once, rather than stall silently
+    print(f"wheelterrain: compiling {name} for this processor, once (kept in {place})",
+          file=sys.stderr, flush=True)
     errors = []
     with tempfile.TemporaryDirectory(prefix="wheelterrain_lanes_") as tmp:
         c_file = Path(tmp) / f"{name}.c"
