@@ -150,8 +150,9 @@ def main(argv: list[str] | None = None) -> None:
         t0 = time.perf_counter()
         lane_solve = lanes.compiled_solve()
         lane_build += time.perf_counter() - t0
-        tl_solve = median_time(lambda: lane_solve(load, slip, np.nan, P), args.repeats) / n
-        solve_check = np.max(np.abs(lane_solve(load, slip, np.nan, P)[0]
+        cold = (np.nan, np.nan, np.nan)  # no guess, no scan ends given
+        tl_solve = median_time(lambda: lane_solve(load, slip, *cold, P), args.repeats) / n
+        solve_check = np.max(np.abs(lane_solve(load, slip, *cold, P)[0]
                                     - np.array(c_solve(*solve_in)[0]).ravel()))
         # a sweep: model.steady_map over loads x slips, warm-started along the loads from
         # the neighbouring solutions (the whole API path: validation, retries, NaN marking)

@@ -207,7 +207,7 @@ def test_lane_solve_equals_the_steady_state(lane_solve, name):
     capacity = np.array(contact.build().capacity.map(n)(slip, np.tile(p[:, None], (1, n))))
     load = rng.uniform(0.0, 1.2, n) * capacity.ravel()
     load[:7] = 0.0
-    got = lane_solve(load, slip, np.nan, p)
+    got = lane_solve(load, slip, np.nan, np.nan, np.nan, p)
     assert_same_steady_state(got, steady_reference(load, slip, p))
     assert np.all(got[ROW["sinkage"]][:7] == 0)
 
@@ -218,7 +218,8 @@ def test_lane_solve_with_per_point_parameters(lane_solve):
     table = np.array([presets.load(name).vector() for name in PRESETS]).T
     P = np.ascontiguousarray(table[:, rng.integers(0, len(PRESETS), n)])
     load, slip = rng.uniform(1.0, 120.0, n), rng.uniform(-0.3, 0.8, n)
-    assert_same_steady_state(lane_solve(load, slip, np.nan, P), steady_reference(load, slip, P))
+    assert_same_steady_state(lane_solve(load, slip, np.nan, np.nan, np.nan, P),
+                             steady_reference(load, slip, P))
 
 
 @pytest.mark.parametrize("name", PRESETS)
@@ -232,15 +233,20 @@ def test_a_warm_start_reaches_the_cold_solution(lane_solve, name):
     slip = rng.uniform(0.0, 0.8, n)
     capacity = np.array(contact.build().capacity.map(n)(slip, np.tile(p[:, None], (1, n))))
     load = rng.uniform(0.01, 0.9, n) * capacity.ravel()
-    cold = lane_solve(load, slip, np.nan, p)
+    cold = lane_solve(load, slip, np.nan, np.nan, np.nan, p)
     guess = cold[ROW["sinkage"]] * rng.uniform(0.5, 2.0, n)
     guess[::7] = np.nan
     guess[3::7] = 0.1 * presets.load(name)["wheel.radius"]
-    warm = lane_solve(load, slip, guess, p)
+    warm = lane_solve(load, slip, guess, np.nan, np.nan, p)
     assert np.all(converged(warm))
     assert np.allclose(warm[ROW["sinkage"]], cold[ROW["sinkage"]], rtol=1e-12, atol=0)
     assert_agrees(warm[CONTACT_ROWS], cold[CONTACT_ROWS])
     assert np.array_equal(warm[:, ::7], cold[:, ::7])  # no guess: the cold solve itself
+    # the scan's ends given (as a sweep passes them): the same numbers, bit for bit
+    ends = lanes.compiled_scan_ends()(slip, p)
+    assert np.array_equal(ends[1], cold[ROW["capacity"]])
+    assert np.array_equal(lane_solve(load, slip, guess, ends[0], ends[1], p), warm,
+                          equal_nan=True)
 
 
 def test_steady_states_equals_steady_state_point_by_point(lane_cache, table2):
@@ -308,9 +314,9 @@ def test_a_warm_start_that_fails_is_solved_again_cold(monkeypatch, lane_cache, t
         real = lanes.compiled_solve()
     calls = []
 
-    def failing_when_warm(load, slip, guess, p):
-        out = real(load, slip, guess, p)
-        warm = np.isfinite(guess)
+    def failing_when_warm(load, slip, guess, first, last, p):
+        out = real(load, slip, guess, first, last, p)
+        warm = np.isfinite(np.broadcast_to(guess, load.shape))
         calls.append(int(np.sum(warm)))
         out[contact.STEADY_OUTPUTS.index("residual"), warm] = 1.0
         out[contact.STEADY_OUTPUTS.index("last_step"), warm] = 1.0

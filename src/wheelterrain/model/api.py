@@ -166,12 +166,20 @@ def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,
     i = _traction_array("slip", slip, slip_definition)
     load, i = (np.ascontiguousarray(a, dtype=float).reshape(-1) for a in
                np.broadcast_arrays(load, i))
+    guess = np.nan if guess is None else np.broadcast_to(np.asarray(guess, dtype=float),
+                                                         load.shape)
+    return _solve_points(ps, load, i, guess, (np.nan, np.nan), over_capacity)
+
+
+def _solve_points(ps: ParameterSet, load: np.ndarray, i: np.ndarray, guess, ends,
+                  over_capacity: str) -> dict[str, np.ndarray]:
+    """:func:`steady_states` after its checks; ``ends``: the scan's end values per point
+    (:func:`_scan_ends`) or NaN."""
     n = load.size
-    guess_in = np.full(n, np.nan) if guess is None else np.broadcast_to(
-        np.asarray(guess, dtype=float), (n,)).copy()
+    guess_in = np.broadcast_to(np.asarray(guess, dtype=float), (n,))
     solve = _steady_many()
     p = ps.vector()
-    out = solve(load, i, guess_in, p)
+    out = solve(load, i, guess_in, *ends, p)
     row = {name: k for k, name in enumerate(_contact.STEADY_OUTPUTS)}
     carried = load <= out[row["capacity"]]
 
@@ -181,7 +189,7 @@ def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,
 
     retry = np.flatnonzero(np.isfinite(guess_in) & carried & ~converged(out))
     if retry.size:  # a warm start that failed: the cold solve
-        out[:, retry] = solve(load[retry], i[retry], np.full(retry.size, np.nan), p)
+        out[:, retry] = solve(load[retry], i[retry], np.nan, np.nan, np.nan, p)
     if not np.all(carried):
         first = np.flatnonzero(~carried)[0]
         if over_capacity == "raise":
@@ -198,7 +206,8 @@ def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,
             f"{load[k]:g} N, slip {i[k]:g}: relative residual {out[row['residual'], k]:.3g} > "
             f"{RESIDUAL_TOLERANCE:g} and last step {out[row['last_step'], k]:.3g} > "
             f"{STEP_TOLERANCE:g} in log(entry angle)")
-    result = {name: out[k] + 0.0 for name, k in row.items()}  # + 0.0: no -0.0
+    np.add(out, 0.0, out=out)  # no -0.0
+    result = {name: out[k] for name, k in row.items()}
     with np.errstate(divide="ignore"):
         result.update(load=load, slip=i, slip_paper=np.where(i == 1.0, np.inf, i / (1.0 - i)))
     return result
@@ -259,14 +268,16 @@ def steady_map(params: Mapping[str, float] | ParameterSet, loads, slips, *,
     A continuation along the loads: the two smallest loads are solved cold, each next one
     warm-started from the sinkage extrapolated linearly from the two before it, for all slips
     at once (:func:`steady_states` with ``guess``)."""
-    loads = np.asarray(loads, dtype=float).reshape(-1)
-    slips = np.asarray(slips, dtype=float).reshape(-1)
+    ps = _params(params)
+    loads = _finite_array("load", np.asarray(loads, dtype=float).reshape(-1), lo=0.0)
+    slips = _traction_array("slip", np.asarray(slips, dtype=float).reshape(-1), slip_definition)
+    ends = _scan_ends(slips, ps.vector())  # depend on slip and p only: once for every row
     order = np.argsort(loads, kind="stable")
     rows: list[dict[str, np.ndarray]] = []
-    guess = None
+    guess = np.nan
     for k, at in enumerate(order):
-        rows.append(steady_states(params, loads[at], slips, slip_definition=slip_definition,
-                                  guess=guess, over_capacity="nan"))
+        rows.append(_solve_points(ps, np.full(slips.size, loads[at]), slips, guess, ends,
+                                  "nan"))
         if k >= 1:
             w0, w1 = loads[order[k - 1]], loads[at]
             z0, z1 = rows[-2]["sinkage"], rows[-1]["sinkage"]
@@ -280,10 +291,22 @@ def steady_map(params: Mapping[str, float] | ParameterSet, loads, slips, *,
     return result
 
 
+def _scan_ends(slips: np.ndarray, p: np.ndarray) -> tuple:
+    """Fz_static at the solve's scan ends for each slip (NaN on CasADi's VM, which does not
+    use them)."""
+    from wheelterrain.model import lanes
+
+    if not isinstance(_steady_many(), lanes.LaneFunction):
+        return np.nan, np.nan
+    ends = lanes.compiled_scan_ends()(slips, p)
+    return ends[0], ends[1]
+
+
 @lru_cache(maxsize=1)
 def _steady_many():
     """The lane-parallel steady state, or (no C compiler) CasADi's map of build().steady with
-    the same call (load, slip, guess, p) -> STEADY_OUTPUTS rows; the guess is then unused."""
+    the same call (load, slip, guess, first, last, p) -> STEADY_OUTPUTS rows; the guess and
+    the scan's ends are then unused."""
     from wheelterrain.fmu.compiled import CompileError
     from wheelterrain.model import lanes
 
@@ -292,7 +315,7 @@ def _steady_many():
     except CompileError:
         steady = _contact.build().steady
 
-        def vm(load, slip, guess, p):
+        def vm(load, slip, guess, first, last, p):
             n = load.size
             return np.array(steady.map(n)(load, slip, np.tile(p[:, None], (1, n)))).reshape(
                 len(_contact.STEADY_OUTPUTS), n)

@@ -186,12 +186,14 @@ static void wt_strides(long n, int n_in, const long* shared, long* js, long* is)
 
 def solve_source(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> str:
     """The C of ``wt_solve(n, in, shared, out)``: the steady state at n points (inputs load,
-    slip, guess, p; outputs STEADY_OUTPUTS, as ``build().steady``), in chunks of WT_CHUNK
+    slip, guess, first, last, p; outputs STEADY_OUTPUTS, as ``build().steady``), in chunks of
+    WT_CHUNK
     points: the scan, the bracket, at most NEWTON_ITERATIONS Newton iterations for the points
     not yet converged, the final angle, the ripple-free contact there and the outputs: the
     order in which ``build().steady`` evaluates the same pieces. A point with a sinkage guess
     (finite, > 0) starts warm instead (:func:`~wheelterrain.model.contact._solve_start_warm`):
-    the scan's two ends and Newton from the guess."""
+    the scan's two ends and Newton from the guess; ``first`` and ``last``, where finite, are
+    those two ends' Fz_static (from ``wt_scan_ends``: a sweep computes them once per slip)."""
     k = _contact.solve_lane_kernels(nodes)
     singles = ("case", "start", "start_warm", "newton_angle", "newton_update", "solve_angle",
                "finish")
@@ -212,27 +214,37 @@ int wt_solve(long n, const double* const* in, const long* shared, double* const*
   static const double scan[{n_scan}] = {{{angles}}};
   double values[{n_scan} * WT_CHUNK], state[8 * WT_CHUNK], next[8 * WT_CHUNK];
   double fd[2 * WT_CHUNK], theta[WT_CHUNK], capacity[WT_CHUNK], w_safe[WT_CHUNK];
-  long active[WT_CHUNK], cold[WT_CHUNK], warm[WT_CHUNK], js[4], is[4];
-  wt_strides(n, 4, shared, js, is);
+  long active[WT_CHUNK], cold[WT_CHUNK], warm[WT_CHUNK], need[WT_CHUNK], js[6], is[6];
+  wt_strides(n, 6, shared, js, is);
   for (long c0 = 0; c0 < n; c0 += WT_CHUNK) {{
-    long m = n - c0 < WT_CHUNK ? n - c0 : WT_CHUNK, i, n_cold = 0, n_warm = 0;
+    long m = n - c0 < WT_CHUNK ? n - c0 : WT_CHUNK, i, n_cold = 0, n_warm = 0, n_need = 0;
     const double* load = in[0] + c0 * is[0];
     const double* slip = in[1] + c0 * is[1];
     const double* guess = in[2] + c0 * is[2];
-    const double* p = in[3] + c0 * is[3];
-    /* a finite, positive sinkage guess starts a point warm; NaN (or <= 0) cold */
+    const double* first = in[3] + c0 * is[3];
+    const double* last = in[4] + c0 * is[4];
+    const double* p = in[5] + c0 * is[5];
+    /* a finite, positive sinkage guess starts a point warm; NaN (or <= 0) cold. A warm point
+       needs the scan's two ends, unless given (finite): they depend on slip and p only */
     for (i = 0; i < m; ++i) {{
-      double g = guess[i * is[2]];
-      if (g > 0 && g - g == 0) warm[n_warm++] = i; else cold[n_cold++] = i;
+      double g = guess[i * is[2]], a = first[i * is[3]], b = last[i * is[4]];
+      int warm_point = g > 0 && g - g == 0, given = a - a == 0 && b - b == 0;
+      if (warm_point) warm[n_warm++] = i; else cold[n_cold++] = i;
+      if (!warm_point || !given) need[n_need++] = i;
+      if (warm_point && given) {{
+        values[i] = a;
+        values[({n_scan} - 1) * WT_CHUNK + i] = b;
+      }}
     }}
     /* at an entry angle per point: theta, slip, p */
     const double* at[3] = {{theta, slip, p}};
-    long at_js[3] = {{1, js[1], js[3]}}, at_is[3] = {{1, is[1], is[3]}};
+    long at_js[3] = {{1, js[1], js[5]}}, at_is[3] = {{1, is[1], is[5]}};
     for (int s = 0; s < {n_scan}; ++s) {{  /* a warm start needs the scan's two ends only */
       int ends = s == 0 || s == {n_scan} - 1;
       double* o[1] = {{values + s * WT_CHUNK}};
       for (i = 0; i < m; ++i) theta[i] = scan[s];
-      wt_cases(ends ? m : n_cold, ends ? NULL : cold, at, at_js, at_is, o, 0, k_case, fz, 3);
+      wt_cases(ends ? n_need : n_cold, ends ? need : cold, at, at_js, at_is, o, 0, k_case, fz,
+               3);
     }}
     {{
       const double* a[2] = {{load, values}};
@@ -242,7 +254,7 @@ int wt_solve(long n, const double* const* in, const long* shared, double* const*
     }}
     {{
       const double* a[5] = {{load, values, values + ({n_scan} - 1) * WT_CHUNK, guess, p}};
-      long a_js[5] = {{js[0], 1, 1, js[2], js[3]}}, a_is[5] = {{is[0], 1, 1, is[2], is[3]}};
+      long a_js[5] = {{js[0], 1, 1, js[2], js[5]}}, a_is[5] = {{is[0], 1, 1, is[2], is[5]}};
       double* o[3] = {{state, capacity, w_safe}};
       wt_each(n_warm, warm, k_start_warm, a, a_js, a_is, o, WT_CHUNK);
     }}
@@ -277,12 +289,32 @@ int wt_solve(long n, const double* const* in, const long* shared, double* const*
     }}
     {{
       const double* a[4] = {{load, state, out[0] + {f_row} * n + c0, p}};
-      long a_js[4] = {{js[0], WT_CHUNK, 1, js[3]}}, a_is[4] = {{is[0], 1, 1, is[3]}};
+      long a_js[4] = {{js[0], WT_CHUNK, 1, js[5]}}, a_is[4] = {{is[0], 1, 1, is[5]}};
       double* o[3] = {{out[0] + c0, out[0] + {rows["residual"]} * n + c0,
                       out[0] + {rows["last_step"]} * n + c0}};
       wt_each(m, NULL, k_finish, a, a_js, a_is, o, 0);
     }}
     for (i = 0; i < m; ++i) out[0][{rows["capacity"]} * n + c0 + i] = capacity[i];
+  }}
+  return 0;
+}}
+
+/* Fz_static at the scan's two ends (slip, p -> 2 rows): a sweep's warm starts share them. */
+int wt_scan_ends(long n, const double* const* in, const long* shared, double* const* out) {{
+  static const wt_kernel fz[3] = {{{fz}}};
+  static const double ends[2] = {{{float(scan[0])!r}, {float(scan[-1])!r}}};
+  double theta[WT_CHUNK];
+  long js[2], is[2];
+  wt_strides(n, 2, shared, js, is);
+  for (long c0 = 0; c0 < n; c0 += WT_CHUNK) {{
+    long m = n - c0 < WT_CHUNK ? n - c0 : WT_CHUNK;
+    const double* at[3] = {{theta, in[0] + c0 * is[0], in[1] + c0 * is[1]}};
+    long at_js[3] = {{1, js[0], js[1]}}, at_is[3] = {{1, is[0], is[1]}};
+    for (int e = 0; e < 2; ++e) {{
+      double* o[1] = {{out[0] + e * n + c0}};
+      for (long i = 0; i < m; ++i) theta[i] = ends[e];
+      wt_cases(m, NULL, at, at_js, at_is, o, 0, k_case, fz, 3);
+    }}
   }}
   return 0;
 }}
@@ -441,9 +473,19 @@ def compiled_contact(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> LaneFun
 
 @lru_cache(maxsize=4)
 def compiled_solve(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> LaneFunction:
-    """``solve(load, slip, guess, p)`` -> STEADY_OUTPUTS, those of ``build().steady`` where
-    ``guess`` is NaN, warm-started from the sinkage ``guess`` [m] elsewhere; compiled on first
-    use (about 100 s) and cached."""
+    """``solve(load, slip, guess, first, last, p)`` -> STEADY_OUTPUTS, those of
+    ``build().steady`` where ``guess`` is NaN, warm-started from the sinkage ``guess`` [m]
+    elsewhere (with the scan's end values ``first``, ``last`` where finite: from
+    :func:`compiled_scan_ends`); compiled on first use (about 80 s) and cached."""
     library, vector_math = compile_source(solve_source(nodes), "solve_lanes")
     return LaneFunction(library, "wt_solve", _contact.STEADY_OUTPUTS, vector_math,
                         len(_contact.NAMES))
+
+
+@lru_cache(maxsize=4)
+def compiled_scan_ends(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> LaneFunction:
+    """``ends(slip, p)`` -> Fz_static at the solve's smallest scan angle and fully buried (the
+    capacity), in the library of :func:`compiled_solve`."""
+    solve = compiled_solve(nodes)
+    return LaneFunction(solve.library, "wt_scan_ends", ("first", "last"), solve.vector_math,
+                        solve.n_params)
