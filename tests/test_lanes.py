@@ -340,7 +340,9 @@ def test_without_a_c_compiler_steady_states_uses_casadi(monkeypatch, table2):
     monkeypatch.setattr(lanes, "compiled_solve", no_compiler)
     model_api._steady_many.cache_clear()
     try:
-        out = model_api.steady_states(table2, [10.0, 30.0], [0.1, 0.4], guess=[0.01, np.nan])
+        with pytest.warns(UserWarning, match="virtual machine"):
+            out = model_api.steady_states(table2, [10.0, 30.0], [0.1, 0.4],
+                                          guess=[0.01, np.nan])
         for k, (w, i) in enumerate(((10.0, 0.1), (30.0, 0.4))):
             assert out["sinkage"][k] == pytest.approx(
                 model_api.steady_state(table2, w, i)["sinkage"], rel=1e-12)
@@ -370,8 +372,9 @@ def test_contact_forces_many_equals_contact_forces(lane_cache, table2, monkeypat
     monkeypatch.setattr(lanes, "compiled_contact", no_compiler)
     model_api._contact_many.cache_clear()
     try:
-        on_vm = model_api.contact_forces_many(table2, z, slip, sinkage_rate=rate,
-                                              wheel_angle=angle)
+        with pytest.warns(UserWarning, match="no C compiler"):
+            on_vm = model_api.contact_forces_many(table2, z, slip, sinkage_rate=rate,
+                                                  wheel_angle=angle)
     finally:
         model_api._contact_many.cache_clear()
     for k in range(z.size):
@@ -380,3 +383,20 @@ def test_contact_forces_many_equals_contact_forces(lane_cache, table2, monkeypat
         for name, value in one.items():
             assert many[name][k] == pytest.approx(value, rel=1e-12, abs=1e-12), name
             assert on_vm[name][k] == pytest.approx(value, rel=1e-12, abs=1e-12), name
+
+
+def test_an_unwritable_cache_is_a_compile_error_naming_the_setting(tmp_path, monkeypatch):
+    blocked = tmp_path / "file"
+    blocked.write_text("not a directory")
+    monkeypatch.setenv("WHEELTERRAIN_CACHE", str(blocked))
+    with pytest.raises(native.CompileError, match="WHEELTERRAIN_CACHE"):
+        lanes.compile_source("int f(void) { return 0; }\n", "blocked")
+
+
+def test_steady_map_refuses_an_empty_axis(table2):
+    from wheelterrain.errors import InputError
+
+    with pytest.raises(InputError, match="loads"):
+        model_api.steady_map(table2, [], [0.1, 0.2])
+    with pytest.raises(InputError, match="slips"):
+        model_api.steady_map(table2, [10.0], [])

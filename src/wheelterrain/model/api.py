@@ -8,6 +8,7 @@ caller never receives a wrong number silently.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from functools import lru_cache
 
@@ -15,7 +16,7 @@ import numpy as np
 
 from wheelterrain.errors import InputError, LoadTooLargeError, SolveError
 from wheelterrain.model import contact as _contact
-from wheelterrain.model.slip import paper_from_traction, to_traction
+from wheelterrain.model.slip import PAPER_RANGE, TRACTION_RANGE, paper_from_traction, to_traction
 from wheelterrain.parameters import ParameterSet
 
 RESIDUAL_TOLERANCE = 1e-9
@@ -135,8 +136,6 @@ def _traction_array(name: str, values, definition: str) -> np.ndarray:
 
 
 def _slip_range(definition: str) -> tuple[float, float]:
-    from wheelterrain.model.slip import PAPER_RANGE, TRACTION_RANGE
-
     return TRACTION_RANGE if definition == "traction" else PAPER_RANGE
 
 
@@ -148,12 +147,12 @@ def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,
     ``load``, ``slip`` (traction) and ``slip_paper``.
 
     Runs the lane-parallel C of :mod:`wheelterrain.model.lanes` (compiled on first use, about
-    100 s, then cached; ~12 us a point cold on one core), or CasADi's virtual machine where no C
-    compiler is found (same numbers to rounding, ~40x slower). ``guess``: sinkage [m] per point
-    to start Newton from (a neighbouring solution in a sweep; NaN for none); a warm start that
-    does not converge is solved again cold. With a guess the solve returns the root Newton
+    80 s, then cached; ~12 us a point cold on one core), or CasADi's virtual machine where it
+    cannot be compiled (same numbers to rounding, ~40x slower). ``guess``: sinkage [m] per
+    point to start Newton from (a neighbouring solution in a sweep; NaN for none); a warm start
+    that does not converge is solved again cold. With a guess the solve returns the root Newton
     reaches from it; cold, the shallowest (they are the same wherever Fz_static grows with
-    sinkage, as for every driving wheel).
+    sinkage, as the tests find for driving wheels on every preset).
 
     ``over_capacity``: "raise" (LoadTooLargeError for the first load the wheel cannot carry
     fully buried) or "nan" (those points' outputs are NaN; ``capacity`` is still given).
@@ -240,6 +239,11 @@ def contact_forces_many(params: Mapping[str, float] | ParameterSet, sinkage, sli
     return {name: out[k] + 0.0 for k, name in enumerate(_contact.CONTACT_OUTPUTS)}
 
 
+def _falling_back(reason: Exception) -> None:
+    warnings.warn(f"the lane-parallel C is not available ({reason}); evaluating on CasADi's "
+                  "virtual machine instead (the same numbers, about 30x slower)", stacklevel=4)
+
+
 @lru_cache(maxsize=1)
 def _contact_many():
     """The lane-parallel contact, or (no C compiler) CasADi's map of build().contact."""
@@ -248,7 +252,8 @@ def _contact_many():
 
     try:
         return lanes.compiled_contact()
-    except CompileError:
+    except CompileError as err:
+        _falling_back(err)
         contact = _contact.build().contact
 
         def vm(z, rate, slip, angle, p):
@@ -271,6 +276,9 @@ def steady_map(params: Mapping[str, float] | ParameterSet, loads, slips, *,
     ps = _params(params)
     loads = _finite_array("load", np.asarray(loads, dtype=float).reshape(-1), lo=0.0)
     slips = _traction_array("slip", np.asarray(slips, dtype=float).reshape(-1), slip_definition)
+    for name, axis in (("loads", loads), ("slips", slips)):
+        if axis.size == 0:
+            raise InputError(name, [], "must hold at least one value")
     ends = _scan_ends(slips, ps.vector())  # depend on slip and p only: once for every row
     order = np.argsort(loads, kind="stable")
     rows: list[dict[str, np.ndarray]] = []
@@ -284,7 +292,7 @@ def steady_map(params: Mapping[str, float] | ParameterSet, loads, slips, *,
             w2 = loads[order[k + 1]] if k + 1 < len(order) else w1
             slope = (z1 - z0) / (w1 - w0) if w1 > w0 else 0.0 * z1
             guess = z1 + slope * (w2 - w1)  # NaN where either was not carried: cold
-    result = {name: np.empty((loads.size, slips.size)) for name in rows[0]} if rows else {}
+    result = {name: np.empty((loads.size, slips.size)) for name in rows[0]}
     for k, at in enumerate(order):
         for name, values in rows[k].items():
             result[name][at] = values
@@ -312,7 +320,8 @@ def _steady_many():
 
     try:
         return lanes.compiled_solve()
-    except CompileError:
+    except CompileError as err:
+        _falling_back(err)
         steady = _contact.build().steady
 
         def vm(load, slip, guess, first, last, p):

@@ -386,7 +386,11 @@ def compile_source(source: str, name: str) -> tuple[Path, bool]:
         library = place / f"{name}_{len(flags)}.so"
         if library.is_file():
             return library, bool(flags)
-    place.mkdir(parents=True, exist_ok=True)
+    try:
+        place.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise CompileError(f"cannot create the cache directory {place} ({err}); set "
+                           "WHEELTERRAIN_CACHE to a writable one") from err
     # the first use waits for the compiler (20-80 s): say so, once, rather than stall silently
     print(f"wheelterrain: compiling {name} for this processor, once (kept in {place})",
           file=sys.stderr, flush=True)
@@ -407,8 +411,12 @@ def compile_source(source: str, name: str) -> tuple[Path, bool]:
                 raise CompileError(f"cannot run the C compiler {cc!r}: {err}") from err
             if run.returncode == 0:
                 part = library.with_suffix(f".{os.getpid()}.part")
-                part.write_bytes(partial.read_bytes())
-                os.replace(part, library)
+                try:
+                    part.write_bytes(partial.read_bytes())
+                    os.replace(part, library)
+                except OSError as err:
+                    raise CompileError(f"cannot write {library} ({err}); set "
+                                       "WHEELTERRAIN_CACHE to a writable directory") from err
                 return library, bool(flags)
             errors.append(run.stderr.strip()[-1000:])
     raise CompileError(f"{cc} failed on the lane kernels: {errors[-1]}")
