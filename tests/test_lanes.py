@@ -331,12 +331,12 @@ def test_a_warm_start_that_fails_is_solved_again_cold(monkeypatch, lane_cache, t
             "sinkage"], rel=1e-12)
 
 
+def no_compiler(*args, **kwargs):
+    """Stands in for a compiled_* factory on a machine without a C compiler."""
+    raise native.CompileError("no C compiler (cc/gcc, or $CC) on PATH")
+
+
 def test_without_a_c_compiler_steady_states_uses_casadi(monkeypatch, table2):
-    from wheelterrain.fmu.compiled import CompileError
-
-    def no_compiler(*args, **kwargs):
-        raise CompileError("no C compiler (cc/gcc, or $CC) on PATH")
-
     monkeypatch.setattr(lanes, "compiled_solve", no_compiler)
     model_api._steady_many.cache_clear()
     try:
@@ -352,7 +352,6 @@ def test_without_a_c_compiler_steady_states_uses_casadi(monkeypatch, table2):
 
 def test_contact_forces_many_equals_contact_forces(lane_cache, table2, monkeypatch):
     from wheelterrain.errors import InputError
-    from wheelterrain.fmu.compiled import CompileError
 
     z = np.array([-0.001, 0.0, 0.004, 0.02, 0.04])
     slip = np.array([0.1, -0.3, 0.2, 0.5, 0.9])
@@ -365,9 +364,6 @@ def test_contact_forces_many_equals_contact_forces(lane_cache, table2, monkeypat
             model_api.contact_forces_many(table2, [0.01, 1.0], 0.2)
         with pytest.raises(InputError, match="wheel_angle"):
             model_api.contact_forces_many(table2, 0.01, 0.2, wheel_angle=[0.0, np.inf])
-
-    def no_compiler(*args, **kwargs):
-        raise CompileError("no C compiler (cc/gcc, or $CC) on PATH")
 
     monkeypatch.setattr(lanes, "compiled_contact", no_compiler)
     model_api._contact_many.cache_clear()
