@@ -12,6 +12,7 @@ import warnings
 from collections.abc import Mapping
 from functools import lru_cache
 
+import casadi as ca
 import numpy as np
 
 from wheelterrain.errors import InputError, LoadTooLargeError, SolveError
@@ -98,15 +99,22 @@ def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: 
     out = _named(_contact.build().steady(w, i, ps.vector()), _contact.STEADY_OUTPUTS)
     if w > out["capacity"]:
         raise LoadTooLargeError(w, out["capacity"], contact_radius(ps))
-    converged = (abs(out["residual"]) <= RESIDUAL_TOLERANCE
-                 or out["last_step"] <= STEP_TOLERANCE)
-    if not converged:
-        raise SolveError(
-            f"sinkage solve did not converge for load {w:g} N, slip {i:g}: relative residual "
-            f"{out['residual']:.3g} > {RESIDUAL_TOLERANCE:g} and last step "
-            f"{out['last_step']:.3g} > {STEP_TOLERANCE:g} in log(entry angle)")
+    if not _converged(out["residual"], out["last_step"]):
+        raise SolveError(f"sinkage solve did not converge for load {w:g} N, slip {i:g}: "
+                         + _unconverged(out["residual"], out["last_step"]))
     out.update(load=w, slip=i, slip_paper=paper_from_traction(i))
     return out
+
+
+def _converged(residual, last_step):
+    """The solve's acceptance test (floats or arrays): a small relative residual, or a last
+    Newton step at rounding level."""
+    return (np.abs(residual) <= RESIDUAL_TOLERANCE) | (last_step <= STEP_TOLERANCE)
+
+
+def _unconverged(residual: float, last_step: float) -> str:
+    return (f"relative residual {residual:.3g} > {RESIDUAL_TOLERANCE:g} and last step "
+            f"{last_step:.3g} > {STEP_TOLERANCE:g} in log(entry angle)")
 
 
 def steady_jacobian(params: Mapping[str, float] | ParameterSet, load: float, slip: float,
@@ -170,6 +178,9 @@ def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,
     return _solve_points(ps, load, i, guess, (np.nan, np.nan), over_capacity)
 
 
+_STEADY_ROW = {name: k for k, name in enumerate(_contact.STEADY_OUTPUTS)}
+
+
 def _solve_points(ps: ParameterSet, load: np.ndarray, i: np.ndarray, guess, ends,
                   over_capacity: str) -> dict[str, np.ndarray]:
     """:func:`steady_states` after its checks; ``ends``: the scan's end values per point
@@ -179,12 +190,11 @@ def _solve_points(ps: ParameterSet, load: np.ndarray, i: np.ndarray, guess, ends
     solve = _steady_many()
     p = ps.vector()
     out = solve(load, i, guess_in, *ends, p)
-    row = {name: k for k, name in enumerate(_contact.STEADY_OUTPUTS)}
+    row = _STEADY_ROW
     carried = load <= out[row["capacity"]]
 
     def converged(o):
-        return ((np.abs(o[row["residual"]]) <= RESIDUAL_TOLERANCE)
-                | (o[row["last_step"]] <= STEP_TOLERANCE))
+        return _converged(o[row["residual"]], o[row["last_step"]])
 
     retry = np.flatnonzero(np.isfinite(guess_in) & carried & ~converged(out))
     if retry.size:  # a warm start that failed: the cold solve
@@ -200,11 +210,9 @@ def _solve_points(ps: ParameterSet, load: np.ndarray, i: np.ndarray, guess, ends
     bad = np.flatnonzero(carried & ~converged(out))
     if bad.size:
         k = bad[0]
-        raise SolveError(
-            f"sinkage solve did not converge at {bad.size} of {n} points, first at load "
-            f"{load[k]:g} N, slip {i[k]:g}: relative residual {out[row['residual'], k]:.3g} > "
-            f"{RESIDUAL_TOLERANCE:g} and last step {out[row['last_step'], k]:.3g} > "
-            f"{STEP_TOLERANCE:g} in log(entry angle)")
+        raise SolveError(f"sinkage solve did not converge at {bad.size} of {n} points, first "
+                         f"at load {load[k]:g} N, slip {i[k]:g}: "
+                         + _unconverged(out[row["residual"], k], out[row["last_step"], k]))
     np.add(out, 0.0, out=out)  # no -0.0
     result = {name: out[k] for name, k in row.items()}
     with np.errstate(divide="ignore"):
@@ -247,21 +255,31 @@ def _falling_back(reason: Exception) -> None:
 @lru_cache(maxsize=1)
 def _contact_many():
     """The lane-parallel contact, or (no C compiler) CasADi's map of build().contact."""
-    from wheelterrain.fmu.compiled import CompileError
     from wheelterrain.model import lanes
 
+    return _lanes_or_vm(lanes.compiled_contact, _contact.build().contact, used=(0, 1, 2, 3))
+
+
+def _lanes_or_vm(compiled, function: ca.Function, used: tuple[int, ...]):
+    """``compiled()`` (a lanes.LaneFunction), or where it cannot be compiled, with a warning,
+    the same call on CasADi's map of ``function``: per-point columns and ``p`` in, one row per
+    output out; ``used`` picks the columns ``function`` takes (the others, a warm start's
+    guess and scan ends, only speed the C)."""
+    from wheelterrain.fmu.compiled import CompileError
+
     try:
-        return lanes.compiled_contact()
+        return compiled()
     except CompileError as err:
         _falling_back(err)
-        contact = _contact.build().contact
 
-        def vm(z, rate, slip, angle, p):
-            n = z.size
-            return np.array(contact.map(n)(z, rate, slip, angle, np.tile(p[:, None], (1, n)))
-                            ).reshape(len(_contact.CONTACT_OUTPUTS), n)
+    def vm(*args):
+        *columns, p = args
+        n = max(np.size(c) for c in columns)
+        taken = [np.broadcast_to(np.asarray(columns[k], dtype=float), (n,)) for k in used]
+        return np.array(function.map(n)(*taken, np.tile(p[:, None], (1, n)))).reshape(
+            function.n_out(), n)
 
-        return vm
+    return vm
 
 
 def steady_map(params: Mapping[str, float] | ParameterSet, loads, slips, *,
@@ -315,18 +333,6 @@ def _steady_many():
     """The lane-parallel steady state, or (no C compiler) CasADi's map of build().steady with
     the same call (load, slip, guess, first, last, p) -> STEADY_OUTPUTS rows; the guess and
     the scan's ends are then unused."""
-    from wheelterrain.fmu.compiled import CompileError
     from wheelterrain.model import lanes
 
-    try:
-        return lanes.compiled_solve()
-    except CompileError as err:
-        _falling_back(err)
-        steady = _contact.build().steady
-
-        def vm(load, slip, guess, first, last, p):
-            n = load.size
-            return np.array(steady.map(n)(load, slip, np.tile(p[:, None], (1, n)))).reshape(
-                len(_contact.STEADY_OUTPUTS), n)
-
-        return vm
+    return _lanes_or_vm(lanes.compiled_solve, _contact.build().steady, used=(0, 1))
