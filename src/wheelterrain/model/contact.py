@@ -498,6 +498,7 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
 
 
 ARC, ARC_REVERSAL, PATCH = 0, 1, 2  # the cases of the contact switch (:func:`_forms`)
+FORMS = ("arc", "arc_reversal", "patch")  # their kernels' names, in case order
 
 
 @lru_cache(maxsize=8)
@@ -522,9 +523,10 @@ def _forms(nodes: tuple[int, int], ripple: bool) -> tuple[ca.Function, ca.Functi
         return ca.Function(name + tag, [th, sl, angle, pp],
                            [ca.vertcat(*(out[k] for k in CONTACT_OUTPUTS))], {"cse": True})
 
-    arc = kernel("arc", _arc_form(th, sl, angle, P, nodes, ripple, reversal=False))
-    split = kernel("arc_reversal", _arc_form(th, sl, angle, P, nodes, ripple, reversal=True))
-    patch = kernel("patch", _patch_form(th, sl, angle, P, ripple))
+    arc = kernel(FORMS[ARC], _arc_form(th, sl, angle, P, nodes, ripple, reversal=False))
+    split = kernel(FORMS[ARC_REVERSAL], _arc_form(th, sl, angle, P, nodes, ripple,
+                                                  reversal=True))
+    patch = kernel(FORMS[PATCH], _patch_form(th, sl, angle, P, ripple))
 
     Rc, Rs, Rref = _radii(P)
     reverses = _reverses(th, exit_angle(th, P), _Displacement(th, sl, P, Rc, Rs, Rref))
@@ -580,7 +582,7 @@ def lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> tuple[ca.Function, t
     case_fn = ca.Function("contact_case", sym, [case(theta_f, sym[2], P.p)],
                           list(CONTACT_INPUTS), ["case"], {"cse": True})
     forms = []
-    for name in ("arc", "arc_reversal", "patch"):  # ARC, ARC_REVERSAL, PATCH
+    for name in FORMS:
         kernel = switch.find_function(name)
         out = _contact(*sym[:4], P, nodes, True, form=kernel)
         forms.append(ca.Function(f"contact_{name}", sym, [ca.vertcat(
@@ -610,7 +612,7 @@ def solve_lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> dict:
     case, switch = _forms(nodes, False)
     at = CONTACT_OUTPUTS.index("normal_force_static")
     fz, fz_d, static = [], [], []
-    for name in ("arc", "arc_reversal", "patch"):  # ARC, ARC_REVERSAL, PATCH
+    for name in FORMS:
         out = switch.find_function(name + "_static")(th, sl, 0, pp)
         static.append(ca.Function(f"static_{name}", [th, sl, pp], [out], {"cse": True}))
         f = out[at]
@@ -717,11 +719,10 @@ def _solve_start(load, values):
     """The bracket of the sinkage solve from Fz_static at :func:`scan_angles` (``values``):
     ``(state, capacity, w_safe)``, the Newton state of :func:`_newton_update` at its first
     iterate."""
-    const = type(load)
-    w_safe = ca.fmax(load, 1e-300)
+    w_safe = _safe_load(load)
     scan = scan_angles()
     capacity = values[-1]
-    lo, hi = const(math.log(scan[0])), const(math.log(scan[-1]))
+    lo, hi = _scan_range(load)
     h_lo, h_hi = _residual(values[0], w_safe), _residual(values[-1], w_safe)
     for k in range(len(scan) - 1, 0, -1):  # the last assignment is the shallowest crossing
         reached = values[k] >= load
@@ -730,9 +731,24 @@ def _solve_start(load, values):
         lo, h_lo = (ca.if_else(reached, a, b) for a, b in
                     ((math.log(scan[k - 1]), lo), (_residual(values[k - 1], w_safe), h_lo)))
     y = _fallback(lo, hi, h_lo, h_hi)
-    # state: y, bracket (lo, hi, h_lo, h_hi), which end the previous iterate replaced (1 lo,
-    # 0 hi, -1 none), the last step, converged
-    return ca.vertcat(y, lo, hi, h_lo, h_hi, -1, math.inf, 0), capacity, w_safe
+    return _first_state(y, lo, hi, h_lo, h_hi), capacity, w_safe
+
+
+def _safe_load(load):
+    """The load as a divisor (the relative residual's scale)."""
+    return ca.fmax(load, 1e-300)
+
+
+def _scan_range(load):
+    """log of the scan's first and last angle: the widest bracket (constants of load's type)."""
+    const, scan = type(load), scan_angles()
+    return const(math.log(scan[0])), const(math.log(scan[-1]))
+
+
+def _first_state(y, lo, hi, h_lo, h_hi):
+    """The Newton state at the first iterate ``y``: y, the bracket (lo, hi, h_lo, h_hi), which
+    end the previous iterate replaced (1 lo, 0 hi, -1 none), the last step, converged."""
+    return ca.vertcat(y, lo, hi, h_lo, h_hi, -1, math.inf, 0)
 
 
 def _solve_start_warm(load, f_first, f_last, guess, P: _P):
@@ -740,14 +756,12 @@ def _solve_start_warm(load, f_first, f_last, guess, P: _P):
     there (``f_first`` at THETA_MIN, ``f_last`` fully buried: the capacity), and the first
     iterate the entry angle of the sinkage ``guess`` [m] when that lies inside the bracket,
     else regula falsi on it. ``(state, capacity, w_safe)`` as :func:`_solve_start`."""
-    const = type(load)
-    w_safe = ca.fmax(load, 1e-300)
-    scan = scan_angles()
-    lo, hi = const(math.log(scan[0])), const(math.log(scan[-1]))
+    w_safe = _safe_load(load)
+    lo, hi = _scan_range(load)
     h_lo, h_hi = _residual(f_first, w_safe), _residual(f_last, w_safe)
-    y = ca.log(ca.fmax(_entry_angle(guess, P), scan[0]))
+    y = ca.log(ca.fmax(_entry_angle(guess, P), THETA_MIN))
     y = ca.if_else(ca.logic_and(y > lo, y < hi), y, _fallback(lo, hi, h_lo, h_hi))
-    return ca.vertcat(y, lo, hi, h_lo, h_hi, -1, math.inf, 0), f_last, w_safe
+    return _first_state(y, lo, hi, h_lo, h_hi), f_last, w_safe
 
 
 def _solve_angle(load, state):
@@ -760,7 +774,7 @@ def _solve_finish(load, state, f, P: _P):
     Rc, _, _ = _radii(P)
     theta = _solve_angle(load, state)
     sinkage = 2 * Rc * ca.sin(theta / 2) ** 2  # = R_c*(1 - cos(theta)), without cancellation
-    w_safe = ca.fmax(load, 1e-300)
+    w_safe = _safe_load(load)
     residual = ca.if_else(load > 0, (f - load) / w_safe, 0)
     last_step = ca.if_else(load > 0, state[6], 0)
     return sinkage, residual, last_step
