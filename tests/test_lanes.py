@@ -396,3 +396,20 @@ def test_steady_map_refuses_an_empty_axis(table2):
         model_api.steady_map(table2, [], [0.1, 0.2])
     with pytest.raises(InputError, match="slips"):
         model_api.steady_map(table2, [10.0], [])
+
+
+def test_many_point_inputs_of_other_lengths_or_shapes_are_refused_by_name(table2):
+    from wheelterrain.errors import InputError
+
+    with pytest.raises(InputError, match=r"load, slip.*one length"):
+        model_api.steady_states(table2, [10.0, 20.0, 30.0], [0.1, 0.2])
+    with pytest.raises(InputError, match=r"load, guess.*one length"):
+        model_api.steady_states(table2, [10.0, 20.0], 0.2, guess=[0.01, 0.02, 0.03])
+    with pytest.raises(InputError, match=r"sinkage, slip.*one length"):
+        model_api.contact_forces_many(table2, [0.01, 0.02], [0.1, 0.2, 0.3])
+    with pytest.raises(InputError, match="1-D"):
+        model_api.steady_states(table2, [[10.0, 20.0]], 0.2)
+    with pytest.raises(InputError, match=r"loads.*1-D"):
+        model_api.steady_map(table2, [[10.0, 20.0]], [0.1])
+    with pytest.raises(InputError, match="not a number"):
+        model_api.steady_states(table2, "heavy", 0.2)

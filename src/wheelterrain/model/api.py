@@ -135,7 +135,7 @@ def steady_jacobian(params: Mapping[str, float] | ParameterSet, load: float, sli
 def _traction_array(name: str, values, definition: str) -> np.ndarray:
     """Validated traction slips from an array in either definition (as :func:`to_traction`)."""
     to_traction(0.0, definition)  # checks the definition's name
-    values = np.asarray(values, dtype=float)
+    values = _as_floats(name, values)
     lo, hi = _slip_range(definition)
     ok = np.isfinite(values) & (values >= lo) & (values <= hi)
     if not np.all(ok):  # the scalar check words the message (name, range)
@@ -171,10 +171,8 @@ def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,
         raise InputError("over_capacity", over_capacity, "must be 'raise' or 'nan'")
     load = _finite_array("load", load, lo=0.0)
     i = _traction_array("slip", slip, slip_definition)
-    load, i = (np.ascontiguousarray(a, dtype=float).reshape(-1) for a in
-               np.broadcast_arrays(load, i))
-    guess = np.nan if guess is None else np.broadcast_to(np.asarray(guess, dtype=float),
-                                                         load.shape)
+    guess = _as_floats("guess", np.nan if guess is None else guess)  # NaN, <= 0: none
+    load, i, guess = _one_length(load=load, slip=i, guess=guess)
     return _solve_points(ps, load, i, guess, (np.nan, np.nan), over_capacity)
 
 
@@ -220,9 +218,34 @@ def _solve_points(ps: ParameterSet, load: np.ndarray, i: np.ndarray, guess, ends
     return result
 
 
+def _as_floats(name: str, values) -> np.ndarray:
+    """A scalar or 1-D array of numbers, or an InputError naming the input."""
+    try:
+        array = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(name, values, "is not a number or an array of numbers") from None
+    if array.ndim > 1:
+        raise InputError(name, f"array of shape {array.shape}",
+                         "must be a number or a 1-D array") from None
+    return array
+
+
+def _one_length(**columns: np.ndarray) -> list[np.ndarray]:
+    """The columns as contiguous arrays of one length: a number (or one value) is shared by
+    every point; arrays of different lengths are an InputError naming them."""
+    lengths = {name: a.size for name, a in columns.items() if a.size != 1}
+    if len(set(lengths.values())) > 1:
+        shown = ", ".join(f"{name} {size}" for name, size in lengths.items())
+        raise InputError(", ".join(lengths), f"lengths {shown}",
+                         "must be numbers or arrays of one length")
+    n = next(iter(lengths.values()), 1)
+    return [np.ascontiguousarray(np.broadcast_to(a.reshape(-1), (n,))) for a in
+            columns.values()]
+
+
 def _finite_array(name: str, values, lo: float = -math.inf, hi: float = math.inf) -> np.ndarray:
     """As :func:`_finite`, for an array: the first offending value is refused by name."""
-    values = np.asarray(values, dtype=float)
+    values = _as_floats(name, values)
     ok = np.isfinite(values) & (values >= lo) & (values <= hi)
     if not np.all(ok):
         _finite(name, float(values.flat[np.flatnonzero(~ok)[0]]), lo, hi)
@@ -241,8 +264,7 @@ def contact_forces_many(params: Mapping[str, float] | ParameterSet, sinkage, sli
     rate = _finite_array("sinkage_rate", sinkage_rate)
     angle = _finite_array("wheel_angle", wheel_angle)
     i = _traction_array("slip", slip, slip_definition)
-    columns = [np.ascontiguousarray(a, dtype=float).reshape(-1)
-               for a in np.broadcast_arrays(z, rate, i, angle)]
+    columns = _one_length(sinkage=z, sinkage_rate=rate, slip=i, wheel_angle=angle)
     out = _contact_many()(*columns, ps.vector())
     return {name: out[k] + 0.0 for k, name in enumerate(_contact.CONTACT_OUTPUTS)}
 
@@ -292,8 +314,8 @@ def steady_map(params: Mapping[str, float] | ParameterSet, loads, slips, *,
     warm-started from the sinkage extrapolated linearly from the two before it, for all slips
     at once (:func:`steady_states` with ``guess``)."""
     ps = _params(params)
-    loads = _finite_array("load", np.asarray(loads, dtype=float).reshape(-1), lo=0.0)
-    slips = _traction_array("slip", np.asarray(slips, dtype=float).reshape(-1), slip_definition)
+    loads = _finite_array("loads", loads, lo=0.0).reshape(-1)
+    slips = _traction_array("slips", slips, slip_definition).reshape(-1)
     for name, axis in (("loads", loads), ("slips", slips)):
         if axis.size == 0:
             raise InputError(name, [], "must hold at least one value")
