@@ -55,18 +55,32 @@ def compile_function(fn: ca.Function, out_dir: Path, jacobian: bool = False,
     with tempfile.TemporaryDirectory(prefix="wheelterrain_cg_") as tmp:
         source = _generate(fn, Path(tmp), jacobian)
         partial = Path(tmp) / library.name
-        try:
-            run = subprocess.run([cc, optimisation, *CFLAGS, str(source), "-o", str(partial),
-                                  "-lm"],
-                                 capture_output=True, text=True, check=False)
-        except OSError as err:
-            raise CompileError(f"cannot run the C compiler {cc!r}: {err}") from err
+        run = run_compiler([cc, optimisation, *CFLAGS, str(source), "-o", str(partial), "-lm"])
         if run.returncode != 0:
             raise CompileError(f"{cc} failed on {source.name}: {run.stderr.strip()[:2000]}")
-        shutil.copyfile(partial, library.with_suffix(".so.part"))
-        os.replace(library.with_suffix(".so.part"), library)
+        install(partial, library)
         library.with_suffix(".sha256").write_text(_digest(source) + "\n")
     return library
+
+
+def run_compiler(command: list[str]) -> subprocess.CompletedProcess:
+    """Run a compiler command line, its output captured; a compiler that cannot be started is
+    a CompileError."""
+    try:
+        return subprocess.run(command, capture_output=True, text=True, check=False)
+    except OSError as err:
+        raise CompileError(f"cannot run the C compiler {command[0]!r}: {err}") from err
+
+
+def install(built: Path, library: Path) -> None:
+    """Put the library ``built`` (in a temporary folder) at ``library`` atomically: a reader
+    never loads half a file, and processes compiling the same library at once do not clash."""
+    part = library.with_suffix(f".{os.getpid()}.part")
+    try:
+        shutil.copyfile(built, part)
+        os.replace(part, library)
+    except OSError as err:
+        raise CompileError(f"cannot write {library} ({err})") from err
 
 
 def _generate(fn: ca.Function, directory: Path, jacobian: bool = False) -> Path:

@@ -136,15 +136,11 @@ def _traction_array(name: str, values, definition: str) -> np.ndarray:
     """Validated traction slips from an array in either definition (as :func:`to_traction`)."""
     to_traction(0.0, definition)  # checks the definition's name
     values = _as_floats(name, values)
-    lo, hi = _slip_range(definition)
+    lo, hi = TRACTION_RANGE if definition == "traction" else PAPER_RANGE
     ok = np.isfinite(values) & (values >= lo) & (values <= hi)
     if not np.all(ok):  # the scalar check words the message (name, range)
         to_traction(float(values.flat[np.flatnonzero(~ok)[0]]), definition)
     return values if definition == "traction" else values / (1.0 + values)
-
-
-def _slip_range(definition: str) -> tuple[float, float]:
-    return TRACTION_RANGE if definition == "traction" else PAPER_RANGE
 
 
 def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,

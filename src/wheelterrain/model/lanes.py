@@ -26,9 +26,7 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
-import os
 import platform
-import subprocess
 import sys
 import tempfile
 from dataclasses import dataclass
@@ -38,7 +36,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from wheelterrain.fmu.compiled import CompileError, cache_directory, compiler
+from wheelterrain.fmu.compiled import CompileError, cache_directory, compiler, install, run_compiler
 from wheelterrain.model import contact as _contact
 
 LANES = 8  # points per kernel call; 8 measured faster than 4 and 16 (two AVX2 vectors)
@@ -403,20 +401,10 @@ def compile_source(source: str, name: str) -> tuple[Path, bool]:
             partial = Path(tmp) / library.name
             link = [f for f in flags if f.startswith(("-l", "-Wl"))]
             options = [f for f in flags if f not in link]
-            try:
-                run = subprocess.run([cc, *_COMMON, *options, str(c_file), "-o", str(partial),
-                                      *link, "-lm"], capture_output=True, text=True,
-                                     check=False)
-            except OSError as err:
-                raise CompileError(f"cannot run the C compiler {cc!r}: {err}") from err
+            run = run_compiler([cc, *_COMMON, *options, str(c_file), "-o", str(partial), *link,
+                                "-lm"])
             if run.returncode == 0:
-                part = library.with_suffix(f".{os.getpid()}.part")
-                try:
-                    part.write_bytes(partial.read_bytes())
-                    os.replace(part, library)
-                except OSError as err:
-                    raise CompileError(f"cannot write {library} ({err}); set "
-                                       "WHEELTERRAIN_CACHE to a writable directory") from err
+                install(partial, library)
                 return library, bool(flags)
             errors.append(run.stderr.strip()[-1000:])
     raise CompileError(f"{cc} failed on the lane kernels: {errors[-1]}")
