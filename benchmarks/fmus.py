@@ -103,10 +103,13 @@ HOST = Path(__file__).resolve().parents[1] / "tests" / "fmi_host.c"
 
 
 def native_step_c_host(fmu_dir: Path, steps: int, repeats: int,
-                       ps=None) -> float | None:
+                       ps=None, quasi_static: str | None = None) -> float | None:
     """Seconds per WheelTerrain set + doStep + get of the native binary from a C host (median
     of ``repeats``), or None without a C compiler. ``ps``: the table parameters to set (None:
-    the FMU's start values, the default preset's)."""
+    the FMU's start values, the default preset's). Dynamic mode (constant inputs), or with
+    ``quasi_static`` "warm" or "cold" the quasi-static mode with that warm_start (the load
+    ramps from 20 N at 1 N/s, 1 mN a 1 ms step: a smoothly varying load, as in a system
+    simulation)."""
     import subprocess
 
     from fmpy import read_model_description
@@ -125,9 +128,16 @@ def native_step_c_host(fmu_dir: Path, steps: int, repeats: int,
                                                   ("carriage_speed", 0.024)))
     get = ",".join(str(vr[n]) for n in ("normal_force", "drawbar_pull", "torque"))
     kinds = {v.name: v.type for v in md.modelVariables}
-    given = "-" if ps is None else ",".join(
+    given = [] if ps is None else [
         f"{vr[p.name]}={ps[p.name]!r}" if kinds[p.name] == "Real"
-        else f"i{vr[p.name]}={round(ps[p.name])}" for p in TABLE)
+        else f"i{vr[p.name]}={round(ps[p.name])}" for p in TABLE]
+    if quasi_static is not None:
+        given += [f"b{vr['quasi_static']}=1",
+                  f"b{vr['warm_start']}={int(quasi_static == 'warm')}"]
+        ramp = ",".join(f"{vr[n]}={x}" for n, x in (("load", "20+1"), ("wheel_speed", "0.6+0"),
+                                                     ("carriage_speed", "0.024+0")))
+        get += f",{vr['contact_sinkage']}"
+    given = ",".join(given) or "-"
     with tempfile.TemporaryDirectory() as tmp:
         unzip = extract(str(fmu), unzipdir=str(Path(tmp) / "fmu"))
         exe = Path(tmp) / "host"
@@ -204,6 +214,18 @@ def main() -> None:
             print(f"native: WheelTerrain set+doStep+get from a C host: {c_host * 1e6:.2f} us "
                   f"(FMU defaults, {presets.DEFAULT_PRESET}: patch form); {arc * 1e6:.2f} us "
                   f"with {ARC_PRESET}'s parameters (arc form)")
+            # quasi-static mode, the load ramping: every solve cold, then warm-started from
+            # the previous step's sinkage (the FMU's default)
+            for label, params in ((presets.DEFAULT_PRESET, None), (ARC_PRESET, ps)):
+                quasi = {how: native_step_c_host(dirs["native"], 5 * args.steps, args.repeats,
+                                                 params, how) for how in ("cold", "warm")}
+                key = "" if params is None else "_arc"
+                figures[f"native_quasi_static_cold_c_host{key}_s"] = quasi["cold"]
+                figures[f"native_quasi_static_warm_c_host{key}_s"] = quasi["warm"]
+                print(f"native, quasi-static mode, load ramping, {label}: "
+                      f"{quasi['cold'] * 1e6:.2f} us a step solved cold, "
+                      f"{quasi['warm'] * 1e6:.2f} us warm-started ("
+                      f"{quasi['cold'] / quasi['warm']:.1f}x)")
     print(f"baseline: core contact Function call from Python: "
           f"{per_call(core, args.steps, args.repeats):.1f} us")
     if args.no_c1_c4:

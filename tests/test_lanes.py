@@ -174,8 +174,7 @@ CONTACT_ROWS = slice(ROW["normal_force"], ROW["normal_force_static"] + 1)
 
 def converged(out: np.ndarray) -> np.ndarray:
     """model.steady_state's acceptance test, per point."""
-    return ((np.abs(out[ROW["residual"]]) <= model_api.RESIDUAL_TOLERANCE)
-            | (out[ROW["last_step"]] <= model_api.STEP_TOLERANCE))
+    return contact.solve_converged(out[ROW["residual"]], out[ROW["last_step"]])
 
 
 def steady_reference(load, slip, P: np.ndarray) -> np.ndarray:
@@ -247,6 +246,42 @@ def test_a_warm_start_reaches_the_cold_solution(lane_solve, name):
     assert np.array_equal(ends[1], cold[ROW["capacity"]])
     assert np.array_equal(lane_solve(load, slip, guess, ends[0], ends[1], p), warm,
                           equal_nan=True)
+
+
+@pytest.mark.parametrize("name", PRESETS[:2])
+def test_the_lane_warm_start_is_steady_from(lane_solve, name):
+    """The warm start the FMUs run (build().steady_from, CasADi) and the lanes' are the same
+    algebra: the same outputs to rounding, driving and braking, from guesses 0.3x to 3x."""
+    p = presets.load(name).vector()
+    rng = np.random.default_rng(29 + len(name))
+    n = 60
+    slip = rng.uniform(-0.6, 0.9, n)
+    capacity = np.array(contact.build().capacity.map(n)(slip, np.tile(p[:, None], (1, n))))
+    load = rng.uniform(0.01, 0.9, n) * capacity.ravel()
+    cold = lane_solve(load, slip, np.nan, np.nan, np.nan, p)
+    guess = cold[ROW["sinkage"]] * rng.uniform(0.3, 3.0, n)
+    got = lane_solve(load, slip, guess, np.nan, np.nan, p)
+    assert np.all(converged(got))  # so steady_from keeps its warm result: no retry
+    ref = np.array(contact.build().steady_from.map(n)(load, slip, np.tile(p[:, None], (1, n)),
+                                                      guess)).reshape(-1, n)
+    assert_same_steady_state(got, ref)
+
+
+def test_steady_from_solves_again_cold_where_the_warm_start_fails(monkeypatch, table2):
+    """With one Newton iteration allowed, a warm start from the root converges and stands; one
+    from 30 % off does not, and steady_from returns the cold solve's outputs, bit for bit."""
+    root = contact.build().steady(40.0, 0.3, table2.vector())[0]
+    monkeypatch.setattr(contact, "NEWTON_ITERATIONS", 1)
+    fns = contact.build.__wrapped__(contact.DEFAULT_NODES)  # not the cached build
+    p = table2.vector()
+    cold = np.array(fns.steady(40.0, 0.3, p)).ravel()
+    assert not converged(cold)  # one iteration is not enough from the scan's bracket
+    exact = np.array(fns.steady_from(40.0, 0.3, p, root)).ravel()
+    assert converged(exact)
+    assert exact[ROW["sinkage"]] == pytest.approx(float(root), rel=1e-12)
+    off = np.array(fns.steady_from(40.0, 0.3, p, 1.3 * float(root))).ravel()
+    assert np.array_equal(off, cold)
+    assert np.array_equal(np.array(fns.steady_from(40.0, 0.3, p, np.nan)).ravel(), cold)
 
 
 def test_steady_states_equals_steady_state_point_by_point(lane_cache, table2):

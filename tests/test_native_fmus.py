@@ -126,6 +126,42 @@ def test_flavours_agree_on_wheelterrain(flavours, quasi_static, contact_form):
     assert checked >= 15
 
 
+@pytest.mark.parametrize("contact_form", [0, 1], ids=["arc", "patch"])
+def test_quasi_static_warm_start_gives_the_cold_solve(flavours, contact_form):
+    """warm_start (Newton from the last solved sinkage) along a load and slip sequence that
+    jumps about: the outputs of every-step-cold, to 1e-9, in both flavours, and the steady
+    state of the model's own cold solve."""
+    from wheelterrain import model
+
+    loads = (8.0, 20.0, 45.0, 44.5, 12.0, 60.0, 60.0, 3.0)
+    speeds = (0.024, 0.030, 0.020, 0.026, 0.031, 0.018, 0.025, 0.022)  # slip 0.2 to 0.55
+    names = ("contact_sinkage", "normal_force", "drawbar_pull", "torque", "slip")
+    traces = {}
+    for flavour in ("pythonfmu", "native"):
+        for warm in (True, False):
+            t = instance(flavours, flavour, "WheelTerrain", f"{flavour}-{warm}",
+                         {"quasi_static": True, "warm_start": warm,
+                          "model.contact_form": contact_form, "wheel_speed": 0.8})
+            try:
+                trace = []
+                for k, (w, v) in enumerate(zip(loads, speeds, strict=True)):
+                    t.set({"load": w, "carriage_speed": v})
+                    t.fmu.doStep(k * 1e-3, 1e-3)
+                    trace.append(t.get(names))
+                traces[flavour, warm] = np.array(trace)
+            finally:
+                t.close()
+    for key, trace in traces.items():
+        np.testing.assert_allclose(trace, traces["native", False], rtol=1e-9, atol=1e-12,
+                                   err_msg=str(key))
+    ps = presets.load(presets.DEFAULT_PRESET)
+    ps = ps.with_values({"model.contact_form": contact_form})
+    for row, w in zip(traces["native", True], loads, strict=True):
+        ref = model.steady_state(ps, w, row[-1])
+        assert row[0] == pytest.approx(ref["sinkage"], rel=1e-9)
+        assert row[2] == pytest.approx(ref["drawbar_pull"], rel=1e-9, abs=1e-9)
+
+
 def test_flavours_agree_on_the_rig(flavours):
     rng = np.random.default_rng(5)
     for k in range(10):

@@ -22,6 +22,8 @@ static void model_initialize(Instance *c) { (void)c; }
    (model exchange; the co-simulation step integrates it). */
 static int model_refresh(Instance *c, double *dx, char *message) {
     casadi_real u[N_IN], p[N_P], y[N_OUT], status = 0.0, info = 0.0, angle = c->b.s[0];
+    /* quasi-static warm start: Newton from the last solved sinkage (0: cold) */
+    casadi_real guess = c->b.v[VR_WARM_START] != 0.0 ? c->b.v[VR_CONTACT_SINKAGE] : 0.0;
     int k;
     for (k = 0; k < N_IN; k++) u[k] = c->b.v[IN_VRS[k]];
     for (k = 0; k < N_P; k++) p[k] = c->b.v[P_VRS[k]];
@@ -31,6 +33,7 @@ static int model_refresh(Instance *c, double *dx, char *message) {
     if (c->b.v[VR_QUASI_STATIC] != 0.0) {
         c->arg[0] = u;
         c->arg[1] = p;
+        c->arg[2] = &guess;
         if (terrain_quasi_static(c->arg, c->res, c->iw, c->w, 0)) status = -1.0;
     } else {
         c->arg[0] = u;

@@ -95,10 +95,13 @@ _WORKER: dict = {}
 
 
 def _worker_instance(fmu: str) -> Instance:
-    """The worker's FMU instance, quasi-static: extracted and initialised once per process."""
+    """The worker's FMU instance, quasi-static: extracted and initialised once per process.
+    Every point is solved cold (warm_start off), so a point's result does not depend on which
+    points the worker solved before it."""
     if _WORKER.get("fmu") != fmu:
         _close_worker()
-        inst = Instance(fmu, name=f"sweep{os.getpid()}").start({"quasi_static": True})
+        inst = Instance(fmu, name=f"sweep{os.getpid()}").start({"quasi_static": True,
+                                                                 "warm_start": False})
         _WORKER.update(fmu=fmu, inst=inst, time=0.0)
     return _WORKER["inst"]
 

@@ -161,8 +161,8 @@ def _hook_config(model: str, vr: dict[str, int]) -> list[str]:
                                    [p.name for p in TABLE])
         lines = [f"#define N_IN {len(inputs)}"]
         lines += [f"#define VR_{name.upper()} {vr[name]}" for name in
-                  ("quasi_static", "wheel_angle", "sinkage", "wheel_speed", "carriage_speed",
-                   "load")]
+                  ("quasi_static", "warm_start", "wheel_angle", "sinkage", "wheel_speed",
+                   "carriage_speed", "load", "contact_sinkage")]
         lines += [f"#define STATUS_{key} {_c_double(getattr(fmu_model, f'STATUS_{key}'))}"
                   for key in ("OK", "SLIP", "LOAD", "UNCONVERGED", "BURIED", "NONFINITE")]
         lines += [f"#define MESSAGE_{key} "

@@ -8,8 +8,10 @@ arithmetic.
 
 WheelTerrain
     ``terrain_dynamic(u, angle, p) -> (y, status, info)`` and
-    ``terrain_quasi_static(u, p) -> (y, status, info)`` with u = TERRAIN_INPUTS, y =
-    TERRAIN_OUTPUTS (without wheel_angle, which the wrapper integrates). ``status``: STATUS_OK,
+    ``terrain_quasi_static(u, p, guess) -> (y, status, info)`` with u = TERRAIN_INPUTS, y =
+    TERRAIN_OUTPUTS (without wheel_angle, which the wrapper integrates); ``guess`` the sinkage
+    [m] the solve starts Newton from (``warm_start``: the last contact_sinkage output), 0 for a
+    cold solve (``contact.build().steady_from``). ``status``: STATUS_OK,
     STATUS_SLIP (traction slip outside [-1, 1], or the wheel or the carriage moving backward;
     ``info`` is the slip), STATUS_LOAD (load beyond the capacity; ``info`` is the capacity),
     STATUS_UNCONVERGED (the solve's convergence check failed), STATUS_BURIED (dynamic mode:
@@ -35,7 +37,6 @@ from wheelterrain.fmu.variables import (
     TERRAIN_OUTPUTS,
 )
 from wheelterrain.model import contact, rig
-from wheelterrain.model.api import RESIDUAL_TOLERANCE, STEP_TOLERANCE
 from wheelterrain.model.slip import reference_radius
 from wheelterrain.parameters import NAMES
 
@@ -155,19 +156,20 @@ def terrain_functions() -> tuple[ca.Function, ca.Function]:
     dynamic = ca.Function("terrain_dynamic", [u, angle, p], [y, status, info],
                           ["u", "angle", "p"], ["y", "status", "info"])
 
-    steady = dict(zip(contact.STEADY_OUTPUTS, fns.steady(load, safe_slip, p), strict=True))
+    guess = ca.MX.sym("guess")
+    steady = dict(zip(contact.STEADY_OUTPUTS, fns.steady_from(load, safe_slip, p, guess),
+                      strict=True))
     steady.update(contact_sinkage=steady["sinkage"], slip=traction, slip_paper=paper,
                   ripple_amplitude=0)
     y = ca.vertcat(*(steady[k] for k in TERRAIN_OUTPUTS))
     too_heavy = load > steady["capacity"]
-    converged = ca.logic_or(ca.fabs(steady["residual"]) <= RESIDUAL_TOLERANCE,
-                            steady["last_step"] <= STEP_TOLERANCE)
+    converged = contact.solve_converged(steady["residual"], steady["last_step"])
     status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(
         too_heavy, STATUS_LOAD, ca.if_else(converged, ca.if_else(
             _finite(y), STATUS_OK, STATUS_NONFINITE), STATUS_UNCONVERGED)))
     info = ca.if_else(slip_bad, traction, steady["capacity"])
-    quasi = ca.Function("terrain_quasi_static", [u, p], [y, status, info], ["u", "p"],
-                        ["y", "status", "info"])
+    quasi = ca.Function("terrain_quasi_static", [u, p, guess], [y, status, info],
+                        ["u", "p", "guess"], ["y", "status", "info"])
     return dynamic, quasi
 
 

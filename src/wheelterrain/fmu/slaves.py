@@ -280,7 +280,9 @@ class TerrainCore(_Core):
         u = [float(v[name]) for name in fmu_model.TERRAIN_INPUTS]
         p = [float(v[prm.name]) for prm in TABLE]
         if v["quasi_static"]:
-            y, status, info = self.quasi_static(u, p)
+            # warm start: from the last solved sinkage (none yet: 0, cold)
+            guess = float(v.get("contact_sinkage", 0.0)) if v["warm_start"] else 0.0
+            y, status, info = self.quasi_static(u, p, guess)
         else:
             y, status, info = self.dynamic(u, self.angle, p)
         if self._operating_point(None if status == fmu_model.STATUS_OK else

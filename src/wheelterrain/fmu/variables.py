@@ -80,6 +80,13 @@ TERRAIN_IO: tuple[Var, ...] = (
         "true: solve the sinkage that carries the input 'load' (grouser-period mean, ripple "
         "off, as `wheelterrain steady`); false: forces at the input sinkage and sinkage rate "
         "(ripple on, contact damping on)", type="Boolean", start=False),
+    Var("warm_start", "parameter",
+        "quasi-static mode: true: start the sinkage solve from the last solved sinkage (the "
+        "contact_sinkage output; the cold solve where that does not converge), about twice as "
+        "fast a step; false: every solve cold, the shallowest equilibrium whatever came "
+        "before. They differ only where the static normal force is non-monotone in sinkage "
+        "(extreme braking corners), where a warm start stays on the equilibrium it is on",
+        type="Boolean", start=True),
     *_TERRAIN_INPUT_ROWS,
     *_outputs([
         Var("normal_force", "output", "Normal (vertical) force of the soil on the wheel, up",

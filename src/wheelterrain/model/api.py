@@ -17,15 +17,9 @@ import numpy as np
 
 from wheelterrain.errors import InputError, LoadTooLargeError, SolveError
 from wheelterrain.model import contact as _contact
+from wheelterrain.model.contact import RESIDUAL_TOLERANCE, STEP_TOLERANCE  # noqa: F401 (public)
 from wheelterrain.model.slip import PAPER_RANGE, TRACTION_RANGE, paper_from_traction, to_traction
 from wheelterrain.parameters import ParameterSet
-
-RESIDUAL_TOLERANCE = 1e-9
-"""Largest accepted relative normal-force residual of the sinkage solve (it reaches ~1e-15)."""
-STEP_TOLERANCE = 1e-13
-"""Alternatively accepted: last Newton step in log(entry angle) at rounding level, i.e. the root
-is pinned in sinkage although the load is too small a part of cancelling force terms for the
-relative force residual to reach RESIDUAL_TOLERANCE."""
 
 
 def _params(params: Mapping[str, float] | ParameterSet) -> ParameterSet:
@@ -106,15 +100,12 @@ def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: 
     return out
 
 
-def _converged(residual, last_step):
-    """The solve's acceptance test (floats or arrays): a small relative residual, or a last
-    Newton step at rounding level."""
-    return (np.abs(residual) <= RESIDUAL_TOLERANCE) | (last_step <= STEP_TOLERANCE)
+_converged = _contact.solve_converged
 
 
 def _unconverged(residual: float, last_step: float) -> str:
-    return (f"relative residual {residual:.3g} > {RESIDUAL_TOLERANCE:g} and last step "
-            f"{last_step:.3g} > {STEP_TOLERANCE:g} in log(entry angle)")
+    return (f"relative residual {residual:.3g} > {_contact.RESIDUAL_TOLERANCE:g} and last step "
+            f"{last_step:.3g} > {_contact.STEP_TOLERANCE:g} in log(entry angle)")
 
 
 def steady_jacobian(params: Mapping[str, float] | ParameterSet, load: float, slip: float,

@@ -653,6 +653,8 @@ class ModelFunctions:
     - ``capacity(slip, p)`` -> ``capacity``: static normal force fully buried (sinkage = R_c),
       the largest load the wheel can carry; the same expression the solve checks against.
     - ``steady(load, slip, p)`` -> STEADY_OUTPUTS: the solve plus the ripple-free contact there.
+    - ``steady_from(load, slip, p, guess)`` -> STEADY_OUTPUTS: the same started warm from a
+      sinkage guess (:func:`_steady_from`); ``steady`` itself where the guess is not > 0.
     - ``steady_jacobian(load, slip, p, sinkage)`` -> ``d_inputs`` (4x2: sinkage, normal_force,
       drawbar_pull, torque by load, slip) and ``d_params`` (4 x len(p)), by the implicit function
       theorem at a solved ``sinkage``.
@@ -666,6 +668,7 @@ class ModelFunctions:
     sinkage_solve: ca.Function
     capacity: ca.Function
     steady: ca.Function
+    steady_from: ca.Function
     steady_jacobian: ca.Function
     nodes: tuple[int, int]
 
@@ -675,8 +678,9 @@ def _symbols():
             ca.MX.sym("wheel_angle"), ca.MX.sym("p", len(NAMES)))
 
 
-def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int]):
-    """Quasi-static sinkage: the shallowest entry angle at which Fz_static equals the load.
+def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int], guess=None):
+    """Quasi-static sinkage: the shallowest entry angle at which Fz_static equals the load
+    (from a sinkage ``guess`` [m]: the root Newton reaches from it, :func:`_solve_start_warm`).
 
     1. Scan Fz_static at SCAN_POINTS log-spaced entry angles up to full burial (pi/2) and keep the
        first interval in which it reaches the load: the equilibrium a wheel sinking from the
@@ -699,8 +703,13 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int]):
     (``model.steady_state`` does); convergence is a checked output, not an assumption.
     """
     _, fz_only, _ = _static_functions(nodes)
-    values = [fz_only(t, slip, P.p) for t in scan_angles()]
-    state, capacity, w_safe = _solve_start(load, values)
+    scan = scan_angles()
+    if guess is None:
+        values = [fz_only(t, slip, P.p) for t in scan]
+        state, capacity, w_safe = _solve_start(load, values)
+    else:
+        state, capacity, w_safe = _solve_start_warm(load, fz_only(scan[0], slip, P.p),
+                                                    fz_only(scan[-1], slip, P.p), guess, P)
     iteration = _newton_iteration(nodes)
     for _ in range(NEWTON_ITERATIONS):
         state = iteration(state[7], state, slip, P.p, w_safe)
@@ -866,16 +875,14 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
         list(CONTACT_INPUTS), ["d_state", "d_params"])
 
     load = ca.MX.sym("load")
-    sink, theta, residual, last_step, capacity = _sinkage_solve_expr(load, slip, P, nodes)
+    rows = _steady_expr(load, slip, P, nodes)
+    solved = ("sinkage", "residual", "last_step", "capacity")
     sinkage_solve = ca.Function("sinkage_solve", [load, slip, p],
-                                [sink, residual, last_step, capacity], list(STEADY_INPUTS),
-                                ["sinkage", "residual", "last_step", "capacity"])
-    capacity_fn = ca.Function("capacity", [slip, p], [capacity], ["slip", "p"], ["capacity"])
-
-    # at the solved angle: no round trip through the sinkage
-    quasi = _static_functions(nodes)[2](theta, slip, p)
-    steady = ca.Function("steady", [load, slip, p], [sink, *quasi, residual, last_step, capacity],
-                         list(STEADY_INPUTS), list(STEADY_OUTPUTS))
+                                [rows[STEADY_OUTPUTS.index(k)] for k in solved],
+                                list(STEADY_INPUTS), list(solved))
+    capacity_fn = ca.Function("capacity", [slip, p], [rows[-1]], ["slip", "p"], ["capacity"])
+    steady = ca.Function("steady", [load, slip, p], rows, list(STEADY_INPUTS),
+                         list(STEADY_OUTPUTS))
 
     # Implicit function theorem at a solved sinkage: Fz_static(z, slip, p) = load.
     at = _contact(z, 0, slip, 0, P, nodes, ripple=False)
@@ -890,4 +897,54 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
     steady_jacobian = ca.Function("steady_jacobian", [load, slip, p, z], [d_inputs, d_params],
                                   [*STEADY_INPUTS, "sinkage"], ["d_inputs", "d_params"])
     return ModelFunctions(contact, contact_jacobian, sinkage_solve, capacity_fn, steady,
-                          steady_jacobian, nodes)
+                          _steady_from(steady, nodes), steady_jacobian, nodes)
+
+
+def _steady_expr(load, slip, P: _P, nodes: tuple[int, int], guess=None) -> list:
+    """STEADY_OUTPUTS of the solve (cold, or from a sinkage ``guess``), the contact taken at
+    the solved angle: no round trip through the sinkage."""
+    sink, theta, residual, last_step, capacity = _sinkage_solve_expr(load, slip, P, nodes,
+                                                                     guess)
+    quasi = _static_functions(nodes)[2](theta, slip, P.p)
+    return [sink, *quasi, residual, last_step, capacity]
+
+
+def _steady_from(steady: ca.Function, nodes: tuple[int, int]) -> ca.Function:
+    """``steady_from(load, slip, p, guess)``: ``steady`` started warm from a sinkage guess [m]
+    (finite and > 0; else cold, exactly ``steady``). The warm start evaluates of the scan only
+    its two ends and starts Newton at the guess; where it does not converge (and the wheel can
+    carry the load) the cold solve runs instead. Both are switches, so a call runs only the
+    branch it takes."""
+    load, slip, p, guess = (ca.MX.sym("load"), ca.MX.sym("slip"), ca.MX.sym("p", len(NAMES)),
+                            ca.MX.sym("guess"))
+    rows = ca.MX.sym("rows", len(STEADY_OUTPUTS))
+    args = [load, slip, p, guess]
+    warm = ca.Function("steady_warm", args,
+                       [ca.vertcat(*_steady_expr(load, slip, _P(p), nodes, guess))])
+    cold = ca.Function("steady_cold", args, [ca.vertcat(*steady(load, slip, p))])
+    valid = ca.logic_and(guess > 0, guess < math.inf)  # NaN compares false
+    first = ca.Function.if_else("steady_start", warm, cold)(valid, *args)
+    out = dict(zip(STEADY_OUTPUTS, ca.vertsplit(first), strict=True))
+    retry = ca.logic_and(ca.logic_and(valid, load <= out["capacity"]),
+                         ca.logic_not(solve_converged(out["residual"], out["last_step"])))
+    again = ca.Function("steady_again", [rows, *args], [ca.vertcat(*steady(load, slip, p))])
+    kept = ca.Function("steady_kept", [rows, *args], [rows])
+    final = ca.Function.if_else("steady_retry", again, kept)(retry, first, *args)
+    return ca.Function("steady_from", args, ca.vertsplit(final), [*STEADY_INPUTS, "guess"],
+                       list(STEADY_OUTPUTS))
+
+
+RESIDUAL_TOLERANCE = 1e-9
+"""Largest accepted relative normal-force residual of the sinkage solve (it reaches ~1e-15)."""
+STEP_TOLERANCE = 1e-13
+"""Alternatively accepted: last Newton step in log(entry angle) at rounding level, i.e. the root
+is pinned in sinkage although the load is too small a part of cancelling force terms for the
+relative force residual to reach RESIDUAL_TOLERANCE."""
+
+
+def solve_converged(residual, last_step):
+    """The sinkage solve's acceptance test, on floats, arrays or CasADi symbols: a small
+    relative residual, or a last Newton step at rounding level."""
+    if isinstance(residual, (ca.SX, ca.MX)):
+        return ca.logic_or(ca.fabs(residual) <= RESIDUAL_TOLERANCE, last_step <= STEP_TOLERANCE)
+    return (np.abs(residual) <= RESIDUAL_TOLERANCE) | (np.asarray(last_step) <= STEP_TOLERANCE)
