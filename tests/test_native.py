@@ -45,7 +45,9 @@ def test_compiled_fmu_functions_equal_the_vm(tmp_path, which):
     for _ in range(30):
         u = [rng.uniform(0, 0.04), rng.uniform(-0.05, 0.05), rng.uniform(0.1, 1.0),
              rng.uniform(0.0, 0.04), rng.uniform(1.0, 100.0)]
-        args = (u, rng.uniform(-10, 10), p) if which == 0 else (u, p)
+        # quasi-static: cold (guess 0) and warm-started from a guess
+        guess = rng.choice([0.0, rng.uniform(0.002, 0.06)])
+        args = (u, rng.uniform(-10, 10), p) if which == 0 else (u, p, guess)
         want = [np.asarray(x, dtype=float).ravel() for x in fn(*args)]
         got = compiled(*args)
         np.testing.assert_allclose(np.asarray(got[0]), want[0], rtol=1e-12, atol=1e-12)

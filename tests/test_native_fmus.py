@@ -674,6 +674,28 @@ def test_a_sinkage_beyond_full_burial_is_refused_not_served(flavours, flavour):
         t.close()
 
 
+@pytest.mark.parametrize("flavour", ["pythonfmu", "native"])
+def test_a_refused_step_is_not_taken(flavours, flavour):
+    """New inputs are evaluated once, at the end of the step that follows them; when they are
+    refused, that step is undone: the wheel angle stays, the next good step starts where the
+    refused one would have, and advances the angle by one step."""
+    t = instance(flavours, flavour, "WheelTerrain", f"undo-{flavour}", {"quasi_static": False})
+    try:
+        t.set({"sinkage": 0.02, "wheel_speed": 0.6, "carriage_speed": 0.024})
+        t.fmu.doStep(0.0, 0.01)
+        (angle,) = t.get(("wheel_angle",))
+        assert angle == pytest.approx(0.006, rel=1e-12)
+        t.set({"sinkage": 0.2})  # beyond full burial
+        with pytest.raises(FMICallException):
+            t.fmu.doStep(0.01, 0.01)
+        assert t.get(("wheel_angle",)) == [pytest.approx(angle, rel=1e-15)]
+        t.set({"sinkage": 0.02})
+        t.fmu.doStep(0.01, 0.01)
+        assert t.get(("wheel_angle",)) == [pytest.approx(2 * angle, rel=1e-12)]
+    finally:
+        t.close()
+
+
 def test_native_outputs_of_a_refused_point_are_not_served_as_ok(flavours):
     """After a refused step the outputs are the last valid point's: fmi2GetReal now says so
     with fmi2Warning and the reason (it said fmi2OK), and OK again once the inputs are

@@ -6,7 +6,8 @@
  * the sizes and value references the hooks use, and the C that CasADi generates from the very
  * Functions the Python flavour calls, wheelterrain.fmu.functions), and model_hooks.inc, the
  * model's hooks (terrain_hooks.c or rig_hooks.c beside this file: model_work, model_reset,
- * model_initialize, model_refresh, model_step, copying values in and out of those Functions).
+ * model_initialize, model_refresh, model_step, copying values in and out of those Functions,
+ * and MODEL_CHECKS_AT_STEP_END, see fmi2DoStep).
  * No arithmetic of the model is written by hand.
  *
  * Model exchange: the continuous states are the ones the co-simulation step advances (the
@@ -611,6 +612,22 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
         LOG_ERROR(c, "fmi2DoStep: the step starts at t = %.17g but the last one ended at "
                   "t = %.17g; steps must continue from the last step's end", t, c->b.time);
         return fmi2Error;
+    }
+    if (MODEL_CHECKS_AT_STEP_END && c->b.dirty && !any_invalid(c, 0)) {
+        /* Not evaluated since the last set: step, then evaluate once, at the step's end (what
+           the master reads next), so a set + doStep + get costs one evaluation. The model's
+           refusals depend on its inputs, not on its state; a refused step is not taken. */
+        double start[N_STATES];
+        memcpy(start, c->b.s, sizeof start);
+        model_step(c, t, h);
+        refresh(c);
+        if (c->b.operating_error) {
+            memcpy(c->b.s, start, sizeof start);
+            LOG_DISCARD(c, "%s: step refused: %s", MODEL_NAME, c->b.operating_message);
+            return fmi2Discard;
+        }
+        c->b.time = t + h;
+        return fmi2OK;
     }
     refresh(c);
     if (any_invalid(c, 1)) return fmi2Discard;

@@ -7,6 +7,9 @@
  * value references come from the generated model_vars.h: IN_VRS, OUT_VRS, P_VRS, N_X, N_U, N_P,
  * N_OUT. */
 
+/* The rig's refusals depend on its state: each step is checked at its start (fmi2DoStep). */
+#define MODEL_CHECKS_AT_STEP_END 0
+
 static void model_work(casadi_int *sz_arg, casadi_int *sz_res, casadi_int *sz_iw,
                        casadi_int *sz_w) {
     cover(rig_step_work, sz_arg, sz_res, sz_iw, sz_w);

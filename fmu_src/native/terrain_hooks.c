@@ -8,6 +8,10 @@
  * N_OUT, N_P, VR_*, STATUS_*, MESSAGE_*. The wheel angle is the one continuous state of
  * model exchange. */
 
+/* The terrain's refusals (slip, burial, load, convergence) depend on its inputs, not on the
+   wheel angle: a step with unevaluated inputs is evaluated once, at its end (fmi2DoStep). */
+#define MODEL_CHECKS_AT_STEP_END 1
+
 static void model_work(casadi_int *sz_arg, casadi_int *sz_res, casadi_int *sz_iw,
                        casadi_int *sz_w) {
     cover(terrain_dynamic_work, sz_arg, sz_res, sz_iw, sz_w);

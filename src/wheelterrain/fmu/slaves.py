@@ -303,10 +303,22 @@ class TerrainCore(_Core):
         self.refresh()
 
     def do_step(self, t: float, h: float) -> bool:
-        """Check the step's inputs, advance the wheel angle. The outputs at the end of the step
-        are computed when first read (a master that sets new inputs first pays for one
-        evaluation per step, not two); a problem found then refuses the next step."""
+        """Check the step's inputs, advance the wheel angle, as fmi2_native.c does. Inputs not
+        evaluated since they were set are evaluated once, at the step's end (what the master
+        reads next: a set + doStep + get costs one evaluation); the terrain's refusals depend
+        on its inputs, not on the angle, and a refused step is not taken. Inputs already
+        evaluated (a master that reads before it steps) were checked then; the outputs at the
+        step's end are computed when first read, and a problem found then refuses the next
+        step."""
         if not self.step_allowed(t, h):
+            return False
+        if self.dirty and not self._settings_invalid():
+            start = self.angle
+            self.angle += float(self.values["wheel_speed"]) * h
+            self.refresh()
+            if self.refuse_if_invalid():
+                return True
+            self.angle = start
             return False
         self.refresh()
         if not self.refuse_if_invalid():
