@@ -339,9 +339,14 @@ def _scan_ends(slips: np.ndarray, p: np.ndarray) -> tuple:
 
 @lru_cache(maxsize=1)
 def _steady_many():
-    """The lane-parallel steady state, or (no C compiler) CasADi's map of build().steady with
-    the same call (load, slip, guess, first, last, p) -> STEADY_OUTPUTS rows; the guess and
-    the scan's ends are then unused."""
+    """The lane-parallel steady state, or (no C compiler) CasADi's map of build().steady_from
+    (the same warm start) with the same call (load, slip, guess, first, last, p) ->
+    STEADY_OUTPUTS rows; the scan's ends are then unused."""
     from wheelterrain.model import lanes
 
-    return _lanes_or_vm(lanes.compiled_solve, _contact.build().steady, used=(0, 1))
+    steady_from = _contact.build().steady_from
+    load, slip, guess = ca.MX.sym("load"), ca.MX.sym("slip"), ca.MX.sym("guess")
+    p = ca.MX.sym("p", steady_from.size1_in(2))
+    in_lane_order = ca.Function("steady_guess", [load, slip, guess, p],
+                                steady_from(load, slip, p, guess))
+    return _lanes_or_vm(lanes.compiled_solve, in_lane_order, used=(0, 1, 2))
