@@ -607,25 +607,15 @@ def solve_lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> dict:
       ``newton_update(state, f, df, w_safe)``: the next state (state[7]: converged).
     - ``solve_angle(load, state)``, then ``finish(load, state, f, p)``: sinkage, residual,
       last_step."""
-    th, sl, pp = ca.SX.sym("theta_f"), ca.SX.sym("slip"), ca.SX.sym("p", len(NAMES))
+    pp = ca.SX.sym("p", len(NAMES))
     P = _P(pp)
-    case, switch = _forms(nodes, False)
-    at = CONTACT_OUTPUTS.index("normal_force_static")
-    fz, fz_d, static = [], [], []
-    for name in FORMS:
-        out = switch.find_function(name + "_static")(th, sl, 0, pp)
-        static.append(ca.Function(f"static_{name}", [th, sl, pp], [out], {"cse": True}))
-        f = out[at]
-        fz.append(ca.Function(f"fz_{name}", [th, sl, pp], [f], {"cse": True}))
-        fz_d.append(ca.Function(f"fz_d_{name}", [th, sl, pp], [f, ca.jacobian(f, th)],
-                                {"cse": True}))
+    case, fz, fz_d, static = _static_kernels(nodes)
     load, values = ca.SX.sym("load"), ca.SX.sym("values", len(scan_angles()))
     f_first, f_last, guess = ca.SX.sym("f_first"), ca.SX.sym("f_last"), ca.SX.sym("guess")
     state, f, df, w_safe = (ca.SX.sym("state", 8), ca.SX.sym("f"), ca.SX.sym("df"),
                             ca.SX.sym("w_safe"))
     return {
-        "case": ca.Function("static_case", [th, sl, pp], [case(th, sl, pp)]),
-        "fz": tuple(fz), "fz_d": tuple(fz_d), "static": tuple(static),
+        "case": case, "fz": fz, "fz_d": fz_d, "static": static,
         "start": ca.Function("solve_start", [load, values],
                              list(_solve_start(load, ca.vertsplit(values))), {"cse": True}),
         "start_warm": ca.Function("solve_start_warm", [load, f_first, f_last, guess, pp],
@@ -847,15 +837,44 @@ def _newton_update(state, f, df, w_safe):
 
 
 @lru_cache(maxsize=4)
+def _static_kernels(nodes: tuple[int, int]) -> tuple:
+    """The ripple-free contact at entry angle theta_f, per case of :func:`_forms`' switch, as
+    SX Functions of (theta_f, slip, p): ``(case, fz, fz_d, static)``, ``fz[c]`` Fz_static
+    with case c's kernel, ``fz_d[c]`` Fz_static and its derivative by theta_f (SX forward
+    mode, with common subexpressions shared), ``static[c]`` every CONTACT_OUTPUT."""
+    th, sl, pp = ca.SX.sym("theta_f"), ca.SX.sym("slip"), ca.SX.sym("p", len(NAMES))
+    case, switch = _forms(nodes, False)
+    at = CONTACT_OUTPUTS.index("normal_force_static")
+    fz, fz_d, static = [], [], []
+    for name in FORMS:
+        out = switch.find_function(name + "_static")(th, sl, 0, pp)
+        static.append(ca.Function(f"static_{name}", [th, sl, pp], [out], {"cse": True}))
+        f = out[at]
+        fz.append(ca.Function(f"fz_{name}", [th, sl, pp], [f], {"cse": True}))
+        fz_d.append(ca.Function(f"fz_d_{name}", [th, sl, pp], [f, ca.jacobian(f, th)],
+                                {"cse": True}))
+    return (ca.Function("static_case", [th, sl, pp], [case(th, sl, pp)]), tuple(fz),
+            tuple(fz_d), tuple(static))
+
+
+@lru_cache(maxsize=4)
 def _static_functions(nodes: tuple[int, int]) -> tuple[ca.Function, ca.Function, ca.Function]:
     """Functions of the ripple-free contact at entry angle theta_f: (Fz_static and its
-    d/d(theta_f)), Fz_static alone, and every CONTACT_OUTPUT."""
+    d/d(theta_f)), Fz_static alone, and every CONTACT_OUTPUT; each a switch over
+    :func:`_static_kernels` (the derivative differentiated per kernel in SX: half the cost
+    of differentiating the MX switch)."""
     th, sl, pp = ca.MX.sym("theta_f"), ca.MX.sym("slip"), ca.MX.sym("p", len(NAMES))
-    arc = _at_entry_angle(th, sl, 0, _P(pp), nodes, ripple=False)
-    fz = arc["normal_force_static"]
-    return (ca.Function("fz_static", [th, sl, pp], [fz, ca.jacobian(fz, th)]),
-            ca.Function("fz_static_value", [th, sl, pp], [fz]),
-            ca.Function("arc_static", [th, sl, pp], [arc[k] for k in CONTACT_OUTPUTS]))
+    case, fz, fz_d, static = _static_kernels(nodes)
+    c = case(th, sl, pp)
+
+    def switched(kernels) -> list:
+        out = ca.Function.conditional(kernels[0].name() + "_switch", list(kernels[:2]),
+                                      kernels[2])(c, th, sl, pp)
+        return out if isinstance(out, (list, tuple)) else [out]
+
+    return (ca.Function("fz_static", [th, sl, pp], switched(fz_d)),
+            ca.Function("fz_static_value", [th, sl, pp], switched(fz)),
+            ca.Function("arc_static", [th, sl, pp], ca.vertsplit(switched(static)[0])))
 
 
 @lru_cache(maxsize=4)
