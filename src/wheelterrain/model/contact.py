@@ -265,6 +265,16 @@ def shear_function(j: ca.SX, P: _P) -> ca.SX:
     return ca.sign(j) * ((1 - hump) * janosi + hump * wong)
 
 
+def shear_peak(P: _P) -> ca.SX:
+    """The largest |g(j)| of :func:`shear_function` over all j: 1 for Janosi; for Wong's hump
+    K_r*max over E in [0, 1] of (1 + C*e*E)*(1 - E), K_r*(C*e + 1)**2/(4*C*e) at
+    E = (C*e - 1)/(2*C*e) when C*e > 1, else K_r at E = 0 (1.05 at K_r = 1)."""
+    Kr, hump = P["soil.residual_ratio"], P["model.shear_model"]
+    ce = (1 / (Kr * (1 - math.exp(-1))) - 1) * math.e
+    wong = Kr * ca.if_else(ce > 1, (ce + 1) ** 2 / (4 * ca.fmax(ce, 1)), 1)
+    return (1 - hump) + hump * wong
+
+
 def exit_angle(theta_f: ca.SX, P: _P) -> ca.SX:
     """theta_r = -arccos(1 - lambda*z/R_c), lambda = ``model.exit_ratio``, written through
     sin(theta_f/2) (finite derivatives in theta_f at lambda = 0).
@@ -385,27 +395,34 @@ def _grouser_thrust(theta_f, front, rear, w_front, w_rear, g_front, g_rear, P: _
     Choices: only grousers on the contact arc [theta_r, theta_f] count; the wall is taken as
     vertical (its tilt by theta is neglected in K_p).
     """
-    on = P["model.grouser_thrust"]
-    R, h_g, b = P["wheel.radius"], P["grouser.height"], P["wheel.width"]
-    c, gamma = P["soil.cohesion"], P["soil.gamma"]
-    k_p = ca.tan(math.pi / 4 + P["soil.phi"] / 2) ** 2
-    surface = Rc * ca.cos(theta_f)
-
-    def force(cos_t):
-        top = ca.fmax(R * cos_t - surface, 0)
-        height = ca.fmax((R + h_g) * cos_t - surface - top, 0)
-        return (0.5 * gamma * height**2 * k_p + 2 * c * height * ca.sqrt(k_p)
-                + gamma * top * height * k_p)
-
-    f_front = force(front["cos"]) * g_front
-    f_rear = force(rear["cos"]) * g_rear
-    scale = on * b * P["grouser.count"] / (2 * math.pi)
+    R, h_g = P["wheel.radius"], P["grouser.height"]
+    f_front = _grouser_force(front["cos"], theta_f, P, Rc) * g_front
+    f_rear = _grouser_force(rear["cos"], theta_f, P, Rc) * g_rear
+    scale = _grouser_density(P)
     horizontal = scale * (ca.dot(w_front, f_front * front["cos"])
                           + ca.dot(w_rear, f_rear * rear["cos"]))
     vertical = scale * (ca.dot(w_front, f_front * front["sin"])
                         + ca.dot(w_rear, f_rear * rear["sin"]))
     torque = scale * (R + h_g / 2) * (ca.dot(w_front, f_front) + ca.dot(w_rear, f_rear))
     return horizontal, vertical, torque
+
+
+def _grouser_force(cos_t, theta_f, P: _P, Rc):
+    """Passive earth force per unit width on a grouser at cos(theta) = ``cos_t`` (see
+    :func:`_grouser_thrust`); non-decreasing in ``cos_t`` (soil parameters >= 0)."""
+    R, h_g = P["wheel.radius"], P["grouser.height"]
+    c, gamma = P["soil.cohesion"], P["soil.gamma"]
+    k_p = ca.tan(math.pi / 4 + P["soil.phi"] / 2) ** 2
+    surface = Rc * ca.cos(theta_f)
+    top = ca.fmax(R * cos_t - surface, 0)
+    height = ca.fmax((R + h_g) * cos_t - surface - top, 0)
+    return (0.5 * gamma * height**2 * k_p + 2 * c * height * ca.sqrt(k_p)
+            + gamma * top * height * k_p)
+
+
+def _grouser_density(P: _P):
+    """The grouser thrust's factor: on/off times width times grousers per radian."""
+    return P["model.grouser_thrust"] * P["wheel.width"] * P["grouser.count"] / (2 * math.pi)
 
 
 SMALL_MOBILISATION = 1e-3  # |x*l/K| below which the patch-mean shear uses its Taylor series
@@ -500,6 +517,57 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
         "ripple_amplitude": amplitude if ripple else ca.SX(0),
         "normal_force_static": normal_static,
     }
+
+
+BOUND_MARGIN = 1 + 1e-9  # covers rounding where the bound is the value itself (the patch)
+
+
+def static_bound(theta_f: ca.SX, slip: ca.SX, P: _P) -> ca.SX:
+    """A cheap upper bound on Fz_static at entry angle ``theta_f`` in (0, pi/2], for either
+    contact form and any quadrature rule with non-negative panel weights summing to one:
+    the sinkage solve's scan skips angles where it is below the load (there Fz_static is too).
+
+    Arc: every node lies in [-theta_f, theta_f] (exit ratio <= 1, |a0 + a1*i| <= 1), so
+    0 <= cos <= 1 and |sin| <= sin(theta_f); the stress is at most k_eq*(1 - cos(theta_f))**n,
+    the mobilised shear at most :func:`shear_peak`, the grouser force at most its value at
+    cos = 1, and the weights of a panel sum to its width. Hence, with D = |theta_f - theta_m|
+    + |theta_m - theta_r|, sigma_max and g_max::
+
+        Fz_static <= b*D*(R_c*sigma_max + R_s*sin(theta_f)*(c + sigma_max*tan(phi))*g_max)
+                     + density*D*F_grouser(1)*g_max*sin(theta_f)
+
+    Patch: Fz_static itself (b*l*p, a few operations). Both times BOUND_MARGIN. Valid for
+    parameters in their declared ranges (all soil parameters >= 0); tests check it against the
+    quadrature over random points of those ranges; where an assumption above fails (inputs
+    outside the declared ranges), it is +inf: no angle is skipped."""
+    Rc, Rs, _ = _radii(P)
+    b, c, tan_phi = P["wheel.width"], P["soil.cohesion"], ca.tan(P["soil.phi"])
+    n = P["soil.n0"] + P["soil.n1"] * ca.fabs(slip)
+    k_eq = (c * P["soil.k_c"] + P["soil.gamma"] * b * P["soil.k_phi"]) * (Rc / b) ** n
+    half = ca.sin(theta_f / 2)
+    sigma_max = k_eq * ca.exp(n * ca.log(2 * half**2))  # k_eq*(1 - cos(theta_f))**n
+    theta_r = exit_angle(theta_f, P)
+    theta_m = (P["model.a0"] + P["model.a1"] * slip) * theta_f
+    span = ca.fabs(theta_f - theta_m) + ca.fabs(theta_m - theta_r)
+    sin_f, g_max = ca.sin(theta_f), shear_peak(P)
+    grouser = _grouser_density(P) * _grouser_force(1, theta_f, P, Rc) * g_max * sin_f
+    arc = b * span * (Rc * sigma_max + Rs * sin_f * (c + sigma_max * tan_phi) * g_max) \
+        + span * grouser
+    patch = _patch_form(theta_f, slip, 0, P, False)["normal_force_static"]
+    lam, ratio = P["model.exit_ratio"], P["model.a0"] + P["model.a1"] * slip
+    holds = [theta_f <= FULL_BURIAL, ca.fabs(ratio) <= 1, lam >= 0, lam <= 1, n >= 0, c >= 0,
+             P["soil.gamma"] >= 0, k_eq >= 0, tan_phi >= 0, P["soil.residual_ratio"] > 0,
+             P["grouser.height"] >= 0, Rc > 0, Rs > 0]
+    bound = ca.if_else(P["model.contact_form"] == 1, patch, arc)
+    # where an assumption fails (inputs outside the model's ranges) there is no bound: +inf
+    return ca.if_else(_all(holds), BOUND_MARGIN * bound, math.inf)
+
+
+def _all(conditions: list) -> ca.SX:
+    out = conditions[0]
+    for condition in conditions[1:]:
+        out = ca.logic_and(out, condition)
+    return out
 
 
 ARC, ARC_REVERSAL, PATCH = 0, 1, 2  # the cases of the contact switch (:func:`_forms`)
@@ -605,9 +673,13 @@ def solve_lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> dict:
     - ``case(theta_f, slip, p)``: the switch's case; ``fz[c](theta_f, slip, p)``: Fz_static
       with case c's kernel; ``fz_d[c]``: Fz_static and its derivative by theta_f;
       ``static[c]``: every CONTACT_OUTPUT, ripple-free (the steady state's contact).
+    - ``scan_plan(load, slip, p)``, ``scan_low(load, values)``: the pruned scan's decisions
+      (:func:`_scan_values`).
     - ``start(load, values)``: (state, capacity, w_safe) from Fz_static at :func:`scan_angles`;
       ``start_warm(load, f_first, f_last, guess, p)``: the same from the scan's two ends and a
       sinkage guess [m] (:func:`_solve_start_warm`).
+    - ``refine(state, f, w_safe)``: a cold start's second iterate from Fz_static at its first
+      (:func:`_refine`).
     - ``newton_angle(state)``: the entry angle of the state's iterate;
       ``newton_update(state, f, df, w_safe)``: the next state (state[7]: converged).
     - ``solve_angle(load, state)``, then ``finish(load, state, f, p)``: sinkage, residual,
@@ -617,15 +689,17 @@ def solve_lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> dict:
     case, fz, fz_d, static = _static_kernels(nodes)
     load, values = ca.SX.sym("load"), ca.SX.sym("values", len(scan_angles()))
     f_first, f_last, guess = ca.SX.sym("f_first"), ca.SX.sym("f_last"), ca.SX.sym("guess")
-    state, f, df, w_safe = (ca.SX.sym("state", 8), ca.SX.sym("f"), ca.SX.sym("df"),
+    state, f, df, w_safe = (ca.SX.sym("state", STATE_SIZE), ca.SX.sym("f"), ca.SX.sym("df"),
                             ca.SX.sym("w_safe"))
     return {
-        "case": case, "fz": fz, "fz_d": fz_d, "static": static,
+        "case": case, "fz": fz, "fz_d": fz_d, "static": static, **_scan_kernels(),
         "start": ca.Function("solve_start", [load, values],
                              list(_solve_start(load, ca.vertsplit(values))), {"cse": True}),
         "start_warm": ca.Function("solve_start_warm", [load, f_first, f_last, guess, pp],
                                   list(_solve_start_warm(load, f_first, f_last, guess, P)),
                                   {"cse": True}),
+        "refine": ca.Function("solve_refine", [state, f, w_safe], [_refine(state, f, w_safe)],
+                              {"cse": True}),
         "newton_angle": ca.Function("newton_angle", [state], [ca.exp(state[0])]),
         "newton_update": ca.Function("newton_update", [state, f, df, w_safe],
                                      [_newton_update(state, f, df, w_safe)], {"cse": True}),
@@ -681,7 +755,10 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int], guess=None):
        first interval in which it reaches the load: the equilibrium a wheel sinking from the
        surface meets first. (Fz_static(z) is monotone for driving wheels; in extreme braking
        corners the negative shear pulls the wheel down, it is not, and a load can have several
-       equilibria.)
+       equilibria.) Angles where :func:`static_bound` is below the load are not evaluated
+       (:func:`_scan_values`): the same bracket from 2-3 contact evaluations instead of 13.
+       The bracket's regula falsi point, evaluated without derivative, then gives by inverse
+       quadratic interpolation a second iterate close to the root (:func:`_refine`).
     2. Safeguarded Newton in y = log(theta_f) on that bracket, on asinh(Fz/W) - asinh(1): monotone
        in Fz, ~log(Fz/W) and so nearly linear in y where Fz >> W (Fz grows like
        theta_f**(2n+1)), and of moderate size where braking shear makes Fz negative (a plain
@@ -689,7 +766,9 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int], guess=None):
        leaves the bracket is replaced by Illinois regula falsi on the bracket (whose end
        residuals are tracked), bisection if that fails. Unrolled to NEWTON_ITERATIONS
        iterations, each a switch that is the identity once a Newton step was below NEWTON_STOP
-       (:func:`_newton_iteration`): a pure CasADi expression that stops when it has converged.
+       or left a predicted residual below PREDICTED_STOP (:func:`_newton_update`): a pure
+       CasADi expression that stops when it has converged, two Newton steps on a driving
+       wheel.
 
     Returns sinkage, entry angle, the relative residual of the final iterate, the size of the last
     step in log(theta_f) and the capacity (Fz_static fully buried). Callers must check
@@ -700,8 +779,8 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int], guess=None):
     _, fz_only, _ = _static_functions(nodes)
     scan = scan_angles()
     if guess is None:
-        values = [fz_only(t, slip, P.p) for t in scan]
-        state, capacity, w_safe = _solve_start(load, values)
+        state, capacity, w_safe = _solve_start(load, _scan_values(load, slip, P, nodes))
+        state = _refine(state, fz_only(ca.exp(state[0]), slip, P.p), w_safe)
     else:
         state, capacity, w_safe = _solve_start_warm(load, fz_only(scan[0], slip, P.p),
                                                     fz_only(scan[-1], slip, P.p), guess, P)
@@ -719,6 +798,62 @@ def scan_angles() -> np.ndarray:
     return np.concatenate([[THETA_MIN], np.geomspace(SCAN_MIN, FULL_BURIAL, SCAN_POINTS)])
 
 
+MISSING = math.nan  # a scan value the pruned scan did not evaluate (not a crossing)
+
+
+def _scan_values(load, slip, P: _P, nodes: tuple[int, int]) -> list:
+    """Fz_static at :func:`scan_angles` as far as :func:`_solve_start` uses it, evaluating
+    only what it can use (each a switch: a skipped angle costs no contact evaluation):
+
+    1. fully buried (the capacity), and every inner angle where :func:`static_bound` does not
+       rule out that Fz_static reaches the load (``scan_plan``);
+    2. the low end of the bracket that leaves, if it was skipped (``scan_low``).
+
+    Every other entry is MISSING: an angle where Fz_static < load, which is all _solve_start
+    needs of it. So the bracket, its end values and hence the solve are those of the full
+    scan, bit for bit (tests check it); the deep sinkage of a heavy load is bracketed with
+    2 contact evaluations instead of 13."""
+    kernels = _scan_kernels()
+    fz_only = _static_functions(nodes)[1]
+    missing = ca.Function("scan_missing", [ca.MX.sym("theta_f"), ca.MX.sym("slip"),
+                                           ca.MX.sym("p", len(NAMES))], [MISSING])
+    maybe = ca.Function.if_else("scan_value", fz_only, missing)
+    scan = scan_angles()
+    plan = ca.vertsplit(kernels["scan_plan"](load, slip, P.p))
+    values = [ca.MX(MISSING)] + [maybe(plan[k - 1], scan[k], slip, P.p)
+                                 for k in range(1, len(scan) - 1)] + [fz_only(scan[-1], slip,
+                                                                               P.p)]
+    index, theta, absent = kernels["scan_low"](load, ca.vertcat(*values), ca.vertcat(*plan))
+    low = ca.Function.if_else("scan_low_value", fz_only, missing)(absent, theta, slip, P.p)
+    # the low end is below the last angle: the capacity stays a function of slip and p only
+    return [ca.if_else(ca.logic_and(absent, index == k), low, v)
+            for k, v in enumerate(values[:-1])] + values[-1:]
+
+
+@lru_cache(maxsize=1)
+def _scan_kernels() -> dict:
+    """The pruned scan's decisions as SX Functions (:func:`_scan_values`; the lane solve
+    calls the same): ``scan_plan(load, slip, p)``, 1 at each inner scan angle (1 .. last - 1)
+    to evaluate; ``scan_low(load, values, plan)``, the index of the bracket's low end, its
+    angle and 1 if its value is MISSING (the first angle, or an inner one the plan skipped)."""
+    load, slip, pp = ca.SX.sym("load"), ca.SX.sym("slip"), ca.SX.sym("p", len(NAMES))
+    scan = scan_angles()
+    P = _P(pp)
+    # an angle can be the crossing only where the bound reaches the load (or is NaN)
+    maybe = [ca.logic_not(static_bound(ca.SX(t), slip, P) < load) for t in scan[1:-1]]
+    plan = ca.Function("scan_plan", [load, slip, pp], [ca.vertcat(*maybe)], {"cse": True})
+    values, kept = ca.SX.sym("values", len(scan)), ca.SX.sym("plan", len(scan) - 2)
+    index = ca.SX(0)  # no crossing: the bracket is the whole scan, its low end THETA_MIN
+    for k in range(len(scan) - 1, 0, -1):  # the last assignment is the shallowest crossing
+        index = ca.if_else(values[k] >= load, k - 1, index)
+    theta, absent = ca.SX(scan[0]), ca.SX(1)
+    for k in range(1, len(scan) - 1):
+        theta = ca.if_else(index == k, scan[k], theta)
+        absent = ca.if_else(index == k, kept[k - 1] == 0, absent)
+    low = ca.Function("scan_low", [load, values, kept], [index, theta, absent], {"cse": True})
+    return {"scan_plan": plan, "scan_low": low}
+
+
 def _solve_start(load, values):
     """The bracket of the sinkage solve from Fz_static at :func:`scan_angles` (``values``):
     ``(state, capacity, w_safe)``, the Newton state of :func:`_newton_update` at its first
@@ -727,13 +862,14 @@ def _solve_start(load, values):
     scan = scan_angles()
     capacity = values[-1]
     lo, hi = _scan_range(load)
-    h_lo, h_hi = _residual(values[0], w_safe), _residual(values[-1], w_safe)
+    f_lo, f_hi = values[0], values[-1]
     for k in range(len(scan) - 1, 0, -1):  # the last assignment is the shallowest crossing
         reached = values[k] >= load
-        hi, h_hi = (ca.if_else(reached, a, b) for a, b in
-                    ((math.log(scan[k]), hi), (_residual(values[k], w_safe), h_hi)))
-        lo, h_lo = (ca.if_else(reached, a, b) for a, b in
-                    ((math.log(scan[k - 1]), lo), (_residual(values[k - 1], w_safe), h_lo)))
+        hi, f_hi = (ca.if_else(reached, a, b) for a, b in
+                    ((math.log(scan[k]), hi), (values[k], f_hi)))
+        lo, f_lo = (ca.if_else(reached, a, b) for a, b in
+                    ((math.log(scan[k - 1]), lo), (values[k - 1], f_lo)))
+    h_lo, h_hi = _residual(f_lo, w_safe), _residual(f_hi, w_safe)
     y = _fallback(lo, hi, h_lo, h_hi)
     return _first_state(y, lo, hi, h_lo, h_hi), capacity, w_safe
 
@@ -749,10 +885,14 @@ def _scan_range(load):
     return const(math.log(scan[0])), const(math.log(scan[-1]))
 
 
+STATE_SIZE = 9  # the Newton state of the sinkage solve, :func:`_first_state`
+
+
 def _first_state(y, lo, hi, h_lo, h_hi):
-    """The Newton state at the first iterate ``y``: y, the bracket (lo, hi, h_lo, h_hi), which
-    end the previous iterate replaced (1 lo, 0 hi, -1 none), the last step, converged."""
-    return ca.vertcat(y, lo, hi, h_lo, h_hi, -1, math.inf, 0)
+    """The Newton state (STATE_SIZE) at the first iterate ``y``: y, the bracket (lo, hi, h_lo,
+    h_hi), which end the previous iterate replaced (1 lo, 0 hi, -1 none), the last step,
+    converged, and whether the last step was Newton's (1) or the bracket's (0)."""
+    return ca.vertcat(y, lo, hi, h_lo, h_hi, -1, math.inf, 0, 0)
 
 
 def _solve_start_warm(load, f_first, f_last, guess, P: _P):
@@ -786,12 +926,16 @@ def _solve_finish(load, state, f, P: _P):
 
 NEWTON_STOP = 1e-10  # a Newton step in log(theta_f) this small ends the solve: the next would
 # be ~1e-20, below rounding (quadratic convergence); the result is still checked by the caller
+PREDICTED_STOP = 1e-13  # ...as does a step after which the predicted relative residual is this
+RESIDUAL_SCALE = 1e-3  # of the load: where the Newton residual turns from log(F/W) to linear
 
 
 def _residual(f, w_safe):
-    """asinh(F/W) - asinh(1): monotone in F, zero at F = W, ~log(F/W) for F >> W, finite for
-    F <= 0."""
-    return ca.asinh(f / w_safe) - math.asinh(1.0)
+    """asinh(F/(eps*W)) - asinh(1/eps), eps = RESIDUAL_SCALE: monotone in F, zero at F = W,
+    log(F/W) to 1e-6 for F > W/10 (where Fz_static ~ theta_f**q, nearly linear in log(theta_f):
+    Newton converges with a small constant), finite and moderate for F <= 0 (braking corners),
+    where a plain (F - W)/W would dwarf the log branch and stall regula falsi."""
+    return ca.asinh(f / (RESIDUAL_SCALE * w_safe)) - math.asinh(1 / RESIDUAL_SCALE)
 
 
 def _fallback(lo, hi, h_lo, h_hi):
@@ -799,6 +943,26 @@ def _fallback(lo, hi, h_lo, h_hi):
     it would leave the bracket."""
     rf = lo - h_lo * (hi - lo) / ca.fmax(h_hi - h_lo, 1e-300)
     return ca.if_else(ca.logic_and(rf >= lo, rf <= hi), rf, (lo + hi) / 2)
+
+
+def _refine(state, f, w_safe):
+    """The cold solve's second iterate, from Fz_static ``f`` (no derivative) at its first, the
+    regula falsi point y0 of the scan's bracket [lo, hi]: y0 narrows the bracket, and inverse
+    quadratic interpolation through the residuals at lo, y0 and hi (log(Fz) is smooth and
+    nearly linear in log(theta_f)) gives an iterate ~1e-3 from the root, where two Newton
+    steps with the derivative reach rounding; regula falsi on the narrowed bracket where the
+    interpolation leaves it. Half the cost of a Newton iteration, and it saves one."""
+    y, lo, hi, h_lo, h_hi = ca.vertsplit(state)[:5]
+    h = _residual(f, w_safe)
+    below = h <= 0
+    iqi = (lo * h * h_hi / ((h_lo - h) * (h_lo - h_hi))
+           + y * h_lo * h_hi / ((h - h_lo) * (h - h_hi))
+           + hi * h_lo * h / ((h_hi - h_lo) * (h_hi - h)))
+    lo, h_lo = ca.if_else(below, y, lo), ca.if_else(below, h, h_lo)
+    hi, h_hi = ca.if_else(below, hi, y), ca.if_else(below, h_hi, h)
+    inside = ca.logic_and(iqi > lo, iqi < hi)  # NaN (equal residuals) is not inside
+    y_next = ca.if_else(inside, iqi, _fallback(lo, hi, h_lo, h_hi))
+    return ca.vertcat(y_next, lo, hi, h_lo, h_hi, below, ca.fabs(y_next - y), 0, 0)
 
 
 @lru_cache(maxsize=4)
@@ -809,7 +973,7 @@ def _newton_iteration(nodes: tuple[int, int]) -> ca.Function:
     shorter than NEWTON_STOP, ``done`` is 1 and the remaining iterations are the identity,
     evaluated as such (no contact evaluation): the solve stops when it has converged."""
     fz_fun = _static_functions(nodes)[0]
-    state, sl, pp, w_safe = (ca.MX.sym("state", 8), ca.MX.sym("slip"),
+    state, sl, pp, w_safe = (ca.MX.sym("state", STATE_SIZE), ca.MX.sym("slip"),
                              ca.MX.sym("p", len(NAMES)), ca.MX.sym("w_safe"))
     f, df = fz_fun(ca.exp(state[0]), sl, pp)
     next_state = _newton_update(state, f, df, w_safe)
@@ -821,11 +985,19 @@ def _newton_iteration(nodes: tuple[int, int]) -> ca.Function:
 
 def _newton_update(state, f, df, w_safe):
     """One safeguarded Newton iteration's algebra: the next state from ``state`` and Fz_static
-    ``f`` and its derivative ``df`` by theta_f at theta_f = exp(state[0])."""
-    y, lo, hi, h_lo, h_hi, last_below, _, _ = ca.vertsplit(state)
+    ``f`` and its derivative ``df`` by theta_f at theta_f = exp(state[0]).
+
+    It is the last (``done``) when its step is a Newton step inside the bracket and either
+    shorter than NEWTON_STOP, or, after a previous Newton step d0, the relative residual this
+    step d leaves is predicted below PREDICTED_STOP: quadratic convergence gives an error
+    ~C*d**2 with C ~ d/d0**2, i.e. a residual ~|theta*dF/dtheta/W|*d**3/d0**2 (required with
+    d <= d0/2, the contraction that makes the estimate meaningful). That saves the confirming
+    evaluation the NEWTON_STOP test needs; the caller still checks the final residual."""
+    y, lo, hi, h_lo, h_hi, last_below, step_before, _, newton_before = ca.vertsplit(state)
     theta = ca.exp(y)
     h = _residual(f, w_safe)
-    slope = theta * df / (w_safe * ca.sqrt(1 + (f / w_safe) ** 2))
+    u = f / (RESIDUAL_SCALE * w_safe)
+    slope = theta * df / (RESIDUAL_SCALE * w_safe * ca.hypot(1, u))
     below = h <= 0
     # Illinois: an end kept twice in a row has its residual halved, so regula falsi cannot
     # stagnate against it.
@@ -837,8 +1009,12 @@ def _newton_update(state, f, df, w_safe):
     inside = ca.logic_and(step >= lo, step <= hi)
     y_next = ca.if_else(inside, step, _fallback(lo, hi, h_lo, h_hi))
     last_step = ca.fabs(y_next - y)
-    done = ca.logic_and(inside, last_step <= NEWTON_STOP)
-    return ca.vertcat(y_next, lo, hi, h_lo, h_hi, below, last_step, done)
+    predicted = (ca.fabs(theta * df / w_safe) * last_step**3
+                 / ca.fmax(step_before, 1e-300) ** 2)
+    quadratic = _all([newton_before == 1, last_step <= step_before / 2,
+                      predicted <= PREDICTED_STOP])
+    done = ca.logic_and(inside, ca.logic_or(last_step <= NEWTON_STOP, quadratic))
+    return ca.vertcat(y_next, lo, hi, h_lo, h_hi, below, last_step, done, inside)
 
 
 @lru_cache(maxsize=4)

@@ -185,16 +185,16 @@ static void wt_strides(long n, int n_in, const long* shared, long* js, long* is)
 def solve_source(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> str:
     """The C of ``wt_solve(n, in, shared, out)``: the steady state at n points (inputs load,
     slip, guess, first, last, p; outputs STEADY_OUTPUTS, as ``build().steady``), in chunks of
-    WT_CHUNK
-    points: the scan, the bracket, at most NEWTON_ITERATIONS Newton iterations for the points
-    not yet converged, the final angle, the ripple-free contact there and the outputs: the
-    order in which ``build().steady`` evaluates the same pieces. A point with a sinkage guess
+    WT_CHUNK points: the pruned scan (:func:`~wheelterrain.model.contact._scan_values`), the
+    bracket, the refined second iterate, at most NEWTON_ITERATIONS Newton iterations for the
+    points not yet converged, the final angle, the ripple-free contact there and the outputs:
+    the order in which ``build().steady`` evaluates the same pieces. A point with a sinkage guess
     (finite, > 0) starts warm instead (:func:`~wheelterrain.model.contact._solve_start_warm`):
     the scan's two ends and Newton from the guess; ``first`` and ``last``, where finite, are
     those two ends' Fz_static (from ``wt_scan_ends``: a sweep computes them once per slip)."""
     k = _contact.solve_lane_kernels(nodes)
-    singles = ("case", "start", "start_warm", "newton_angle", "newton_update", "solve_angle",
-               "finish")
+    singles = ("case", "scan_plan", "scan_low", "start", "start_warm", "refine",
+               "newton_angle", "newton_update", "solve_angle", "finish")
     kernels = [kernel_c(k[name], f"k_{name}") for name in singles]
     kernels += [kernel_c(f, f"k_{f.name()}") for f in (*k["fz"], *k["fz_d"], *k["static"])]
     scan = _contact.scan_angles()
@@ -205,17 +205,22 @@ def solve_source(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> str:
     rows = {name: row for row, name in enumerate(_contact.STEADY_OUTPUTS)}
     f_row = rows["normal_force_static"]
     angles = ", ".join(repr(float(a)) for a in scan)
+    size, done = _contact.STATE_SIZE, 7
     entry = f"""
 #define WT_CHUNK 256
 int wt_solve(long n, const double* const* in, const long* shared, double* const* out) {{
   static const wt_kernel fz[3] = {{{fz}}}, fz_d[3] = {{{fz_d}}}, contact[3] = {{{static}}};
   static const double scan[{n_scan}] = {{{angles}}};
-  double values[{n_scan} * WT_CHUNK], state[8 * WT_CHUNK], next[8 * WT_CHUNK];
+  double values[{n_scan} * WT_CHUNK], state[{size} * WT_CHUNK], next[{size} * WT_CHUNK];
   double fd[2 * WT_CHUNK], theta[WT_CHUNK], capacity[WT_CHUNK], w_safe[WT_CHUNK];
-  long active[WT_CHUNK], cold[WT_CHUNK], warm[WT_CHUNK], need[WT_CHUNK], js[6], is[6];
+  double plan[{n_scan - 2} * WT_CHUNK], low[3 * WT_CHUNK];
+  long active[WT_CHUNK], cold[WT_CHUNK], warm[WT_CHUNK], need[WT_CHUNK], some[WT_CHUNK];
+  long first_end[WT_CHUNK];
+  long js[6], is[6];
   wt_strides(n, 6, shared, js, is);
   for (long c0 = 0; c0 < n; c0 += WT_CHUNK) {{
     long m = n - c0 < WT_CHUNK ? n - c0 : WT_CHUNK, i, n_cold = 0, n_warm = 0, n_need = 0;
+    long n_first = 0;
     const double* load = in[0] + c0 * is[0];
     const double* slip = in[1] + c0 * is[1];
     const double* guess = in[2] + c0 * is[2];
@@ -229,6 +234,7 @@ int wt_solve(long n, const double* const* in, const long* shared, double* const*
       int warm_point = g > 0 && g - g == 0, given = a - a == 0 && b - b == 0;
       if (warm_point) warm[n_warm++] = i; else cold[n_cold++] = i;
       if (!warm_point || !given) need[n_need++] = i;
+      if (warm_point && !given) first_end[n_first++] = i;
       if (warm_point && given) {{
         values[i] = a;
         values[({n_scan} - 1) * WT_CHUNK + i] = b;
@@ -237,12 +243,48 @@ int wt_solve(long n, const double* const* in, const long* shared, double* const*
     /* at an entry angle per point: theta, slip, p */
     const double* at[3] = {{theta, slip, p}};
     long at_js[3] = {{1, js[1], js[5]}}, at_is[3] = {{1, is[1], is[5]}};
-    for (int s = 0; s < {n_scan}; ++s) {{  /* a warm start needs the scan's two ends only */
-      int ends = s == 0 || s == {n_scan} - 1;
+    for (i = 0; i < m; ++i) theta[i] = scan[{n_scan} - 1];
+    {{  /* fully buried (the capacity): every point that has not been given it */
+      double* o[1] = {{values + ({n_scan} - 1) * WT_CHUNK}};
+      wt_cases(n_need, need, at, at_js, at_is, o, 0, k_case, fz, 3);
+    }}
+    {{  /* a warm point lacking the scan's first end */
+      double* o[1] = {{values}};
+      for (i = 0; i < m; ++i) theta[i] = scan[0];
+      wt_cases(n_first, first_end, at, at_js, at_is, o, 0, k_case, fz, 3);
+    }}
+    {{  /* a cold point: the inner angles its scan plan keeps, then its bracket's low end
+         (contact._scan_values); the rest stay NaN, angles below the load */
+      const double* a[3] = {{load, slip, p}};
+      long a_js[3] = {{js[0], js[1], js[5]}}, a_is[3] = {{is[0], is[1], is[5]}};
+      double* o[1] = {{plan}};
+      wt_each(n_cold, cold, k_scan_plan, a, a_js, a_is, o, WT_CHUNK);
+    }}
+    for (i = 0; i < n_cold; ++i) values[cold[i]] = 0.0 / 0.0;
+    for (int s = 1; s < {n_scan} - 1; ++s) {{
+      long n_some = 0;
       double* o[1] = {{values + s * WT_CHUNK}};
+      for (i = 0; i < n_cold; ++i) {{
+        if (plan[(s - 1) * WT_CHUNK + cold[i]] != 0) some[n_some++] = cold[i];
+        else values[s * WT_CHUNK + cold[i]] = 0.0 / 0.0;
+      }}
       for (i = 0; i < m; ++i) theta[i] = scan[s];
-      wt_cases(ends ? n_need : n_cold, ends ? need : cold, at, at_js, at_is, o, 0, k_case, fz,
-               3);
+      wt_cases(n_some, some, at, at_js, at_is, o, 0, k_case, fz, 3);
+    }}
+    {{
+      const double* a[3] = {{load, values, plan}};
+      long a_js[3] = {{js[0], WT_CHUNK, WT_CHUNK}}, a_is[3] = {{is[0], 1, 1}};
+      double* o[3] = {{low, low + WT_CHUNK, low + 2 * WT_CHUNK}};
+      long n_some = 0;
+      wt_each(n_cold, cold, k_scan_low, a, a_js, a_is, o, 0);
+      for (i = 0; i < n_cold; ++i) {{
+        theta[cold[i]] = low[WT_CHUNK + cold[i]];
+        if (low[2 * WT_CHUNK + cold[i]] != 0) some[n_some++] = cold[i];
+      }}
+      double* f_low[1] = {{fd}};
+      wt_cases(n_some, some, at, at_js, at_is, f_low, 0, k_case, fz, 3);
+      for (i = 0; i < n_some; ++i)
+        values[(long)low[some[i]] * WT_CHUNK + some[i]] = fd[some[i]];
     }}
     {{
       const double* a[2] = {{load, values}};
@@ -256,10 +298,25 @@ int wt_solve(long n, const double* const* in, const long* shared, double* const*
       double* o[3] = {{state, capacity, w_safe}};
       wt_each(n_warm, warm, k_start_warm, a, a_js, a_is, o, WT_CHUNK);
     }}
+    {{  /* a cold point's second iterate, from Fz_static at its first (contact._refine) */
+      const double* s_in[1] = {{state}};
+      long s_js[1] = {{WT_CHUNK}}, s_is[1] = {{1}};
+      double* s_out[1] = {{theta}};
+      wt_each(n_cold, cold, k_newton_angle, s_in, s_js, s_is, s_out, 0);
+      double* f_out[1] = {{fd}};
+      wt_cases(n_cold, cold, at, at_js, at_is, f_out, 0, k_case, fz, 3);
+      const double* r_in[3] = {{state, fd, w_safe}};
+      long r_js[3] = {{WT_CHUNK, 1, 1}}, r_is[3] = {{1, 1, 1}};
+      double* r_out[1] = {{next}};
+      wt_each(n_cold, cold, k_refine, r_in, r_js, r_is, r_out, WT_CHUNK);
+      for (i = 0; i < n_cold; ++i)
+        for (int j = 0; j < {size}; ++j)
+          state[j * WT_CHUNK + cold[i]] = next[j * WT_CHUNK + cold[i]];
+    }}
     for (int iteration = 0; iteration < {_contact.NEWTON_ITERATIONS}; ++iteration) {{
       long n_active = 0, a;
       for (i = 0; i < m; ++i)
-        if (state[7 * WT_CHUNK + i] == 0) active[n_active++] = i;
+        if (state[{done} * WT_CHUNK + i] == 0) active[n_active++] = i;
       if (n_active == 0) break;
       const double* s_in[1] = {{state}};
       long s_js[1] = {{WT_CHUNK}}, s_is[1] = {{1}};
@@ -272,7 +329,7 @@ int wt_solve(long n, const double* const* in, const long* shared, double* const*
       double* u_out[1] = {{next}};
       wt_each(n_active, active, k_newton_update, u_in, u_js, u_is, u_out, WT_CHUNK);
       for (a = 0; a < n_active; ++a)
-        for (int j = 0; j < 8; ++j)
+        for (int j = 0; j < {size}; ++j)
           state[j * WT_CHUNK + active[a]] = next[j * WT_CHUNK + active[a]];
     }}
     {{
