@@ -927,12 +927,14 @@ def _solve_finish(load, state, f, P: _P):
 NEWTON_STOP = 1e-10  # a Newton step in log(theta_f) this small ends the solve: the next would
 # be ~1e-20, below rounding (quadratic convergence); the result is still checked by the caller
 PREDICTED_STOP = 1e-13  # ...as does a step after which the predicted relative residual is this
-RESIDUAL_SCALE = 1e-3  # of the load: where the Newton residual turns from log(F/W) to linear
+RESIDUAL_SCALE = 0.1  # of the load: where the Newton residual turns from log(F/W) to linear
+# (1e-3 made the residual a steep step where Fz_static changes sign, and Newton oscillated
+# across it in braking corners; 0.1 keeps both the small constant and those corners)
 
 
 def _residual(f, w_safe):
     """asinh(F/(eps*W)) - asinh(1/eps), eps = RESIDUAL_SCALE: monotone in F, zero at F = W,
-    log(F/W) to 1e-6 for F > W/10 (where Fz_static ~ theta_f**q, nearly linear in log(theta_f):
+    log(F/W) to ~1e-2 for F > W/2 (where Fz_static ~ theta_f**q, nearly linear in log(theta_f):
     Newton converges with a small constant), finite and moderate for F <= 0 (braking corners),
     where a plain (F - W)/W would dwarf the log branch and stall regula falsi."""
     return ca.asinh(f / (RESIDUAL_SCALE * w_safe)) - math.asinh(1 / RESIDUAL_SCALE)
@@ -996,8 +998,11 @@ def _newton_update(state, f, df, w_safe):
     y, lo, hi, h_lo, h_hi, last_below, step_before, _, newton_before = ca.vertsplit(state)
     theta = ca.exp(y)
     h = _residual(f, w_safe)
-    u = f / (RESIDUAL_SCALE * w_safe)
-    slope = theta * df / (RESIDUAL_SCALE * w_safe * ca.hypot(1, u))
+    # sqrt(1 + u**2) without overflow (libm's hypot is not used: the native FMUs bind libm to
+    # versions old glibc has, and hypot changed version in glibc 2.35)
+    u = ca.fabs(f / (RESIDUAL_SCALE * w_safe))
+    big, small = ca.fmax(u, 1), ca.fmin(u, 1)
+    slope = theta * df / (RESIDUAL_SCALE * w_safe * big * ca.sqrt(1 + (small / big) ** 2))
     below = h <= 0
     # Illinois: an end kept twice in a row has its residual halved, so regula falsi cannot
     # stagnate against it.
