@@ -288,6 +288,20 @@ def exit_angle(theta_f: ca.SX, P: _P) -> ca.SX:
     return -2 * ca.asin(root * ca.sin(theta_f / 2))
 
 
+def _reece(slip: ca.SX, P: _P) -> tuple[ca.SX, ca.SX]:
+    """Reece's pressure-sinkage law: the exponent n = n0 + n1*|i| (Ding et al. 2011) and the
+    modulus c*k_c' + gamma*b*k_phi' (p = modulus*(z/b)**n), shared by both contact forms."""
+    n = P["soil.n0"] + P["soil.n1"] * ca.fabs(slip)
+    modulus = (P["soil.cohesion"] * P["soil.k_c"]
+               + P["soil.gamma"] * P["wheel.width"] * P["soil.k_phi"])
+    return n, modulus
+
+
+def _max_stress_ratio(slip: ca.SX, P: _P) -> ca.SX:
+    """theta_m/theta_f = a0 + a1*i (Wong & Reece 1967)."""
+    return P["model.a0"] + P["model.a1"] * slip
+
+
 def _offset_trig(sin_f: ca.SX, cos_f: ca.SX, x: ca.SX) -> dict:
     """cos/sin of theta = theta_f - x, sin(x), and the differences cos(theta) - cos(theta_f) and
     sin(theta_f) - sin(theta), through half angles so that no difference cancels at small angles
@@ -309,11 +323,11 @@ def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tup
     Rc, Rs, Rref = _radii(P)
     b = P["wheel.width"]
     c, tan_phi = P["soil.cohesion"], ca.tan(P["soil.phi"])
-    n = P["soil.n0"] + P["soil.n1"] * ca.fabs(slip)
-    k_eq = (c * P["soil.k_c"] + P["soil.gamma"] * b * P["soil.k_phi"]) * (Rc / b) ** n
+    n, modulus = _reece(slip, P)
+    k_eq = modulus * (Rc / b) ** n
 
     theta_r = exit_angle(theta_f, P)
-    theta_m = (P["model.a0"] + P["model.a1"] * slip) * theta_f
+    theta_m = _max_stress_ratio(slip, P) * theta_f
 
     displacement = _Displacement(theta_f, slip, P, Rc, Rs, Rref)
     d_front, d_rear = theta_f - theta_m, theta_m - theta_r
@@ -482,12 +496,11 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
     """
     Rc, Rs, Rref = _radii(P)
     b, c = P["wheel.width"], P["soil.cohesion"]
-    n = P["soil.n0"] + P["soil.n1"] * ca.fabs(slip)
+    n, modulus = _reece(slip, P)
     half = ca.sin(theta_f / 2)
     z = 2 * Rc * half**2  # R_c*(1 - cos(theta_f)) without cancellation
     theta_r = exit_angle(theta_f, P)
     length = Rc * (ca.sin(theta_f) - ca.sin(theta_r))
-    modulus = c * P["soil.k_c"] + P["soil.gamma"] * b * P["soil.k_phi"]
     pressure = modulus * (z / b) ** n
     normal_static = b * length * pressure
     amplitude = P["ripple.k_g"] * pressure + P["ripple.k_0"] * length * P["soil.gamma_variation"]
@@ -542,19 +555,20 @@ def static_bound(theta_f: ca.SX, slip: ca.SX, P: _P) -> ca.SX:
     outside the declared ranges), it is +inf: no angle is skipped."""
     Rc, Rs, _ = _radii(P)
     b, c, tan_phi = P["wheel.width"], P["soil.cohesion"], ca.tan(P["soil.phi"])
-    n = P["soil.n0"] + P["soil.n1"] * ca.fabs(slip)
-    k_eq = (c * P["soil.k_c"] + P["soil.gamma"] * b * P["soil.k_phi"]) * (Rc / b) ** n
+    n, modulus = _reece(slip, P)
+    k_eq = modulus * (Rc / b) ** n
     half = ca.sin(theta_f / 2)
     sigma_max = k_eq * ca.exp(n * ca.log(2 * half**2))  # k_eq*(1 - cos(theta_f))**n
     theta_r = exit_angle(theta_f, P)
-    theta_m = (P["model.a0"] + P["model.a1"] * slip) * theta_f
+    ratio = _max_stress_ratio(slip, P)
+    theta_m = ratio * theta_f
     span = ca.fabs(theta_f - theta_m) + ca.fabs(theta_m - theta_r)
     sin_f, g_max = ca.sin(theta_f), shear_peak(P)
     grouser = _grouser_density(P) * _grouser_force(1, theta_f, P, Rc) * g_max * sin_f
     arc = b * span * (Rc * sigma_max + Rs * sin_f * (c + sigma_max * tan_phi) * g_max) \
         + span * grouser
     patch = _patch_form(theta_f, slip, 0, P, False)["normal_force_static"]
-    lam, ratio = P["model.exit_ratio"], P["model.a0"] + P["model.a1"] * slip
+    lam = P["model.exit_ratio"]
     holds = [theta_f <= FULL_BURIAL, ca.fabs(ratio) <= 1, lam >= 0, lam <= 1, n >= 0, c >= 0,
              P["soil.gamma"] >= 0, k_eq >= 0, tan_phi >= 0, P["soil.residual_ratio"] > 0,
              P["grouser.height"] >= 0, Rc > 0, Rs > 0]
@@ -673,7 +687,7 @@ def solve_lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> dict:
     - ``case(theta_f, slip, p)``: the switch's case; ``fz[c](theta_f, slip, p)``: Fz_static
       with case c's kernel; ``fz_d[c]``: Fz_static and its derivative by theta_f;
       ``static[c]``: every CONTACT_OUTPUT, ripple-free (the steady state's contact).
-    - ``scan_plan(load, slip, p)``, ``scan_low(load, values)``: the pruned scan's decisions
+    - ``scan_plan(load, slip, p)``, ``scan_low(load, values, plan)``: the pruned scan's decisions
       (:func:`_scan_values`).
     - ``start(load, values)``: (state, capacity, w_safe) from Fz_static at :func:`scan_angles`;
       ``start_warm(load, f_first, f_last, guess, p)``: the same from the scan's two ends and a
@@ -681,7 +695,7 @@ def solve_lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> dict:
     - ``refine(state, f, w_safe)``: a cold start's second iterate from Fz_static at its first
       (:func:`_refine`).
     - ``newton_angle(state)``: the entry angle of the state's iterate;
-      ``newton_update(state, f, df, w_safe)``: the next state (state[7]: converged).
+      ``newton_update(state, f, df, w_safe)``: the next state (state[STATE_DONE]: converged).
     - ``solve_angle(load, state)``, then ``finish(load, state, f, p)``: sinkage, residual,
       last_step."""
     pp = ca.SX.sym("p", len(NAMES))
@@ -786,7 +800,7 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int], guess=None):
                                                     fz_only(scan[-1], slip, P.p), guess, P)
     iteration = _newton_iteration(nodes)
     for _ in range(NEWTON_ITERATIONS):
-        state = iteration(state[7], state, slip, P.p, w_safe)
+        state = iteration(state[STATE_DONE], state, slip, P.p, w_safe)
     theta = _solve_angle(load, state)
     sinkage, residual, last_step = _solve_finish(load, state, fz_only(theta, slip, P.p), P)
     return sinkage, theta, residual, last_step, capacity
@@ -886,6 +900,7 @@ def _scan_range(load):
 
 
 STATE_SIZE = 9  # the Newton state of the sinkage solve, :func:`_first_state`
+STATE_DONE = 7  # its converged flag
 
 
 def _first_state(y, lo, hi, h_lo, h_hi):
@@ -951,7 +966,7 @@ def _refine(state, f, w_safe):
     """The cold solve's second iterate, from Fz_static ``f`` (no derivative) at its first, the
     regula falsi point y0 of the scan's bracket [lo, hi]: y0 narrows the bracket, and inverse
     quadratic interpolation through the residuals at lo, y0 and hi (log(Fz) is smooth and
-    nearly linear in log(theta_f)) gives an iterate ~1e-3 from the root, where two Newton
+    nearly linear in log(theta_f)) gives an iterate ~1e-4 from the root, where two Newton
     steps with the derivative reach rounding; regula falsi on the narrowed bracket where the
     interpolation leaves it. Half the cost of a Newton iteration, and it saves one."""
     y, lo, hi, h_lo, h_hi = ca.vertsplit(state)[:5]

@@ -205,7 +205,7 @@ def solve_source(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> str:
     rows = {name: row for row, name in enumerate(_contact.STEADY_OUTPUTS)}
     f_row = rows["normal_force_static"]
     angles = ", ".join(repr(float(a)) for a in scan)
-    size, done = _contact.STATE_SIZE, 7
+    size, done = _contact.STATE_SIZE, _contact.STATE_DONE
     entry = f"""
 #define WT_CHUNK 256
 int wt_solve(long n, const double* const* in, const long* shared, double* const* out) {{
