@@ -6,10 +6,12 @@ each solver set-up, VM and compiled prediction model, measured in the same run:
     python benchmarks/mpc.py --quick --json     # one repeat, one JSON object on stdout
 
 ``--json`` prints ``rows``: [{``setup`` (``ipopt-vm``, ``sqpmethod-vm``, ``ipopt-compiled``,
-``sqpmethod-compiled``, ``sqpmethod-rti-compiled``), ``median_s``, ``p90_s``,
-``slip_rms_error``, ``iterations``, ``ratio_to_ipopt_vm``}]; the report goes to stderr.
+``sqpmethod-compiled``, ``sqpmethod-rti-compiled``, ``rti-vm``, ``rti-compiled``), ``median_s``,
+``p90_s``, ``slip_rms_error``, ``iterations``, ``ratio_to_ipopt_vm``}]; the report goes to stderr.
 ``sqpmethod-rti`` is the real-time iteration: one SQP iteration per sample from the shifted
-warm start (Settings.max_iterations = 1).
+warm start (Settings.max_iterations = 1); ``rti`` the same step as our own iteration
+(``Settings(solver="rti")``: the states condensed out, a dense QP in the commands for DAQP,
+one CasADi Function per sample), ``rti-vm`` with the prediction model on the CasADi VM.
 
 Each figure is the median over repeats of the per-run median (and 90th percentile) of the wall
 time of the solver call. The baseline for the ratios is ipopt on the CasADi VM. Goals
@@ -32,7 +34,8 @@ from wheelterrain.fmu import compiled as native
 # (name, solver, compiled prediction model, SQP iterations per sample)
 SETUPS = (("ipopt-vm", "ipopt", False, 20), ("sqpmethod-vm", "sqpmethod", False, 20),
           ("ipopt-compiled", "ipopt", True, 20), ("sqpmethod-compiled", "sqpmethod", True, 20),
-          ("sqpmethod-rti-compiled", "sqpmethod", True, 1))
+          ("sqpmethod-rti-compiled", "sqpmethod", True, 1), ("rti-vm", "rti", False, 1),
+          ("rti-compiled", "rti", True, 1))
 
 
 def main() -> None:

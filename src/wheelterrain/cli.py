@@ -631,16 +631,19 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
               "Functions in process.")
 @click.option("--preset", default=presets.DEFAULT_PRESET, show_default=True,
               metavar="NAME|FILE.json", help="Soil and wheel of plant and model.")
-@click.option("--solver", type=click.Choice(["sqpmethod", "ipopt"]), default="sqpmethod",
-              show_default=True, help="sqpmethod uses the qrqp QP solver.")
+@click.option("--solver", type=click.Choice(["sqpmethod", "ipopt", "rti"]),
+              default="sqpmethod", show_default=True,
+              help="sqpmethod: CasADi's SQP with the qrqp QP solver, to convergence. rti: the "
+              "real-time iteration, one Gauss-Newton QP per sample with the states condensed "
+              "out, solved by DAQP: the fastest set-up (with --compiled, ~0.6 ms per solve on "
+              "the nominal scenario, the same tracking); not for the efficiency scenario.")
 @click.option("--compiled", is_flag=True, help="Generate and compile C for the prediction "
               "model and its Jacobian (about 80 s the first time; cached per model version in "
               "$WHEELTERRAIN_CACHE or ~/.cache).")
 @click.option("--iterations", default=None, type=click.IntRange(1, 1000),
               help="SQP iterations per sample, at most (default: the controller's own limit, "
-              "mpc.Settings.max_iterations). 1 is the real-time iteration: one iteration from "
-              "the shifted warm start, the fastest set-up (with --compiled, ~2 ms per solve on "
-              "the nominal scenario, the same tracking).")
+              "mpc.Settings.max_iterations). 1 is sqpmethod's real-time iteration: one "
+              "iteration from the shifted warm start (--solver rti takes the same step faster).")
 @click.option("--horizon", default=30, show_default=True, type=click.IntRange(1, 500),
               help="Prediction intervals.")
 @click.option("--interval", default=0.02, show_default=True, type=click.FloatRange(1e-3, 1.0),

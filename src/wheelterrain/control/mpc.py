@@ -30,6 +30,19 @@ Objectives
     of motor power, times the carriage speed), with the same move penalty.
 Constraints: |motor torque| <= torque_limit, motor power <= power_limit, sinkage <=
 sinkage_limit, 0 <= speed command <= speed_limit.
+
+Solvers
+    ``sqpmethod`` (CasADi's SQP with the qrqp QP solver, Gauss-Newton Hessian for ``track``),
+    ``ipopt``, and ``rti``: the real-time iteration, one Gauss-Newton QP per sample from the
+    shifted warm start, as sqpmethod with max_iterations = 1 takes it, but with the QP's
+    structure used. The interval residuals are equality constraints whose Jacobian in the
+    states is block bidiagonal; they are eliminated (condensing: the state steps as an affine
+    function of the command steps, a sparse LU), which leaves a dense QP in the horizon's
+    commands only (30 variables, the torque, power and sinkage limits as 90 rows) for DAQP,
+    a dual active-set solver for small dense QPs. The QP is the same one (the elimination is
+    exact), so the iterate is sqpmethod's to rounding; linearisation, condensing, QP and
+    update are one CasADi Function, one call per sample. Least squares (``track``) only:
+    the Gauss-Newton Hessian needs no multipliers.
 """
 
 from __future__ import annotations
@@ -51,7 +64,9 @@ MPC_STATES = (*rig.RIG_STATES, "wheel_angle")
 OUTPUTS = ("slip", "drawbar_pull", "normal_force", "soil_torque", "motor_torque", "power")
 REGULARISATION = 1e-4  # Levenberg-Marquardt term on the Gauss-Newton Hessian (slip terms ~1e6)
 SLIP_SCALE = 1e-3  # slip error of weight 1 in the tracking objective
-SOLVERS = ("sqpmethod", "ipopt")
+SOLVERS = ("sqpmethod", "ipopt", "rti")
+RTI_QP = "daqp"  # CasADi's plugin of DAQP, a dual active-set solver for small dense QPs
+RTI_VIOLATION = 1e-6  # largest violation of the condensed QP's constraints still called solved
 QP_DUAL_TOLERANCE = 1e-7  # sqpmethod's tol_du and qrqp's dual_inf_tol (see Controller._options)
 OBJECTIVES = ("track", "efficiency")
 
@@ -90,6 +105,9 @@ class Settings:
         need(1e-4 <= self.interval <= 1.0, "interval", self.interval, "[1e-4, 1] s")
         need(self.solver in SOLVERS, "solver", self.solver, ", ".join(SOLVERS))
         need(self.objective in OBJECTIVES, "objective", self.objective, ", ".join(OBJECTIVES))
+        need(self.solver != "rti" or self.objective == "track", "objective", self.objective,
+             "track with solver 'rti' (its Gauss-Newton QP needs a least-squares objective; "
+             "for efficiency use sqpmethod or ipopt)")
         need(0 < self.torque_limit <= 1e4, "torque_limit", self.torque_limit, "(0, 1e4] N.m")
         need(0 < self.power_limit <= 1e6, "power_limit", self.power_limit, "(0, 1e6] W")
         need(0 < self.sinkage_limit <= 1.0, "sinkage_limit", self.sinkage_limit, "(0, 1] m")
@@ -275,7 +293,8 @@ class Controller:
             lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", g.numel())
             # plus a Levenberg-Marquardt term: the states outside the objective would leave the
             # Hessian singular, which slows qrqp's active set down by 100x after a soil change
-            hessian = 2 * lam_f * (jac.T @ jac) + REGULARISATION * ca.DM.eye(w.numel())
+            regularisation = REGULARISATION * ca.DM.eye(w.numel())
+            hessian = 2 * lam_f * (jac.T @ jac) + regularisation
             if s.solver == "ipopt":  # ipopt reads the upper triangle, sqpmethod the whole
                 hessian = ca.triu(hessian)
             self.gauss_newton = ca.Function("gauss_newton", [w, p, lam_f, lam_g], [hessian],
@@ -288,7 +307,50 @@ class Controller:
         self.lbx = np.concatenate([np.zeros(n), np.tile(np.full(nx, -np.inf), n)])
         self.ubx = np.concatenate([s.speed_limit / self.command_scale * np.ones(n),
                                    np.tile(upper, n)])
-        self.solver = ca.nlpsol("mpc", s.solver, nlp, self._options())
+        if s.solver == "rti":
+            self.solver = None
+            self.iteration = self._real_time_iteration(
+                w, p, cost, g, 2 * (jac.T @ jac) + regularisation)
+        else:
+            self.solver = ca.nlpsol("mpc", s.solver, nlp, self._options())
+
+    def _real_time_iteration(self, w, p, cost, g, hessian) -> ca.Function:
+        """``iteration(w, p) -> (w_next, violation)``: one Gauss-Newton SQP step from ``w``
+        with the states condensed out (see the module's Solvers), and the largest violation
+        of the condensed QP's constraints by its solution (a solved QP leaves ~1e-12)."""
+        if not ca.has_conic(RTI_QP):
+            raise MPCError(f"solver = 'rti' needs CasADi's {RTI_QP} QP plugin, which this "
+                           f"CasADi {ca.__version__} lacks; valid: sqpmethod, ipopt")
+        n, nx = self.settings.horizon, len(MPC_STATES)
+        ne = n * nx  # the interval residuals: the first ne rows of g; the commands: w[:n]
+        jac_g = ca.jacobian(g, w)
+        jac_u, jac_x = jac_g[:ne, :n], jac_g[:ne, n:]
+        # linearised residuals g + jac_u du + jac_x dx = 0: dx = S du + s0 (jac_x is block
+        # bidiagonal and invertible: identity minus h*df/dx on the diagonal blocks)
+        sensitivity = -ca.solve(jac_x, ca.densify(jac_u), "csparse")
+        offset = -ca.solve(jac_x, g[:ne], "csparse")
+        z = ca.vertcat(ca.DM.eye(n), sensitivity)  # d(w)/d(du)
+        z0 = ca.vertcat(ca.DM.zeros(n), offset)
+        gradient = ca.gradient(cost, w) + hessian @ z0
+        # the limits left: torque and power (the rows of g after the residuals), the sinkage
+        sinkage = [n + k * nx for k in range(n)]
+        rows = ca.vertcat(jac_g[ne:, :], ca.DM.eye(n + ne)[sinkage, :])
+        values = ca.vertcat(g[ne:], w[sinkage])
+        lower = ca.vertcat(ca.DM(self.lbg[ne:]), ca.DM(self.lbx[sinkage]))
+        upper = ca.vertcat(ca.DM(self.ubg[ne:]), ca.DM(self.ubx[sinkage]))
+        a = ca.densify(rows @ z)
+        start = values + rows @ z0
+        h = ca.densify(z.T @ hessian @ z)
+        qp = ca.conic("rti_qp", RTI_QP, {"h": h.sparsity(), "a": a.sparsity()},
+                      {"error_on_fail": False})
+        lbu, ubu = ca.DM(self.lbx[:n]) - w[:n], ca.DM(self.ubx[:n]) - w[:n]
+        du = qp(h=h, g=z.T @ gradient, a=a, lba=lower - start, uba=upper - start,
+                lbx=lbu, ubx=ubu)["x"]
+        reached = a @ du + start
+        violation = ca.mmax(ca.vertcat(ca.fmax(lower - reached, 0), ca.fmax(reached - upper, 0),
+                                       ca.fmax(lbu - du, 0), ca.fmax(du - ubu, 0)))
+        return ca.Function("rti", [w, p], [w + z @ du + z0, violation], ["w", "p"],
+                           ["w_next", "violation"])
 
     def _options(self) -> dict:
         s = self.settings
@@ -340,13 +402,25 @@ class Controller:
                                          (xs.T / self.x_scale).ravel()])
         args = {"x0": self.guess, "p": np.concatenate([x_now, pt, reference, [previous]]),
                 "lbx": self.lbx, "ubx": self.ubx, "lbg": self.lbg, "ubg": self.ubg}
-        # primal warm start only: qrqp warm-started with the last multipliers cycled (200 ms
-        # QPs, iteration limits) once the estimator moved the soil between solves
-        started = time.perf_counter()
-        result = self.solver(**args)
-        elapsed = time.perf_counter() - started
-        stats = self.solver.stats()
-        w = np.array(result["x"]).ravel()
+        if self.solver is None:  # the real-time iteration
+            started = time.perf_counter()
+            w_next, violation = self.iteration(args["x0"], args["p"])
+            elapsed = time.perf_counter() - started
+            w, violation = np.array(w_next).ravel(), float(violation)
+            solved = bool(np.all(np.isfinite(w))) and violation <= RTI_VIOLATION
+            if not solved:  # keep the shifted warm start: its first command is the plan's
+                w = self.guess
+            status = "Solve_Succeeded" if solved else (
+                f"QP not solved: its limits violated by {violation:.3g}; the shifted plan kept")
+            stats = {"iter_count": 1, "success": solved, "return_status": status}
+        else:
+            # primal warm start only: qrqp warm-started with the last multipliers cycled (200
+            # ms QPs, iteration limits) once the estimator moved the soil between solves
+            started = time.perf_counter()
+            result = self.solver(**args)
+            elapsed = time.perf_counter() - started
+            stats = self.solver.stats()
+            w = np.array(result["x"]).ravel()
         commands = w[:n] * self.command_scale
         xs = (w[n:].reshape(n, -1) * self.x_scale).T
         self._shift(w, pt)
