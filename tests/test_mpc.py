@@ -206,6 +206,15 @@ def test_rti_needs_the_least_squares_objective():
         mpc.Settings(solver="rti", objective="efficiency").check()
 
 
+def test_cli_refuses_rti_for_the_efficiency_scenario_before_running(tmp_path):
+    run = CliRunner().invoke(main, ["mpc", "--plant", "casadi", "--solver", "rti",
+                                    "--scenario", "efficiency", "--out", str(tmp_path)])
+    assert run.exit_code == 2
+    assert "track with solver 'rti'" in run.output
+    assert "closed loop" not in run.output  # refused before the progress bar
+    assert not list(tmp_path.iterdir())
+
+
 def test_rti_tracks_the_nominal_scenario_from_the_cli(tmp_path):
     run = CliRunner().invoke(main, ["mpc", "--plant", "casadi", "--solver", "rti",
                                     "--out", str(tmp_path), "--json", str(tmp_path / "f.json")])

@@ -686,6 +686,7 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool,
                                    max_iterations=iterations or
                                    mpc_module.Settings.max_iterations)
     try:
+        settings.check()  # refused before the progress bar starts
         steps = round(the_scenario.duration / interval)
         with click.progressbar(length=steps, label=f"closed loop '{scenario}' ({plant} plant)",
                                file=sys.stderr) as bar:
