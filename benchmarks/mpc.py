@@ -16,7 +16,7 @@ one CasADi Function per sample), ``rti-vm`` with the prediction model on the Cas
 Each figure is the median over repeats of the per-run median (and 90th percentile) of the wall
 time of the solver call. The baseline for the ratios is ipopt on the CasADi VM. Goals
 (issue 5): median <= 2 ms compiled, <= 10 ms uncompiled. The first compiled run generates and
-compiles the prediction model (~80 s, cached; reported apart).
+compiles the prediction model (15-80 s depending on the host, cached; reported apart).
 """
 
 from __future__ import annotations
