@@ -638,8 +638,8 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
               "out, solved by DAQP: the fastest set-up (with --compiled, ~0.6 ms per solve on "
               "the nominal scenario, the same tracking); not for the efficiency scenario.")
 @click.option("--compiled", is_flag=True, help="Generate and compile C for the prediction "
-              "model and its Jacobian (15-80 s the first time, by host; cached per model version in "
-              "$WHEELTERRAIN_CACHE or ~/.cache).")
+              "model and its Jacobian (15-80 s the first time, by host; cached per model "
+              "version in $WHEELTERRAIN_CACHE or ~/.cache).")
 @click.option("--iterations", default=None, type=click.IntRange(1, 1000),
               help="SQP iterations per sample, at most (default: the controller's own limit, "
               "mpc.Settings.max_iterations). 1 is sqpmethod's real-time iteration: one "
