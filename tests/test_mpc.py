@@ -220,6 +220,13 @@ def test_cli_refuses_rti_for_the_efficiency_scenario_before_running(tmp_path):
     assert not list(tmp_path.iterdir())
 
 
+def test_cli_refuses_iterations_with_rti(tmp_path):
+    run = CliRunner().invoke(main, ["mpc", "--plant", "casadi", "--solver", "rti",
+                                    "--iterations", "3", "--out", str(tmp_path)])
+    assert run.exit_code == 2
+    assert "--iterations 3 does not apply to --solver rti" in run.output
+
+
 def test_cli_rejects_a_bad_interval_with_exit_code_2(tmp_path):
     run = CliRunner().invoke(main, ["mpc", "--plant", "casadi", "--interval", "0.0015",
                                     "--out", str(tmp_path)])

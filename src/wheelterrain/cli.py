@@ -681,6 +681,10 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool,
     _check_out_dir(out)
     ps = _load(preset, ())
     the_scenario = closed_loop.SCENARIOS[scenario]
+    if solver == "rti" and iterations not in (None, 1):
+        _usage_error(f"--iterations {iterations} does not apply to --solver rti: the real-time "
+                     "iteration takes one iteration per sample by definition; for more use "
+                     "--solver sqpmethod")
     settings = mpc_module.Settings(horizon=horizon, interval=interval, solver=solver,
                                    compiled=compiled, objective=the_scenario.objective,
                                    max_iterations=iterations or

@@ -38,11 +38,11 @@ Solvers
     structure used. The interval residuals are equality constraints whose Jacobian in the
     states is block bidiagonal; they are eliminated (condensing: the state steps as an affine
     function of the command steps, a sparse LU), which leaves a dense QP in the horizon's
-    commands only (30 variables, the torque, power and sinkage limits as 90 rows) for DAQP,
-    a dual active-set solver for small dense QPs. The QP is the same one (the elimination is
-    exact), so the iterate is sqpmethod's to rounding; linearisation, condensing, QP and
-    update are one CasADi Function, one call per sample. Least squares (``track``) only:
-    the Gauss-Newton Hessian needs no multipliers.
+    commands only (at the default horizon 30 variables, the torque, power and sinkage limits
+    as 90 rows) for DAQP, a dual active-set solver for small dense QPs. The QP is the same one
+    (the elimination is exact), so the iterate is sqpmethod's to rounding; linearisation,
+    condensing, QP and update are one CasADi Function, one call per sample. Least squares
+    (``track``) only: the Gauss-Newton Hessian needs no multipliers.
 """
 
 from __future__ import annotations
