@@ -668,7 +668,8 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool,
       efficiency      maximise drawbar pull per unit of motor power instead of tracking
     Prints slip_rms_error (after each transient), solve_time_median_s, solve_time_p90_s and
     more; writes OUT/<scenario>.png (slip, reference, torque, sinkage, drawbar pull, solve
-    time) and OUT/<scenario>.csv. Try: wheelterrain mpc --plant casadi --scenario efficiency
+    time) and OUT/<scenario>.csv. Try: wheelterrain mpc --plant casadi --scenario efficiency,
+    or the fastest controller: wheelterrain mpc --compiled --solver rti
     """
     from pathlib import Path
 
