@@ -790,6 +790,16 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int], guess=None):
     root pinned in theta_f when the load is a vanishing fraction of force terms that cancel)
     (``model.steady_state`` does); convergence is a checked output, not an assumption.
     """
+    fz_only = _static_functions(nodes)[1]
+    state, theta, capacity = _sinkage_solve_state(load, slip, P, nodes, guess)
+    sinkage, residual, last_step = _solve_finish(load, state, fz_only(theta, slip, P.p), P)
+    return sinkage, theta, residual, last_step, capacity
+
+
+def _sinkage_solve_state(load, slip, P: _P, nodes: tuple[int, int], guess=None):
+    """:func:`_sinkage_solve_expr` up to its final angle: ``(state, theta, capacity)``, the
+    Newton state, the entry angle and the capacity; :func:`_solve_finish` takes it from there
+    with Fz_static at ``theta``."""
     _, fz_only, _ = _static_functions(nodes)
     scan = scan_angles()
     if guess is None:
@@ -801,9 +811,7 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int], guess=None):
     iteration = _newton_iteration(nodes)
     for _ in range(NEWTON_ITERATIONS):
         state = iteration(state[STATE_DONE], state, slip, P.p, w_safe)
-    theta = _solve_angle(load, state)
-    sinkage, residual, last_step = _solve_finish(load, state, fz_only(theta, slip, P.p), P)
-    return sinkage, theta, residual, last_step, capacity
+    return state, _solve_angle(load, state), capacity
 
 
 def scan_angles() -> np.ndarray:
@@ -1097,8 +1105,10 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
     load = ca.MX.sym("load")
     rows = _steady_expr(load, slip, P, nodes)
     solved = ("sinkage", "residual", "last_step", "capacity")
+    # the solve alone (Fz_static at the final angle, not the whole contact there)
+    sink, _, residual, last_step, capacity = _sinkage_solve_expr(load, slip, P, nodes)
     sinkage_solve = ca.Function("sinkage_solve", [load, slip, p],
-                                [rows[STEADY_OUTPUTS.index(k)] for k in solved],
+                                [sink, residual, last_step, capacity],
                                 list(STEADY_INPUTS), list(solved))
     capacity_fn = ca.Function("capacity", [slip, p], [rows[-1]], ["slip", "p"], ["capacity"])
     steady = ca.Function("steady", [load, slip, p], rows, list(STEADY_INPUTS),
@@ -1122,10 +1132,12 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
 
 def _steady_expr(load, slip, P: _P, nodes: tuple[int, int], guess=None) -> list:
     """STEADY_OUTPUTS of the solve (cold, or from a sinkage ``guess``), the contact taken at
-    the solved angle: no round trip through the sinkage."""
-    sink, theta, residual, last_step, capacity = _sinkage_solve_expr(load, slip, P, nodes,
-                                                                     guess)
+    the solved angle: no round trip through the sinkage. The residual is that contact's own
+    normal_force_static (no separate Fz_static evaluation there, as in the lane solve)."""
+    state, theta, capacity = _sinkage_solve_state(load, slip, P, nodes, guess)
     quasi = _static_functions(nodes)[2](theta, slip, P.p)
+    f = quasi[CONTACT_OUTPUTS.index("normal_force_static")]
+    sink, residual, last_step = _solve_finish(load, state, f, P)
     return [sink, *quasi, residual, last_step, capacity]
 
 
