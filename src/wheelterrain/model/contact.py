@@ -784,22 +784,14 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int], guess=None):
        CasADi expression that stops when it has converged, two Newton steps on a driving
        wheel.
 
-    Returns sinkage, entry angle, the relative residual of the final iterate, the size of the last
-    step in log(theta_f) and the capacity (Fz_static fully buried). Callers must check
-    load <= capacity and convergence: a small residual, or a last step at rounding level (the
-    root pinned in theta_f when the load is a vanishing fraction of force terms that cancel)
-    (``model.steady_state`` does); convergence is a checked output, not an assumption.
+    Returns ``(state, theta, capacity)``: the final Newton state, the entry angle and the
+    capacity (Fz_static fully buried). :func:`_solve_finish`, given Fz_static at ``theta``,
+    makes of them the sinkage, the relative residual of the final iterate and the size of the
+    last step in log(theta_f). Callers must check load <= capacity and convergence: a small
+    residual, or a last step at rounding level (the root pinned in theta_f when the load is a
+    vanishing fraction of force terms that cancel) (``model.steady_state`` does); convergence
+    is a checked output, not an assumption.
     """
-    fz_only = _static_functions(nodes)[1]
-    state, theta, capacity = _sinkage_solve_state(load, slip, P, nodes, guess)
-    sinkage, residual, last_step = _solve_finish(load, state, fz_only(theta, slip, P.p), P)
-    return sinkage, theta, residual, last_step, capacity
-
-
-def _sinkage_solve_state(load, slip, P: _P, nodes: tuple[int, int], guess=None):
-    """:func:`_sinkage_solve_expr` up to its final angle: ``(state, theta, capacity)``, the
-    Newton state, the entry angle and the capacity; :func:`_solve_finish` takes it from there
-    with Fz_static at ``theta``."""
     _, fz_only, _ = _static_functions(nodes)
     scan = scan_angles()
     if guess is None:
@@ -1103,13 +1095,15 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
         list(CONTACT_INPUTS), ["d_state", "d_params"])
 
     load = ca.MX.sym("load")
-    rows = _steady_expr(load, slip, P, nodes)
+    solve = _sinkage_solve_expr(load, slip, P, nodes)
+    rows = _steady_expr(load, slip, P, nodes, solve=solve)
     solved = ("sinkage", "residual", "last_step", "capacity")
-    # the solve alone (Fz_static at the final angle, not the whole contact there)
-    sink, _, residual, last_step, capacity = _sinkage_solve_expr(load, slip, P, nodes)
-    sinkage_solve = ca.Function("sinkage_solve", [load, slip, p],
-                                [sink, residual, last_step, capacity],
-                                list(STEADY_INPUTS), list(solved))
+    # the same solve alone: Fz_static at the final angle, not the whole contact there
+    state, theta, capacity = solve
+    sinkage_solve = ca.Function(
+        "sinkage_solve", [load, slip, p],
+        [*_solve_finish(load, state, _static_functions(nodes)[1](theta, slip, p), P), capacity],
+        list(STEADY_INPUTS), list(solved))
     capacity_fn = ca.Function("capacity", [slip, p], [rows[-1]], ["slip", "p"], ["capacity"])
     steady = ca.Function("steady", [load, slip, p], rows, list(STEADY_INPUTS),
                          list(STEADY_OUTPUTS))
@@ -1130,11 +1124,12 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
                           _steady_from(steady, nodes), steady_jacobian, nodes)
 
 
-def _steady_expr(load, slip, P: _P, nodes: tuple[int, int], guess=None) -> list:
-    """STEADY_OUTPUTS of the solve (cold, or from a sinkage ``guess``), the contact taken at
-    the solved angle: no round trip through the sinkage. The residual is that contact's own
+def _steady_expr(load, slip, P: _P, nodes: tuple[int, int], guess=None, solve=None) -> list:
+    """STEADY_OUTPUTS of the solve (cold, or from a sinkage ``guess``; ``solve``: the result
+    of :func:`_sinkage_solve_expr` when the caller has it already), the contact taken at the
+    solved angle: no round trip through the sinkage. The residual is that contact's own
     normal_force_static (no separate Fz_static evaluation there, as in the lane solve)."""
-    state, theta, capacity = _sinkage_solve_state(load, slip, P, nodes, guess)
+    state, theta, capacity = solve or _sinkage_solve_expr(load, slip, P, nodes, guess)
     quasi = _static_functions(nodes)[2](theta, slip, P.p)
     f = quasi[CONTACT_OUTPUTS.index("normal_force_static")]
     sink, residual, last_step = _solve_finish(load, state, f, P)
