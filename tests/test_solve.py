@@ -109,11 +109,11 @@ def count_evaluations(load: float, slip: float, p: np.ndarray) -> tuple[int, int
     state, _, w_safe = k["start"](load, values)
     state = k["refine"](state, fz(np.exp(float(state[0])), slip, p), w_safe)
     newton = 0
-    while float(state[7]) == 0 and newton < contact.NEWTON_ITERATIONS:
+    while float(state[contact.STATE_DONE]) == 0 and newton < contact.NEWTON_ITERATIONS:
         f, df = fz_d(np.exp(float(state[0])), slip, p)
         state = k["newton_update"](state, f, df, w_safe)
         newton += 1
-    assert float(state[7]) == 1
+    assert float(state[contact.STATE_DONE]) == 1
     return 1 + int(plan.sum()) + int(absent) + 1, newton
 
 

@@ -208,6 +208,13 @@ def solve_source(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> str:
     size, done = _contact.STATE_SIZE, _contact.STATE_DONE
     entry = f"""
 #define WT_CHUNK 256
+/* The points idx[0..m) take their next Newton state (rows of WT_CHUNK, {size} of them). */
+static void wt_take(long m, const long* idx, const double* next, double* state) {{
+  for (long a = 0; a < m; ++a)
+    for (int j = 0; j < {size}; ++j)
+      state[j * WT_CHUNK + idx[a]] = next[j * WT_CHUNK + idx[a]];
+}}
+
 int wt_solve(long n, const double* const* in, const long* shared, double* const* out) {{
   static const wt_kernel fz[3] = {{{fz}}}, fz_d[3] = {{{fz_d}}}, contact[3] = {{{static}}};
   static const double scan[{n_scan}] = {{{angles}}};
@@ -309,12 +316,10 @@ int wt_solve(long n, const double* const* in, const long* shared, double* const*
       long r_js[3] = {{WT_CHUNK, 1, 1}}, r_is[3] = {{1, 1, 1}};
       double* r_out[1] = {{next}};
       wt_each(n_cold, cold, k_refine, r_in, r_js, r_is, r_out, WT_CHUNK);
-      for (i = 0; i < n_cold; ++i)
-        for (int j = 0; j < {size}; ++j)
-          state[j * WT_CHUNK + cold[i]] = next[j * WT_CHUNK + cold[i]];
+      wt_take(n_cold, cold, next, state);
     }}
     for (int iteration = 0; iteration < {_contact.NEWTON_ITERATIONS}; ++iteration) {{
-      long n_active = 0, a;
+      long n_active = 0;
       for (i = 0; i < m; ++i)
         if (state[{done} * WT_CHUNK + i] == 0) active[n_active++] = i;
       if (n_active == 0) break;
@@ -328,9 +333,7 @@ int wt_solve(long n, const double* const* in, const long* shared, double* const*
       long u_js[4] = {{WT_CHUNK, 1, 1, 1}}, u_is[4] = {{1, 1, 1, 1}};
       double* u_out[1] = {{next}};
       wt_each(n_active, active, k_newton_update, u_in, u_js, u_is, u_out, WT_CHUNK);
-      for (a = 0; a < n_active; ++a)
-        for (int j = 0; j < {size}; ++j)
-          state[j * WT_CHUNK + active[a]] = next[j * WT_CHUNK + active[a]];
+      wt_take(n_active, active, next, state);
     }}
     {{
       const double* a[2] = {{load, state}};
