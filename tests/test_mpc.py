@@ -220,6 +220,14 @@ def test_cli_refuses_rti_for_the_efficiency_scenario_before_running(tmp_path):
     assert not list(tmp_path.iterdir())
 
 
+def test_cli_choices_are_the_controllers_own_lists():
+    """`wheelterrain mpc` spells its solver and scenario choices out (importing the controller
+    would load CasADi for --help); they must stay the lists the controller accepts."""
+    options = {param.name: param for param in main.commands["mpc"].params}
+    assert tuple(options["solver"].type.choices) == mpc.SOLVERS
+    assert set(options["scenario"].type.choices) == set(closed_loop.SCENARIOS)
+
+
 def test_cli_refuses_iterations_with_rti(tmp_path):
     run = CliRunner().invoke(main, ["mpc", "--plant", "casadi", "--solver", "rti",
                                     "--iterations", "3", "--out", str(tmp_path)])
