@@ -13,6 +13,8 @@
  *      Enumeration (e.g. model.contact_form);
  * RAMP "vr=start+slope,..." Real inputs set to start + slope*t before every step ("-");
  * GET  "vr,..." Real values printed after every step, with t, as %.17g.
+ * FMI_HOST_RESOURCES, if set, is the resource location passed to instantiate (a file: URI;
+ * pythonfmu FMUs need it); else "".
  * Exit status 0 if every call returned fmi2OK, else 1 (the failing call is printed).
  */
 #include <stdarg.h>
@@ -102,6 +104,12 @@ static void print_row(double t, int n, const double *values) {
     printf("\n");
 }
 
+/* The resource location the host passes: FMI_HOST_RESOURCES or "". */
+static const char *resources(void) {
+    const char *uri = getenv("FMI_HOST_RESOURCES");
+    return uri ? uri : "";
+}
+
 static void logger3(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category,
                     fmi3String message) {
     (void)env;
@@ -134,7 +142,7 @@ static int run3(Library lib, const char *token, int steps, double h, int n_set,
         fprintf(stderr, "the library lacks an fmi3 function\n");
         return 1;
     }
-    c = instantiate("host", token, "", fmi3False, fmi3False, fmi3False, fmi3False, NULL, 0,
+    c = instantiate("host", token, resources(), fmi3False, fmi3False, fmi3False, fmi3False, NULL, 0,
                     NULL, logger3, NULL);
     if (!c) {
         fprintf(stderr, "fmi3InstantiateCoSimulation failed\n");
@@ -214,7 +222,8 @@ int main(int argc, char **argv) {
             fprintf(stderr, "%s lacks an fmi2 function\n", argv[1]);
             return 1;
         }
-        c = instantiate("host", fmi2CoSimulation, argv[2], "", &callbacks, fmi2False, fmi2False);
+        c = instantiate("host", fmi2CoSimulation, argv[2], resources(), &callbacks, fmi2False,
+                        fmi2False);
         if (!c) {
             fprintf(stderr, "fmi2Instantiate failed\n");
             return 1;

@@ -18,7 +18,10 @@ What this layer adds around pythonfmu (its gaps: see fmu_src/README.md):
 
 from __future__ import annotations
 
+import gc
 import math
+import sys
+import weakref
 from collections.abc import Callable
 from functools import partial
 from pathlib import Path
@@ -57,6 +60,51 @@ def compiled_or_vm(fn, resources: str | None = None):
 
 
 # --------------------------------------------------------------------------------------------
+# Instance lifetime: CasADi objects must be gone before the interpreter is finalised
+#
+# In a C host, pythonfmu finalises the interpreter it started from a static destructor of its
+# library, at process exit, after CasADi's own static destructors have run. A CasADi Function
+# still referenced from Python then is destroyed against CasADi's destroyed statics: "pure
+# virtual method called", the host aborts (exit 134) after a clean run. So when the last
+# instance in the process is freed (fmi2FreeInstance drops pythonfmu's reference; the cores
+# hold their slaves weakly, so that frees them), the package's caches of CasADi objects are
+# emptied while CasADi is still whole. Only where pythonfmu started the interpreter: a Python
+# host (fmpy) finalises its interpreter before any static destructor, and keeps its caches.
+
+_live_instances = 0
+
+
+def _instance_created(slave) -> None:
+    global _live_instances
+    _live_instances += 1
+    weakref.finalize(slave, _instance_freed)
+
+
+def _instance_freed() -> None:
+    global _live_instances
+    _live_instances -= 1
+    if _live_instances == 0 and embedded_interpreter():
+        release_casadi_objects()
+
+
+def embedded_interpreter() -> bool:
+    """True when this interpreter was started by a C host's FMU library, not by a ``python``
+    command (``sys.orig_argv`` is empty only for an interpreter embedded with Py_Initialize)."""
+    return not sys.orig_argv
+
+
+def release_casadi_objects() -> None:
+    """Empty every cache of the wheelterrain modules loaded (the CasADi Functions, their
+    compiled libraries) and collect what they referenced. They are rebuilt on next use."""
+    for name, module in list(sys.modules.items()):
+        if name == "wheelterrain" or name.startswith("wheelterrain."):
+            for value in list(vars(module).values()):
+                if callable(getattr(value, "cache_clear", None)):
+                    value.cache_clear()
+    gc.collect()
+
+
+# --------------------------------------------------------------------------------------------
 # The slave behaviours
 
 
@@ -66,7 +114,10 @@ class _Core:
     model_name = ""
 
     def __init__(self, slave, variables: list[Var]) -> None:
-        self.slave = slave
+        # weakly: the slave owns this core, and nothing of ours may keep the slave alive once
+        # pythonfmu drops it (see _instance_created)
+        self.slave = weakref.proxy(slave)
+        _instance_created(slave)
         self.vars = {v.name: v for v in variables}
         self.values: dict[str, float] = {}
         self.errors: dict[str, str] = {}
@@ -164,8 +215,10 @@ class _Core:
         self._valid = {kind: frozenset(vr for vr, var in self.slave.vars.items()
                                        if type(var).__name__ == kind) for kind in self._EMPTY}
         for kind in self._EMPTY:
-            fetch = getattr(self.slave, f"get_{kind.lower()}")
-            store = getattr(self.slave, f"set_{kind.lower()}")
+            # the class's functions, not bound methods: a bound method stored on the slave
+            # would make a reference cycle and keep the slave alive after fmi2FreeInstance
+            fetch = partial(getattr(self.slave.__class__, f"get_{kind.lower()}"), self.slave)
+            store = partial(getattr(self.slave.__class__, f"set_{kind.lower()}"), self.slave)
             setattr(self.slave, f"get_{kind.lower()}", partial(self.get_checked, fetch, kind))
             setattr(self.slave, f"set_{kind.lower()}", partial(self.set_checked, store, kind))
 

@@ -1,0 +1,72 @@
+"""The pythonfmu FMUs in a C host, to the end of the process.
+
+A C host (tests/fmi_host.c, compiled here) loads the pythonfmu binary with libpython preloaded,
+as C hosts of pythonfmu FMUs must (fmu_src/README.md), instantiates, steps, terminates and frees
+it, then returns from main. Before the fix in wheelterrain.fmu.slaves (CasADi objects released
+when the last instance is freed) the WheelTerrain FMU aborted the host at exit: "pure virtual
+method called", exit status 134, after a clean run."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import sysconfig
+from pathlib import Path
+
+import pytest
+from fmpy import extract, read_model_description
+
+from wheelterrain.fmu import build_native as nativebuild
+from wheelterrain.fmu import compiled as native
+
+HERE = Path(__file__).resolve().parent
+LIBPYTHON = Path(sysconfig.get_config_var("LIBDIR") or "") / (
+    sysconfig.get_config_var("LDLIBRARY") or "")
+
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.skipif(native.compiler() is None, reason="needs a C compiler"),
+    pytest.mark.skipif(not LIBPYTHON.name.endswith(".so") or not LIBPYTHON.is_file(),
+                       reason="needs a shared libpython to preload (this Python is static)"),
+]
+
+
+@pytest.fixture(scope="module")
+def host(tmp_path_factory) -> Path:
+    binary = tmp_path_factory.mktemp("host") / "fmi_host"
+    subprocess.run([native.compiler(), "-O1", "-Wall", "-Werror", "-I",
+                    str(nativebuild.fmi_headers()), str(HERE / "fmi_host.c"), "-o", str(binary),
+                    "-ldl"], check=True)
+    return binary
+
+
+def run_in_c_host(host: Path, fmu: Path, folder: Path, steps: int, get: str,
+                  set_: str = "-") -> subprocess.CompletedProcess:
+    """Unzip ``fmu`` into ``folder`` and run it in the C host; the embedded interpreter finds
+    numpy and casadi on this Python's path."""
+    unzip = Path(extract(str(fmu), unzipdir=str(folder)))
+    md = read_model_description(str(fmu))
+    library = unzip / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
+    env = {**os.environ, "LD_PRELOAD": str(LIBPYTHON),
+           "PYTHONPATH": os.pathsep.join(p for p in sys.path if p and Path(p).is_dir()),
+           "FMI_HOST_RESOURCES": (unzip / "resources").as_uri()}
+    return subprocess.run([str(host), str(library), md.guid, str(steps), "0.01", set_, "-", get],
+                          capture_output=True, text=True, env=env, timeout=300, check=False)
+
+
+def vr(fmu: Path, name: str) -> int:
+    return {v.name: v.valueReference for v in
+            read_model_description(str(fmu)).modelVariables}[name]
+
+
+@pytest.mark.parametrize(("name", "output"), [("WheelTerrain", "normal_force"),
+                                              ("SingleWheelRig", "carriage_speed")])
+def test_the_host_runs_to_the_end_and_exits_with_status_0(fmu_dir, host, tmp_path, name, output):
+    fmu = fmu_dir / f"{name}.fmu"
+    for attempt in range(2):  # the abort was 2 of 2 before the fix: twice, in fresh processes
+        run = run_in_c_host(host, fmu, tmp_path / f"run{attempt}", 20, str(vr(fmu, output)))
+        assert run.returncode == 0, (run.returncode, run.stderr[-2000:])
+        rows = [[float(x) for x in line.split()] for line in run.stdout.splitlines()]
+        assert len(rows) == 20
+        assert all(row[1] == row[1] and row[1] != 0.0 for row in rows)  # computed, not NaN or 0
