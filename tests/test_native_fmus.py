@@ -965,3 +965,57 @@ def test_a_long_run_keeps_memory_flat(flavours, flavour, steps):
     finally:
         t.close()
     assert grown < 8 * 2**20, f"resident memory grew by {grown / 2**20:.1f} MB"
+
+
+def _edge_points(rows):
+    """(input, value) at each edge of every declared Real input range, at zero and at its
+    start: the points users reach."""
+    points = []
+    for v in rows:
+        if v.causality == "input" and v.type == "Real":
+            values = {v.min, v.max, 0.0, v.start}
+            points += [(v.name, x) for x in sorted(x for x in values if x is not None)]
+    return points
+
+
+@pytest.mark.parametrize("flavour", ["pythonfmu", "native", "fmi3"])
+@pytest.mark.parametrize(("name", "mode"), [("WheelTerrain", False), ("WheelTerrain", True),
+                                            ("SingleWheelRig", None)])
+def test_no_output_is_a_sentinel_served_as_ok_at_the_edges_of_every_input(flavours, flavour,
+                                                                           name, mode):
+    """Every input at each end of its declared range, at zero and at its start (the others
+    at their starts): the step is refused, or every output is finite, or an output the table
+    declares undefined there (functions.UNDEFINED_OUTPUTS) is NaN with a logged warning. No
+    large stand-in number (the paper's slip used to be 1e9 with the carriage at rest)."""
+    from wheelterrain.fmu.functions import SPEED_FLOOR, UNDEFINED_OUTPUTS
+
+    rows = variables.terrain_variables() if name == "WheelTerrain" else variables.rig_variables()
+    outputs = [v.name for v in rows if v.causality == "output"]
+    starts = {v.name: v.start for v in rows if v.causality == "input" and v.type == "Real"}
+    folder = "native/fmi3" if flavour == "fmi3" else flavour
+    path = flavours["root"] / folder / f"{name}.fmu"
+    key = ("fmi3" if flavour == "fmi3" else flavour, name)
+    values = {} if mode is None else {"quasi_static": mode}
+    served = undefined = 0
+    for k, (changed, x) in enumerate(_edge_points(rows)):
+        with Instance(path, flavours["unzip"][key], f"edge{k}", log=True) as fmu:
+            fmu.start({**values, **starts, changed: x})
+            try:
+                fmu.fmu.doStep(0.0, 1e-3)
+                got = fmu.get(outputs)
+            except FMICallException:
+                continue  # refused: the log says why (tested elsewhere)
+            served += 1
+            for out, y in zip(outputs, got, strict=True):
+                where = f"{flavour} {name} {changed}={x}: {out}"
+                assert abs(y) != pytest.approx(1 / SPEED_FLOOR), where
+                if math.isfinite(y):
+                    continue
+                assert math.isnan(y), (where, y)
+                assert out in UNDEFINED_OUTPUTS, (where, y)
+                warned = [m for status, m in fmu.log if status == 1 and out in m]
+                assert warned, (where, fmu.log[-3:])
+                undefined += 1
+    assert served > 0
+    if name == "WheelTerrain":  # carriage_speed = 0 with the wheel turning is among them
+        assert undefined > 0

@@ -60,6 +60,7 @@ typedef struct {
     int has_range;
     double min, max;
     const char *unit;
+    const char *description;
 } VarInfo;
 
 typedef enum {
@@ -405,6 +406,16 @@ static fmi2Status get_values(Instance *c, const char *function, const fmi2ValueR
                     "point; the current one is refused: %s", MODEL_NAME, function,
                     c->b.operating_error ? c->b.operating_message : "an invalid value");
         return fmi2Warning;
+    }
+    /* an output with no value at this point (e.g. the paper's slip with the carriage at
+       rest) is NaN, served as fmi2Warning, never as OK (its description says where) */
+    for (size_t i = 0; i < n; i++) {
+        if (out[i] != out[i]) {
+            log_message(c, fmi2Warning, 0, "%s: %s: %s is undefined at this operating point "
+                        "(NaN): %s", MODEL_NAME, function, VARS[vr[i]].name,
+                        VARS[vr[i]].description);
+            return fmi2Warning;
+        }
     }
     return fmi2OK;
 }

@@ -109,7 +109,8 @@ def _model_vars(model: str, root: ET.Element) -> str:
         lo = _c_double(v.min) if v.min is not None else "0.0"
         hi = _c_double(v.max) if v.max is not None else "0.0"
         rows.append(f"    {{{_c_string(name)}, {kind}, {causality}, {_c_double(start)}, "
-                    f"{has_range}, {lo}, {hi}, {_c_string(v.unit)}}},")
+                    f"{has_range}, {lo}, {hi}, {_c_string(v.unit)}, "
+                    f"{_c_string(v.description)}}},")
     states = continuous_states(model)
     n_states = len(states) + (model == "SingleWheelRig")  # the rig also keeps its last torque
     text = "\n".join([

@@ -25,6 +25,7 @@ SingleWheelRig
 
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 
 import casadi as ca
@@ -86,11 +87,13 @@ def status_message(status: int, info: float, u) -> str:
     return STATUS_MESSAGES[STATUS_UNCONVERGED] % v["load"]
 
 
-def _finite(y):
-    """1 when every entry of ``y`` is finite (NaN compares false), else 0."""
+def _finite(y, names):
+    """1 when every entry of ``y`` (named ``names``) is finite (NaN compares false), else 0;
+    UNDEFINED_OUTPUTS are not checked."""
     finite = 1
-    for k in range(y.shape[0]):
-        finite = ca.logic_and(finite, ca.fabs(y[k]) < FINITE_LIMIT)
+    for k, name in enumerate(names):
+        if name not in UNDEFINED_OUTPUTS:
+            finite = ca.logic_and(finite, ca.fabs(y[k]) < FINITE_LIMIT)
     return finite
 
 
@@ -104,8 +107,8 @@ def slips(wheel_speed, carriage_speed, slip_radius):
     it. A rim speed below SPEED_FLOOR counts as SPEED_FLOOR, so a locked wheel under a moving
     carriage gives a large negative slip, not a division by zero; both at rest give 0.
     ``forward`` is false when the wheel or the carriage moves backward (beyond SPEED_FLOOR):
-    the model covers forward rolling only. The paper's s = (omega*R - V)/V, +-1/SPEED_FLOOR with
-    the carriage at rest.
+    the model covers forward rolling only. The paper's s = (omega*R - V)/V: NaN with the
+    carriage at rest and the wheel turning (:func:`paper_slip`).
     """
     rim = wheel_speed * slip_radius
     difference = rim - carriage_speed
@@ -117,16 +120,23 @@ def slips(wheel_speed, carriage_speed, slip_radius):
 
 
 def paper_slip(wheel_speed, carriage_speed, slip_radius):
-    """The paper's slip s = (omega*R - V)/V, 0 with both at rest and +-1/SPEED_FLOOR with the
-    carriage at rest; plain arithmetic on floats or CasADi symbols (:func:`slips` and the rig's
-    outputs)."""
+    """The paper's slip s = (omega*R - V)/V, 0 with both at rest; plain arithmetic on floats or
+    CasADi symbols (:func:`slips` and the rig's outputs). With the carriage at rest and the
+    wheel turning it has no value (s -> +-inf): NaN, which both FMU flavours serve with a
+    logged warning (UNDEFINED_OUTPUTS), never a large number that looks like a result."""
     difference = wheel_speed * slip_radius - carriage_speed
     at_rest = rig.pick(abs(wheel_speed * slip_radius) < SPEED_FLOOR,
                        abs(carriage_speed) < SPEED_FLOOR, False)
     still = abs(carriage_speed) < SPEED_FLOOR
     return rig.pick(at_rest, 0.0, rig.pick(
-        still, rig.pick(difference >= 0, 1 / SPEED_FLOOR, -1 / SPEED_FLOOR),
-        difference / rig.pick(still, 1.0, carriage_speed)))
+        still, math.nan, difference / rig.pick(still, 1.0, carriage_speed)))
+
+
+# Outputs that have no value at some operating points: NaN there, served with fmi2Warning and
+# a logged reason (native flavour; the pythonfmu flavour logs the warning, its getters cannot
+# return a status), and left out of the terrain's finiteness check. Each Var's description
+# says where.
+UNDEFINED_OUTPUTS = ("slip_paper", "sensor.slip_paper")
 
 
 def slip_radius(p):
@@ -151,7 +161,7 @@ def terrain_functions() -> tuple[ca.Function, ca.Function]:
     full_burial = contact._radii(contact._P(p))[0]  # sinkage R_c: the soil at the axle
     status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(
         sinkage > full_burial, STATUS_BURIED, ca.if_else(
-            _finite(y), STATUS_OK, STATUS_NONFINITE)))
+            _finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE)))
     info = ca.if_else(slip_bad, traction, full_burial)
     dynamic = ca.Function("terrain_dynamic", [u, angle, p], [y, status, info],
                           ["u", "angle", "p"], ["y", "status", "info"])
@@ -166,7 +176,7 @@ def terrain_functions() -> tuple[ca.Function, ca.Function]:
     converged = contact.solve_converged(steady["residual"], steady["last_step"])
     status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(
         too_heavy, STATUS_LOAD, ca.if_else(converged, ca.if_else(
-            _finite(y), STATUS_OK, STATUS_NONFINITE), STATUS_UNCONVERGED)))
+            _finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE), STATUS_UNCONVERGED)))
     info = ca.if_else(slip_bad, traction, steady["capacity"])
     quasi = ca.Function("terrain_quasi_static", [u, p, guess], [y, status, info],
                         ["u", "p", "guess"], ["y", "status", "info"])

@@ -146,11 +146,18 @@ class _Core:
 
     def _getter(self, name: str) -> Callable[[], float]:
         def get():
-            if self.vars[name].causality == "output":
-                self.refresh()
+            if self.vars[name].causality != "output":
+                return self.values.get(name, math.nan)
+            self.refresh()
             # an output the model has never computed (every evaluation so far was refused) is
             # NaN, not a plausible-looking 0 in the host's results
-            return self.values.get(name, math.nan)
+            value = self.values.get(name, math.nan)
+            if name in fmu_model.UNDEFINED_OUTPUTS and value != value:
+                # as the native flavour, whose fmi2GetReal also returns fmi2Warning (a
+                # pythonfmu getter cannot: fmu_src/README.md)
+                self.log_warning(f"fmi2GetReal: {name} is undefined at this operating point "
+                                 f"(NaN): {self.vars[name].description}")
+            return value
         return get
 
     def _setter(self, name: str) -> Callable[[float], None]:
@@ -200,6 +207,10 @@ class _Core:
     def log_error(self, message: str) -> None:
         from pythonfmu.enums import Fmi2Status
         self.slave.log(f"{self.model_name}: {message}", Fmi2Status.error)
+
+    def log_warning(self, message: str) -> None:
+        from pythonfmu.enums import Fmi2Status
+        self.slave.log(f"{self.model_name}: {message}", Fmi2Status.warning)
 
     # --- value references the FMU does not have --------------------------------------------
     # pythonfmu 0.7 turns the KeyError or TypeError of an unknown (or wrongly typed) value

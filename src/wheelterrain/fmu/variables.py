@@ -104,8 +104,9 @@ TERRAIN_IO: tuple[Var, ...] = (
         Var("slip", "output", "Traction slip i = (omega*R_ref - V)/(omega*R_ref) used by the "
             "model, braking included (domain [-1, 1]: a rim at half the carriage speed to "
             "spinning)", "1"),
-        Var("slip_paper", "output", "Slip in the paper's definition s = (omega*R_ref - V)/V (0 "
-            "with the carriage at rest)", "1"),
+        Var("slip_paper", "output", "Slip in the paper's definition s = (omega*R_ref - V)/V: 0 "
+            "with wheel and carriage at rest; undefined (NaN, with a warning) with the "
+            "carriage at rest and the wheel turning", "1"),
         Var("entry_angle", "output", "Entry angle theta_f of the contact arc", "rad", "Angle",
             "deg"),
         Var("exit_angle", "output", "Exit angle theta_r of the contact arc (<= 0)", "rad",
@@ -162,7 +163,8 @@ RIG_IO: tuple[Var, ...] = (
     Var("sensor.sinkage", "output", "Sinkage the rig's potentiometer reads", "m", "Length",
         "mm", depends_on=()),
     Var("sensor.slip_paper", "output", "Slip in the paper's definition from the measured "
-        "wheel and carriage speeds", "1", depends_on=()),
+        "wheel and carriage speeds: undefined (NaN, with a warning) with the carriage at rest "
+        "and the wheel turning", "1", depends_on=()),
 )
 
 
