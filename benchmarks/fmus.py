@@ -116,8 +116,8 @@ def native_step_c_host(fmu_dir: Path, steps: int, repeats: int,
 
     from fmpy import read_model_description
 
+    from wheelterrain import compiled as native
     from wheelterrain.fmu import build_native
-    from wheelterrain.fmu import compiled as native
 
     cc = native.compiler()
     if cc is None or not HOST.is_file():

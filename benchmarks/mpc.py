@@ -27,9 +27,9 @@ import statistics
 import sys
 import time
 
+from wheelterrain import compiled as native
 from wheelterrain import presets
 from wheelterrain.control import closed_loop, mpc
-from wheelterrain.fmu import compiled as native
 
 # (name, solver, compiled prediction model, SQP iterations per sample)
 SETUPS = (("ipopt-vm", "ipopt", False, 20), ("sqpmethod-vm", "sqpmethod", False, 20),

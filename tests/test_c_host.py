@@ -17,8 +17,8 @@ from pathlib import Path
 import pytest
 from fmpy import extract, read_model_description
 
+from wheelterrain import compiled as native
 from wheelterrain.fmu import build_native as nativebuild
-from wheelterrain.fmu import compiled as native
 
 HERE = Path(__file__).resolve().parent
 LIBPYTHON = Path(sysconfig.get_config_var("LIBDIR") or "") / (

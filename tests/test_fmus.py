@@ -344,7 +344,7 @@ def test_bad_rig_parameter_is_refused(fmus):
 
 
 def test_wheelterrain_ships_and_uses_the_compiled_model(fmus):
-    from wheelterrain.fmu import compiled as native
+    from wheelterrain import compiled as native
 
     if native.compiler() is None:
         pytest.skip("no C compiler: the FMU is built for the CasADi VM")

@@ -14,8 +14,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
+from wheelterrain import compiled as native
 from wheelterrain import presets
-from wheelterrain.fmu import compiled as native
 from wheelterrain.model import api as model_api
 from wheelterrain.model import contact, lanes
 

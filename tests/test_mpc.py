@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from wheelterrain import compiled as native
 from wheelterrain import model, presets
 from wheelterrain.cli import main
 from wheelterrain.control import closed_loop, mpc
 from wheelterrain.cosim import master as cosim
-from wheelterrain.fmu import compiled as native
 from wheelterrain.model import rig
 from wheelterrain.parameters import NAMES, TABLE
 

@@ -1,12 +1,12 @@
-"""The compiled-C route (wheelterrain.fmu.compiled) gives the CasADi VM's numbers."""
+"""The compiled-C route (wheelterrain.compiled) gives the CasADi VM's numbers."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from wheelterrain import compiled as native
 from wheelterrain import presets
-from wheelterrain.fmu import compiled as native
 from wheelterrain.model import contact
 
 

@@ -20,13 +20,13 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
 
+from wheelterrain import compiled as native
 from wheelterrain import presets
 from wheelterrain.cosim import master as cosim
 from wheelterrain.cosim import ssp
 from wheelterrain.errors import CosimulationError
 from wheelterrain.fmu import build_native as nativebuild
 from wheelterrain.fmu import build_pythonfmu as fmubuild
-from wheelterrain.fmu import compiled as native
 from wheelterrain.fmu import variables
 from wheelterrain.fmu.instance import Instance
 from wheelterrain.parameters import TABLE

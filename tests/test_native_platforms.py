@@ -14,9 +14,9 @@ from pathlib import Path
 import pytest
 from fmpy import extract, read_model_description
 
+from wheelterrain import compiled as native
 from wheelterrain.fmu import build_fmi3 as fmi3
 from wheelterrain.fmu import build_native as nativebuild
-from wheelterrain.fmu import compiled as native
 
 HERE = Path(__file__).resolve().parent
 WINE = shutil.which("wine") or shutil.which("wine64")

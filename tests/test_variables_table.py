@@ -13,10 +13,10 @@ from pathlib import Path
 
 import pytest
 
+from wheelterrain import compiled as native
 from wheelterrain.cosim import ssp
 from wheelterrain.cosim import sweep as sweeper
 from wheelterrain.fmu import build_pythonfmu, variables
-from wheelterrain.fmu import compiled as native
 from wheelterrain.fmu import functions as fmu_model
 from wheelterrain.model import rig
 

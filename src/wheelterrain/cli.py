@@ -286,11 +286,11 @@ def build(out: str, flavor: str) -> None:
     """
     from pathlib import Path
 
+    from wheelterrain.compiled import compiler as native_compiler
     from wheelterrain.fmu.build_native import WIN64_CC, cross_compiler
     from wheelterrain.fmu.build_native import build as build_native
     from wheelterrain.fmu.build_pythonfmu import BuildError
     from wheelterrain.fmu.build_pythonfmu import build as build_pythonfmu
-    from wheelterrain.fmu.compiled import compiler as native_compiler
 
     try:
         paths = []

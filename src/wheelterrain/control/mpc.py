@@ -55,7 +55,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from wheelterrain.fmu import compiled as native
+from wheelterrain import compiled as native
 from wheelterrain.fmu import functions as fmu_model
 from wheelterrain.model import rig
 from wheelterrain.parameters import NAMES

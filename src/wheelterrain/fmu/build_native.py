@@ -27,8 +27,8 @@ from xml.etree import ElementTree as ET
 
 import casadi as ca
 
+from wheelterrain import compiled as native
 from wheelterrain.fmu import build_fmi3 as fmi3
-from wheelterrain.fmu import compiled as native
 from wheelterrain.fmu import functions as fmu_model
 from wheelterrain.fmu.build_pythonfmu import VARIABLES, BuildError, describe, pretty, source_dir
 from wheelterrain.fmu.build_pythonfmu import build as build_pythonfmu

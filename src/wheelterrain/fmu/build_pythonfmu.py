@@ -30,7 +30,7 @@ from pathlib import Path
 from xml.dom import minidom
 from xml.etree import ElementTree as ET
 
-from wheelterrain.fmu import compiled as native
+from wheelterrain import compiled as native
 from wheelterrain.fmu import functions as fmu_model
 from wheelterrain.fmu import variables
 

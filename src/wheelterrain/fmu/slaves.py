@@ -29,8 +29,8 @@ from types import MappingProxyType
 
 import numpy as np
 
+from wheelterrain import compiled as native
 from wheelterrain.errors import ParameterError
-from wheelterrain.fmu import compiled as native
 from wheelterrain.fmu import functions as fmu_model
 from wheelterrain.fmu.variables import Var, rig_variables, terrain_variables
 from wheelterrain.model import rig

@@ -274,7 +274,7 @@ def _lanes_or_vm(compiled, function: ca.Function, used: tuple[int, ...]):
     the same call on CasADi's map of ``function``: per-point columns and ``p`` in, one row per
     output out; ``used`` picks the columns ``function`` takes (the others, a warm start's
     guess and scan ends, only speed the C)."""
-    from wheelterrain.fmu.compiled import CompileError
+    from wheelterrain.compiled import CompileError
 
     try:
         return compiled()

@@ -16,7 +16,7 @@ compiler may fuse a*b + c; tests bound the difference at 1e-12 relative over ran
 The derivatives stay CasADi's (``build().contact_jacobian``).
 
 The library is compiled on first use with the machine's C compiler for the machine it runs on
-(-march=native) and kept in the cache directory (:func:`wheelterrain.fmu.compiled.cache_directory`),
+(-march=native) and kept in the cache directory (:func:`wheelterrain.compiled.cache_directory`),
 named by the SHA-256 of its source, flags and processor; without libmvec (not glibc) the same C is
 compiled without the vector math declarations, and without a C compiler :func:`contact` falls
 back to CasADi's mapped virtual machine (same numbers to rounding, ~10x slower).
@@ -36,7 +36,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from wheelterrain.fmu.compiled import CompileError, cache_directory, compiler, install, run_compiler
+from wheelterrain.compiled import CompileError, cache_directory, compiler, install, run_compiler
 from wheelterrain.model import contact as _contact
 
 LANES = 8  # points per kernel call; 8 measured faster than 4 and 16 (two AVX2 vectors)
