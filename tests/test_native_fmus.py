@@ -463,7 +463,10 @@ def test_fmi3_refuses_a_wrong_token_and_reports_through_its_log_callback(flavour
     with pytest.raises(Exception, match="Failed to instantiate"):
         fmu.instantiate(logMessage=lambda env, status, category, message:
                         messages.append(message.decode()))
-    assert any("wrong GUID '{not-this-model}'" in m for m in messages), messages
+    # in FMI 3's words: its function names and its instantiation token, never FMI 2's
+    assert any("fmi3InstantiateCoSimulation: wrong instantiation token '{not-this-model}'"
+               in m for m in messages), messages
+    assert not any("fmi2" in m or "GUID" in m for m in messages), messages
     # a value out of range: fmi3Error with the reason, through the FMI 3 log callback
     inst = Instance(path, flavours["unzip"][("fmi3", "WheelTerrain")], "t3", log=True)
     try:
@@ -472,6 +475,11 @@ def test_fmi3_refuses_a_wrong_token_and_reports_through_its_log_callback(flavour
         with pytest.raises(FMICallException):
             inst.fmu.setReal([inst.vr["soil.phi"]], [5.0])
         assert any("soil.phi = 5 is out of range" in m for m in inst.errors()), inst.log
+        # a call out of sequence names the FMI 3 function: a step in initialisation mode
+        with pytest.raises(FMICallException):
+            inst.fmu.doStep(0.0, 1e-3)
+        assert any("fmi3DoStep" in m for m in inst.errors()), inst.log
+        assert not any("fmi2" in m for _, m in inst.log), inst.log
     finally:
         inst.fmu.freeInstance()
 
@@ -781,7 +789,8 @@ def test_ecos_runs_the_ssp_and_gives_the_fmpy_means(flavours, tmp_path):
     path = ssp.write(tmp_path / "C3.ssp", root, "C3", ps, 0.5, 62.0, 0.03, stop, step)
     out = tmp_path / "ecos.csv"
     keys = ("drawbar_pull", "normal_force", "sinkage")
-    ssp.simulate_with_ecos(path, "C3", stop, step, out, tuple(f"rig::sensor.{k}" for k in keys))
+    ssp.simulate_with_ecos(path, "C3", stop, step, out,
+                           tuple(f"{ssp.RIG_COMPONENT}::sensor.{k}" for k in keys))
     with out.open() as f:
         rows = list(csv.reader(f))
     header = [h.strip() for h in rows[0]]
@@ -793,7 +802,7 @@ def test_ecos_runs_the_ssp_and_gives_the_fmpy_means(flavours, tmp_path):
     t = data[:, header.index("time")]
     mask = (t >= start - step / 2) & (t < end - step / 2)
     for key in keys:
-        col = header.index(f"rig::sensor.{key}[REAL]")
+        col = header.index(f"{ssp.RIG_COMPONENT}::sensor.{key}[REAL]")
         theirs = float(np.mean(data[mask, col]))
         # ecos couples by Jacobi (forces lag the rig by one step): O(step) apart
         assert theirs == pytest.approx(ours.means[key], rel=1e-3), key

@@ -14,6 +14,8 @@
 #define WHEELTERRAIN_FMI2_INTERNAL /* fmi2_native.c: types only, its functions not exported */
 #include "fmi2_native.inc"          /* fmi2_native.c, as the FMU's sources/ ship it */
 
+#include <ctype.h>
+
 #include "fmi3Functions.h"
 
 #define TIME_VR N_VARS /* the independent variable of the FMI 3 modelDescription */
@@ -22,22 +24,73 @@ typedef struct {
     fmi2Component inner; /* the FMI 2 instance (Instance *) doing the work */
     fmi3InstanceEnvironment environment;
     fmi3LogMessageCallback log;
+    fmi2Type type; /* model exchange or co-simulation: which fmi3Instantiate* the user called */
 } Instance3;
 
 #define INNER(instance) (((Instance3 *)(instance))->inner)
 #define CORE(instance) ((Instance *)INNER(instance))
 
-/* The FMI 2 layer logs a format string (its '%' doubled); FMI 3 logs plain text. */
+/* What the FMI 2 layer's messages name, as FMI 3 names it: the functions whose FMI 3
+   counterpart is not the same name with fmi3 for fmi2, and the GUID. Any other fmi2 name
+   becomes its fmi3 twin (fmi2DoStep -> fmi3DoStep). */
+static const char *const RENAMED[][2] = {
+    {"fmi2GetReal", "fmi3GetFloat64"},
+    {"fmi2SetReal", "fmi3SetFloat64"},
+    {"fmi2GetInteger", "fmi3GetInt64"},
+    {"fmi2SetInteger", "fmi3SetInt64"},
+    {"fmi2SetupExperiment", "fmi3EnterInitializationMode"},
+    {"fmi2GetFMUstate", "fmi3GetFMUState"},
+    {"fmi2SetFMUstate", "fmi3SetFMUState"},
+    {"fmi2FreeFMUstate", "fmi3FreeFMUState"},
+    {"fmi2SerializeFMUstate", "fmi3SerializeFMUState"},
+    {"fmi2DeSerializeFMUstate", "fmi3DeserializeFMUState"},
+    {"fmi2SerializedFMUstateSize", "fmi3SerializedFMUStateSize"},
+    {"fmi2NewDiscreteStates", "fmi3UpdateDiscreteStates"},
+    {"fmi2GetRealOutputDerivatives", "fmi3GetOutputDerivatives"},
+    {"GUID", "instantiation token"},
+};
+
+/* Append ``text`` to ``out`` (capacity ``size``, ``*j`` used). */
+static void append(char *out, size_t size, size_t *j, const char *text) {
+    while (*text != '\0' && *j + 1 < size) out[(*j)++] = *text++;
+}
+
+/* The FMI 2 layer logs a format string (its '%' doubled) in FMI 2's words; FMI 3 logs plain
+   text in its own. */
 static void forward_log(fmi2ComponentEnvironment environment, fmi2String name, fmi2Status status,
                         fmi2String category, fmi2String message, ...) {
     Instance3 *w = (Instance3 *)environment;
     char plain[MAX_MESSAGE * 4];
-    size_t j = 0;
+    size_t j = 0, i = 0;
     (void)name;
     if (w == NULL || w->log == NULL) return;
-    for (size_t i = 0; message[i] != '\0' && j + 1 < sizeof plain; i++) {
+    while (message[i] != '\0' && j + 1 < sizeof plain) {
+        size_t word = 0, k;
         if (message[i] == '%' && message[i + 1] == '%') i++;
-        plain[j++] = message[i];
+        if (strncmp(message + i, "fmi2", 4) == 0 || strncmp(message + i, "GUID", 4) == 0) {
+            while (isalnum((unsigned char)message[i + word])) word++;
+        }
+        if (word == 0) {
+            plain[j++] = message[i++];
+            continue;
+        }
+        for (k = 0; k < sizeof RENAMED / sizeof RENAMED[0]; k++) {
+            if (strlen(RENAMED[k][0]) == word && strncmp(message + i, RENAMED[k][0], word) == 0)
+                break;
+        }
+        if (strncmp(message + i, "fmi2Instantiate", word) == 0 && word == 15) {
+            append(plain, sizeof plain, &j, w->type == fmi2ModelExchange
+                                                ? "fmi3InstantiateModelExchange"
+                                                : "fmi3InstantiateCoSimulation");
+        } else if (k < sizeof RENAMED / sizeof RENAMED[0]) {
+            append(plain, sizeof plain, &j, RENAMED[k][1]);
+        } else if (message[i] == 'f') { /* fmi2X -> fmi3X */
+            append(plain, sizeof plain, &j, "fmi3");
+            for (k = 4; k < word && j + 1 < sizeof plain; k++) plain[j++] = message[i + k];
+        } else { /* a word that only starts like GUID: as it is */
+            for (k = 0; k < word && j + 1 < sizeof plain; k++) plain[j++] = message[i + k];
+        }
+        i += word;
     }
     plain[j] = '\0';
     w->log(w->environment, (fmi3Status)status, category, plain);
@@ -55,6 +108,7 @@ static fmi3Instance instantiate(fmi3String name, fmi3String token, fmi3Boolean l
     if (w == NULL) return NULL;
     w->environment = environment;
     w->log = log;
+    w->type = type;
     callbacks.componentEnvironment = w;
     w->inner = fmi2Instantiate(name, type, token, "", &callbacks, fmi2False, loggingOn);
     if (w->inner == NULL) {
