@@ -167,7 +167,7 @@ def c1_c4_ecos(fmu_dir: Path, ps) -> float:
                              cosim.STOP_TIME, cosim.STEP)
             ssp.simulate_with_ecos(path, row["case"], cosim.STOP_TIME, cosim.STEP,
                                    Path(tmp) / f"{row['case']}.csv",
-                                   ("rig::sensor.drawbar_pull",))
+                                   (f"{ssp.RIG_COMPONENT}::sensor.drawbar_pull",))
     return time.perf_counter() - start
 
 

@@ -95,10 +95,35 @@ def test_ssp_file_runs_in_fmpy_ssp_and_agrees(fmu_dir, unzipped, tmp_path):
     start, end = ours.window
     mask = (result["time"] >= start - step / 2) & (result["time"] < end - step / 2)
     for key in ("drawbar_pull", "normal_force", "sinkage"):
-        theirs = float(np.mean(result[f"rig.sensor.{key}"][mask]))
+        theirs = float(np.mean(result[f"{ssp.RIG_COMPONENT}.sensor.{key}"][mask]))
         # fmpy.ssp couples by Jacobi (forces lag the rig's state by one step), our master by
         # Gauss-Seidel: first-order schemes that agree to O(step).
         assert _relative(theirs, ours.means[key]) < 1e-3, (key, theirs, ours.means[key])
+
+
+def test_ssp_names_are_identifiers_no_importer_can_misread(fmu_dir, tmp_path):
+    """OMSimulator aborted on the system name 'SingleWheelRig-C2' and read a component 'rig'
+    with a parameter 'rig.load' as component 'rig', variable 'load'. Every name in the
+    SSD is an identifier, and no parameter's name starts with its component's name."""
+    import xml.etree.ElementTree as ET
+    import zipfile
+
+    path = ssp.write(tmp_path / "C2.ssp", fmu_dir, "C2", presets.load("rashid-patch"), 0.25,
+                     LOAD, RIM, 1.0, 1e-3)
+    with zipfile.ZipFile(path) as z:
+        root = ET.fromstring(z.read("SystemStructure.ssd"))
+    named = [e for e in root.iter() if e.tag.rsplit("}", 1)[-1] in
+             ("SystemStructureDescription", "System", "Component")]
+    assert len(named) == 4
+    for element in named:
+        assert element.get("name").isidentifier(), element.get("name")
+    components = [e for e in named if e.tag.endswith("}Component")]
+    assert {c.get("name") for c in components} == {ssp.RIG_COMPONENT, ssp.TERRAIN_COMPONENT}
+    for component in components:
+        parameters = [e.get("name") for e in component.iter() if e.tag.endswith("}Parameter")]
+        assert parameters, component.get("name")
+        clash = [n for n in parameters if n.split(".")[0] == component.get("name")]
+        assert not clash, (component.get("name"), clash)
 
 
 def test_an_fmu_built_from_another_table_is_named_not_a_key_error():

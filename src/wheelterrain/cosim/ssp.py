@@ -51,12 +51,25 @@ def _component(elements, name: str, source: str, inputs, outputs, params: dict,
         ET.SubElement(p, _q("ssv", kind), value=repr(value) if kind == "Real" else str(value))
 
 
+# The components' names in the SSP: identifiers valid in every engine (letters, digits and
+# underscores), and none equal to the first part of a parameter's structured name (a component
+# "rig" with parameters "rig.load" is read by OMSimulator's importer as component "rig",
+# variable "load").
+RIG_COMPONENT, TERRAIN_COMPONENT = "test_rig", "terrain"
+
+
+def system_name(case: str) -> str:
+    """The system's name for ``case``: an identifier (OMSimulator aborts on
+    'SingleWheelRig-C2')."""
+    return f"SingleWheelRig_{case}"
+
+
 def system_description(case: str, ps: ParameterSet, slip_paper: float, load: float,
                        rim_speed: float, stop: float, step: float) -> bytes:
     for prefix, uri in NS.items():
         ET.register_namespace(prefix, uri)
     root = ET.Element(_q("ssd", "SystemStructureDescription"), version="1.0",
-                      name=f"SingleWheelRig-{case}")
+                      name=system_name(case))
     system = ET.SubElement(root, _q("ssd", "System"), name=case,
                            description=f"Rashid wheel on the single-wheel rig, case {case}: "
                            f"slip s = {slip_paper:g} (paper's definition), load {load:g} N")
@@ -64,17 +77,17 @@ def system_description(case: str, ps: ParameterSet, slip_paper: float, load: flo
     terrain_params = {p.name: _binding(p, ps[p.name]) for p in TABLE}
     rig_values = rig_parameters(ps, slip_paper, load, rim_speed)
     rig_params = {p.name: _binding(p, rig_values[p.name]) for p in rig.RIG_TABLE}
-    _component(elements, "rig", "resources/SingleWheelRig.fmu", FORCES, RIG_OUTPUTS, rig_params,
-               case)
-    _component(elements, "terrain", "resources/WheelTerrain.fmu", COUPLED_STATES, TERRAIN_OUTPUTS,
-               terrain_params, case)
+    _component(elements, RIG_COMPONENT, "resources/SingleWheelRig.fmu", FORCES, RIG_OUTPUTS,
+               rig_params, case)
+    _component(elements, TERRAIN_COMPONENT, "resources/WheelTerrain.fmu", COUPLED_STATES,
+               TERRAIN_OUTPUTS, terrain_params, case)
     connections = ET.SubElement(system, _q("ssd", "Connections"))
     for n in COUPLED_STATES:
-        ET.SubElement(connections, _q("ssd", "Connection"), startElement="rig",
-                      startConnector=n, endElement="terrain", endConnector=n)
+        ET.SubElement(connections, _q("ssd", "Connection"), startElement=RIG_COMPONENT,
+                      startConnector=n, endElement=TERRAIN_COMPONENT, endConnector=n)
     for n in FORCES:
-        ET.SubElement(connections, _q("ssd", "Connection"), startElement="terrain",
-                      startConnector=n, endElement="rig", endConnector=n)
+        ET.SubElement(connections, _q("ssd", "Connection"), startElement=TERRAIN_COMPONENT,
+                      startConnector=n, endElement=RIG_COMPONENT, endConnector=n)
     ET.SubElement(root, _q("ssd", "DefaultExperiment"), startTime="0.0", stopTime=repr(stop))
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
