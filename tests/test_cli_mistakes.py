@@ -123,3 +123,43 @@ def test_written_files_get_the_users_normal_permissions(tmp_path):
     finally:
         os.umask(mask)
     assert (tmp_path / "r.csv").stat().st_mode & 0o777 == 0o644
+
+
+def test_writes_never_replace_a_named_pipe_or_a_link(tmp_path):
+    """`--json /dev/null` used to replace the device by a regular file (the atomic write
+    renamed onto any path). A named pipe stands in for the device here; a link stays a link
+    and its target gets the text."""
+    import os
+    import threading
+
+    pipe = tmp_path / "pipe"
+    os.mkfifo(pipe)
+    received = []
+    reader = threading.Thread(target=lambda: received.append(pipe.read_text()))
+    reader.start()
+    write_atomic(pipe, '{"a": 1}\n')
+    reader.join(timeout=10)
+    assert received == ['{"a": 1}\n']
+    assert pipe.is_fifo()
+    target = tmp_path / "real.json"
+    target.write_text("old")
+    link = tmp_path / "link.json"
+    link.symlink_to(target)
+    write_atomic(link, "new\n")
+    assert link.is_symlink()
+    assert target.read_text() == "new\n"
+
+
+@pytest.mark.parametrize("name", ["afile.txt", "missing.fmu"])
+def test_sweep_of_a_file_that_is_not_an_fmu_is_one_line(tmp_path, name):
+    """It was a 46-line traceback from zipfile."""
+    if name == "afile.txt":
+        (tmp_path / name).write_text("hello\n")
+    result = CliRunner().invoke(main, ["sweep", "--fmu", str(tmp_path / name), "--out",
+                                       str(tmp_path / "out")])
+    assert result.exit_code == 2, result.output
+    errors = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert len(errors) == 1, result.output
+    assert name in errors[0]
+    assert "Traceback" not in result.output
+    assert not (tmp_path / "out").exists()  # a refused run leaves no empty folder

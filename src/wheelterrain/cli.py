@@ -115,8 +115,21 @@ def _check_out_dir(out: str, option: str = "--out") -> None:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         _usage_error(f"{option} {out}: cannot create the folder ({err.strerror or err})")
+    if path != existing:  # made here: removed again if the command ends having written nothing
+        click.get_current_context().call_on_close(lambda: _remove_empty(path, existing))
     if not _can_create_in(path):
         _usage_error(f"{option} {out}: {path} is not a writable folder")
+
+
+def _remove_empty(path, stop) -> None:
+    """Remove ``path`` and its parents up to (not including) ``stop`` while they are empty
+    folders: a refused or failed run leaves no empty output folder behind."""
+    while path != stop:
+        try:
+            path.rmdir()  # only an empty folder
+        except OSError:
+            return
+        path = path.parent
 
 
 def _finite(value):

@@ -498,8 +498,18 @@ def _umask() -> int:
 
 
 def write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file: never a half-written result."""
+    """Write ``text`` to ``path`` through a temporary file: never a half-written result.
+
+    A symbolic link is followed (the file it points to is replaced, the link stays); a path
+    that is neither missing nor a regular file (/dev/null, /dev/stdout, a named pipe) is
+    written in place, never replaced by a regular file."""
     path = Path(path)
+    if path.is_symlink():
+        path = path.resolve()
+    if path.exists() and not path.is_file() and not path.is_dir():
+        with path.open("w") as f:
+            f.write(text)
+        return
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
     try:

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from wheelterrain.errors import ParameterError
-from wheelterrain.fmu.instance import Instance
+from wheelterrain.fmu.instance import Instance, read_description
 from wheelterrain.fmu.variables import TERRAIN_OUTPUTS
 from wheelterrain.model.slip import reference_radius, traction_from_paper
 from wheelterrain.parameters import BY_NAME, DEG, TABLE
@@ -149,8 +149,7 @@ def run(fmu: Path, base: dict[str, float], axes: dict[str, list[float]],
     LocalCluster on this machine; the workers there need wheelterrain and the FMU's runtime."""
     check_axes(axes, slip_definition)
     fmu = str(Path(fmu).resolve())
-    if not Path(fmu).is_file():
-        raise FileNotFoundError(f"{fmu} not found: run `wheelterrain build`")
+    read_description(fmu)  # not found or not an FMU: one error before any worker starts
     points = list(grid(axes))
     chunks = [points[k:k + chunk] for k in range(0, len(points), chunk)]
     results: list[list[dict] | None] = [None] * len(chunks)

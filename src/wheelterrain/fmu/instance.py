@@ -82,6 +82,22 @@ class _Fmi3:
         self.raw.getContinuousStateDerivatives(dx, nx)
 
 
+def read_description(path: str | Path):
+    """fmpy's model description of the FMU at ``path``; a file that is not an FMU fmpy can
+    read is one FMUError naming it (not zipfile's traceback)."""
+    from fmpy import read_model_description
+
+    path = Path(path)
+    if not path.is_file():
+        raise FMUError(f"{path} not found: run `wheelterrain build`")
+    try:
+        return read_model_description(str(path))
+    except Exception as err:  # fmpy raises zipfile's, lxml's or its own errors
+        raise FMUError(f"{path} is not an FMU fmpy can read ({type(err).__name__}: {err}); "
+                       "`wheelterrain build` writes WheelTerrain.fmu and SingleWheelRig.fmu"
+                       ) from None
+
+
 class Instance:
     """An instantiated FMI 2.0 or 3.0 FMU: co-simulation (``interface="cs"``, :attr:`fmu` an
     fmpy FMU2Slave) or model exchange (``"me"``, an FMU2Model; :meth:`start` leaves it in
@@ -95,12 +111,12 @@ class Instance:
 
     def __init__(self, path: str | Path, unzip: str | None = None, name: str = "instance",
                  log: bool = False, interface: str = "cs") -> None:
-        from fmpy import extract, read_model_description
+        from fmpy import extract
         from fmpy.fmi2 import FMU2Model, FMU2Slave
         from fmpy.fmi3 import FMU3Model, FMU3Slave
 
         self.path = Path(path)
-        self.md = read_model_description(str(path))
+        self.md = read_description(path)
         self.interface = interface
         kind = {"cs": self.md.coSimulation, "me": self.md.modelExchange}[interface]
         if kind is None:
