@@ -10,6 +10,7 @@ import os
 import re
 import shutil
 import subprocess
+import sys
 import zipfile
 from pathlib import Path
 
@@ -1028,3 +1029,24 @@ def test_no_output_is_a_sentinel_served_as_ok_at_the_edges_of_every_input(flavou
     assert served > 0
     if name == "WheelTerrain":  # carriage_speed = 0 with the wheel turning is among them
         assert undefined > 0
+
+
+@pytest.mark.parametrize("flavour", ["pythonfmu", "native"])
+def test_a_rig_state_it_cannot_leave_terminates_the_simulation(flavours, flavour, tmp_path):
+    """With no soil force the wheel falls out of the rig's range: the step is refused with
+    fmi2Discard and fmi2Terminated is true, so fmpy's simulate_fmu stops at the last good
+    time. Before, Terminated stayed false and it retried the same step forever (a subprocess
+    with a time limit, so a regression fails instead of hanging)."""
+    script = tmp_path / "run.py"
+    script.write_text(
+        "import sys\nfrom fmpy import simulate_fmu\n"
+        "r = simulate_fmu(sys.argv[1], stop_time=5.0, output_interval=0.01,\n"
+        "                 start_values={'normal_force': 0.0})\n"
+        "print(r['time'][-1], r['sinkage'][-1])\n")
+    fmu = flavours["root"] / flavour / "SingleWheelRig.fmu"
+    run = subprocess.run([sys.executable, str(script), str(fmu)], capture_output=True,
+                         text=True, timeout=300, check=False)
+    assert run.returncode == 0, run.stderr[-2000:]
+    end, sinkage = (float(x) for x in run.stdout.splitlines()[-1].split())  # after the log
+    assert 0.1 < end < 5.0
+    assert 0.5 < sinkage <= 1.0  # the last good state, inside the rig's range

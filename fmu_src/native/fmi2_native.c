@@ -88,10 +88,12 @@ typedef struct {
     int operating_error;
     int mode;
     double time;
+    int terminated; /* a refusal the model cannot leave: fmi2Terminated, until a reset or an
+                       earlier FMU state */
     char operating_message[MAX_MESSAGE];
 } Block;
 
-#define BLOCK_MAGIC 0x57544631u /* "WTF1" */
+#define BLOCK_MAGIC 0x57544632u /* "WTF2" */
 
 typedef struct Instance {
     Block b;
@@ -643,7 +645,14 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
     refresh(c);
     if (any_invalid(c, 1)) return fmi2Discard;
     if (c->b.operating_error) {
-        LOG_DISCARD(c, "%s: step refused: %s", MODEL_NAME, c->b.operating_message);
+        /* a refusal from the model's own state (MODEL_STATE_REFUSALS_ARE_FINAL) comes back at
+           every later step: the simulation cannot go on, and fmi2Terminated says so (a master
+           that only retries a Discard would retry forever) */
+        c->b.terminated = MODEL_STATE_REFUSALS_ARE_FINAL;
+        LOG_DISCARD(c, "%s: step refused%s: %s", MODEL_NAME,
+                    c->b.terminated ? " and the simulation terminated (reset, or set an "
+                                      "earlier FMU state, to go on)" : "",
+                    c->b.operating_message);
         return fmi2Discard;
     }
     model_step(c, t, h);
@@ -678,9 +687,9 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component comp, const fmi2StatusKind s, fmi2
 }
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Boolean *v) {
-    (void)comp;
-    if (s == fmi2Terminated) {
-        *v = fmi2False;
+    Instance *c = (Instance *)comp;
+    if (s == fmi2Terminated && c != NULL) {
+        *v = c->b.terminated ? fmi2True : fmi2False;
         return fmi2OK;
     }
     return fmi2Discard;

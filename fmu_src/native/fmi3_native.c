@@ -616,7 +616,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     status = fmi2DoStep(INNER(instance), currentCommunicationPoint, communicationStepSize,
                         noSetFMUStatePriorToCurrentPoint);
     *eventHandlingNeeded = fmi3False;
-    *terminateSimulation = fmi3False;
+    *terminateSimulation = CORE(instance)->b.terminated ? fmi3True : fmi3False;
     *earlyReturn = fmi3False;
     *lastSuccessfulTime = CORE(instance)->b.time;
     return (fmi3Status)status;

@@ -9,6 +9,9 @@
 
 /* The rig's refusals depend on its state: each step is checked at its start (fmi2DoStep). */
 #define MODEL_CHECKS_AT_STEP_END 0
+/* the rig refuses only a state outside its domain (sinkage beyond the rig's range,
+   a non-finite state): nothing the master sets brings it back */
+#define MODEL_STATE_REFUSALS_ARE_FINAL 1
 
 static void model_work(casadi_int *sz_arg, casadi_int *sz_res, casadi_int *sz_iw,
                        casadi_int *sz_w) {

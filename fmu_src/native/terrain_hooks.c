@@ -11,6 +11,8 @@
 /* The terrain's refusals (slip, burial, load, convergence) depend on its inputs, not on the
    wheel angle: a step with unevaluated inputs is evaluated once, at its end (fmi2DoStep). */
 #define MODEL_CHECKS_AT_STEP_END 1
+/* the terrain refuses inputs (speeds, sinkage, load): the master can set others */
+#define MODEL_STATE_REFUSALS_ARE_FINAL 0
 
 static void model_work(casadi_int *sz_arg, casadi_int *sz_res, casadi_int *sz_iw,
                        casadi_int *sz_w) {
