@@ -350,8 +350,18 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component comp) {
 fmi2Status fmi2ExitInitializationMode(fmi2Component comp) {
     Instance *c = (Instance *)comp;
     if (!allowed(c, "fmi2ExitInitializationMode", S_INITIALIZATION)) return fmi2Error;
+    /* a value refused while it was set is refused here too, not first at the first step: the
+       instance stays in initialisation mode, where the value can be set right */
+    for (int k = 0; k < N_VARS; k++) {
+        if (c->b.invalid[k]) {
+            LOG_ERROR(c, "fmi2ExitInitializationMode: %s = %g is invalid (valid range [%g, %g] "
+                      "%s); set it right and call fmi2ExitInitializationMode again",
+                      VARS[k].name, c->b.v[k], VARS[k].min, VARS[k].max, VARS[k].unit);
+            return fmi2Error;
+        }
+    }
     c->b.mode = c->model_exchange ? S_EVENT : S_STEP_COMPLETE;
-    if (!any_invalid(c, 0)) model_initialize(c);
+    model_initialize(c);
     c->b.dirty = 1;
     return fmi2OK;
 }
