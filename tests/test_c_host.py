@@ -70,3 +70,17 @@ def test_the_host_runs_to_the_end_and_exits_with_status_0(fmu_dir, host, tmp_pat
         rows = [[float(x) for x in line.split()] for line in run.stdout.splitlines()]
         assert len(rows) == 20
         assert all(row[1] == row[1] and row[1] != 0.0 for row in rows)  # computed, not NaN or 0
+
+
+@pytest.mark.parametrize("name", ["WheelTerrain", "SingleWheelRig"])
+def test_a_percent_encoded_non_ascii_resource_uri_runs_in_a_c_host(fmu_dir, host, tmp_path,
+                                                                   name):
+    """A C host passes the resource URI percent-encoded (file:///.../r%C3%BCn); pythonfmu
+    decoded only %20 and crashed the host (SIGSEGV). The guard library decodes it whole."""
+    fmu = fmu_dir / f"{name}.fmu"
+    output = {"WheelTerrain": "normal_force", "SingleWheelRig": "carriage_speed"}[name]
+    folder = tmp_path / "rüb ünï"
+    run = run_in_c_host(host, fmu, folder, 5, str(vr(fmu, output)))
+    assert "%C3%BC" in (folder / "resources").as_uri()  # the URI the host passed
+    assert run.returncode == 0, (run.returncode, run.stderr[-2000:])
+    assert len(run.stdout.splitlines()) == 5

@@ -265,7 +265,9 @@ def test_reset_restores_the_start(fmus):
 def test_bad_parameter_is_refused_with_a_logged_reason(fmus, name, value, needle):
     t = terrain(fmus, sinkage=0.03)
     try:
-        t.set({name: value})
+        with pytest.raises(FMICallException) as info:  # fmi2Error from the guard library
+            t.set({name: value})
+        assert info.value.status == 3
         with pytest.raises(FMICallException) as info:
             t.fmu.doStep(0.0, 1e-3)
         assert info.value.status in (2, 3)  # fmi2Discard or fmi2Error, never fatal
@@ -277,21 +279,17 @@ def test_bad_parameter_is_refused_with_a_logged_reason(fmus, name, value, needle
 
 
 def test_fmpy_simulate_with_a_bad_start_value_writes_no_plausible_numbers(fmus, tmp_path):
-    """The run stops at the refused first step (fmpy ends on a Discard as an early stop, exit
-    0); its results must not look like a result: outputs never computed are NaN, not 0. The
-    reason reaches fmpy's log with --debug-logging (pythonfmu passes no message to the host
-    when logging is off: fmu_src/README.md)."""
+    """The start value is refused when set (fmi2Error from the guard library, as the native
+    flavour), with the reason in fmpy's log; fmpy stops there and writes no results, so
+    nothing plausible-looking reaches a results file."""
     out = tmp_path / "bad.csv"
     run = subprocess.run([sys.executable, "-m", "fmpy", "simulate", str(fmus["WheelTerrain"]),
                           "--debug-logging", "--start-values", "soil.phi", "5",
                           "--stop-time", "0.01", "--output-file", str(out)],
                          capture_output=True, text=True, check=False)
-    assert "soil.phi = 5.0 is out of range" in run.stdout + run.stderr
-    with out.open() as f:
-        rows = list(csv.DictReader(f))
-    assert rows
-    assert all(math.isnan(float(row["normal_force"])) for row in rows)
-    assert all(float(row["time"]) == 0.0 for row in rows)  # no step was taken
+    assert "soil.phi = 5 is out of range" in run.stdout + run.stderr
+    assert run.returncode != 0
+    assert not out.exists()
 
 
 @pytest.mark.slow
@@ -335,7 +333,8 @@ def test_impossible_operating_point_is_refused_with_the_capacity(fmus):
 def test_bad_rig_parameter_is_refused(fmus):
     r = rig(fmus)
     try:
-        r.set({"rig.mass": -1.0})
+        with pytest.raises(FMICallException):  # fmi2Error from the guard library
+            r.set({"rig.mass": -1.0})
         with pytest.raises(FMICallException):
             r.fmu.doStep(0.0, 1e-3)
         assert any("rig.mass" in m for m in r.errors())
@@ -403,20 +402,112 @@ def test_free_right_after_instantiate_does_not_crash_the_host(fmus, name):
 
 def test_an_unknown_value_reference_is_an_error_message_not_a_crash(fmus):
     """pythonfmu made an unknown value reference fmi2Fatal without a message, freed the
-    Python side, and the third call crashed the host. Now: the error is logged, the known
-    references are served, nothing is set for the unknown one, and the instance steps on."""
+    Python side, and the third call crashed the host. Now the guard library answers fmi2Error
+    with a logged reason (nothing is got or set), and the instance steps on."""
     t = terrain(fmus, "vr")
     try:
         for _ in range(3):
-            got = t.fmu.getReal([9999, t.vr["drawbar_pull"]])
-            assert math.isnan(got[0])
-            assert math.isfinite(got[1])
-        assert any("no Real variable with value reference 9999" in m for m in t.errors())
-        t.fmu.setReal([9999, t.vr["sinkage"]], [1.0, 0.02])
-        assert any("not set" in m for m in t.errors())
-        assert t.value("contact_sinkage") == pytest.approx(0.02)
-        t.fmu.getInteger([t.vr["soil.phi"]])  # a Real asked as Integer: the same treatment
-        assert any("no Integer variable" in m for m in t.errors())
+            with pytest.raises(FMICallException) as info:
+                t.fmu.getReal([9999, t.vr["drawbar_pull"]])
+            assert info.value.status == 3
+            assert math.isfinite(t.value("drawbar_pull"))
+        assert any("no variable of this type with value reference 9999" in m
+                   for m in t.errors())
+        with pytest.raises(FMICallException):
+            t.fmu.setReal([9999, t.vr["sinkage"]], [1.0, 0.02])
+        with pytest.raises(FMICallException):
+            t.fmu.getInteger([t.vr["soil.phi"]])  # a Real asked as Integer
+        with pytest.raises(FMICallException):
+            t.fmu.setReal([t.vr["drawbar_pull"]], [1.0])  # an output
+        assert any("drawbar_pull is computed by the model" in m for m in t.errors())
         t.fmu.doStep(0.0, 1e-3)
     finally:
         t.close()
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_non_ascii_unzip_path_runs(fmus, name, tmp_path):
+    """pythonfmu decodes only %20 of the resource URI, so under a non-ASCII folder (which
+    fmpy percent-encodes) it did not find its slave and crashed the host (SIGSEGV). The guard
+    library decodes the URI whole. In a fresh process, so a crash fails the test."""
+    script = ("import sys, math\nfrom fmpy import extract\n"
+              "from wheelterrain.fmu.instance import Instance\n"
+              "d = extract(sys.argv[1], unzipdir=sys.argv[2])\n"
+              "with Instance(sys.argv[1], d, 'x') as i:\n"
+              "    i.start({})\n    i.fmu.doStep(0.0, 1e-3)\n"
+              "    print(i.get([sys.argv[3]])[0])\n")
+    output = {"WheelTerrain": "normal_force", "SingleWheelRig": "carriage_speed"}[name]
+    run = subprocess.run([sys.executable, "-c", script, str(fmus[name]),
+                          str(tmp_path / "rover wheel ünï €"), output],
+                         capture_output=True, text=True, timeout=120, check=False)
+    assert run.returncode == 0, (run.returncode, run.stderr[-2000:])
+    assert math.isfinite(float(run.stdout.split()[-1]))
+
+
+def test_wrong_guid_is_refused_with_a_reason(fmus, capfd):
+    """pythonfmu instantiated whatever GUID it was given; the guard library refuses."""
+    from fmpy.fmi2 import FMU2Slave
+
+    fmu = FMU2Slave(guid="{not-the-guid}", unzipDirectory=fmus["unzip"]["WheelTerrain"],
+                    modelIdentifier="WheelTerrain", instanceName="g")
+    with pytest.raises(Exception, match="Failed to instantiate"):
+        fmu.instantiate()
+    fmu.freeLibrary()
+    assert "wrong GUID '{not-the-guid}' for WheelTerrain" in capfd.readouterr().out
+
+
+CALLS_OUT_OF_ORDER = {
+    # (what has been called, the call out of order)
+    "doStep before initialisation": ("instantiated", lambda f: f.doStep(0.0, 1e-3)),
+    "exit before enter": ("instantiated", lambda f: f.exitInitializationMode()),
+    "enter twice": ("initialization", lambda f: f.enterInitializationMode()),
+    "setupExperiment in initialisation": ("initialization",
+                                          lambda f: f.setupExperiment(startTime=0.0)),
+    "doStep in initialisation": ("initialization", lambda f: f.doStep(0.0, 1e-3)),
+    "enter after initialisation": ("stepping", lambda f: f.enterInitializationMode()),
+    "doStep after terminate": ("terminated", lambda f: f.doStep(0.0, 1e-3)),
+    "terminate twice": ("terminated", lambda f: f.terminate()),
+    "setReal after terminate": ("terminated", lambda f: f.setReal([30], [0.02])),
+}
+
+
+@pytest.mark.parametrize("case", list(CALLS_OUT_OF_ORDER))
+def test_calls_out_of_order_are_refused_with_a_reason(fmus, case):
+    """pythonfmu keeps no call sequence: each of these returned OK. The guard library
+    answers fmi2Error and logs 'illegal call sequence'."""
+    stage, call = CALLS_OUT_OF_ORDER[case]
+    t = Instance(fmus["WheelTerrain"], fmus["unzip"]["WheelTerrain"], "seq", log=True)
+    try:
+        if stage != "instantiated":
+            t.fmu.setupExperiment(startTime=0.0)
+            t.fmu.enterInitializationMode()
+        if stage in ("stepping", "terminated"):
+            t.fmu.exitInitializationMode()
+        if stage == "terminated":
+            t.fmu.terminate()
+        with pytest.raises(FMICallException) as info:
+            call(t.fmu)
+        assert info.value.status == 3
+        assert any("illegal call sequence" in m for m in t.errors()), t.log
+    finally:
+        t.fmu.freeInstance()
+        t._remove_unzip()
+
+
+def test_another_models_state_is_refused_not_deserialised(fmus):
+    """A serialized SingleWheelRig state given to WheelTerrain deserialised, and a later
+    getReal crashed the host. Its bytes carry the model's GUID now; another's are refused."""
+    t = terrain(fmus, "own")
+    r = rig(fmus, "other")
+    try:
+        foreign = r.fmu.serializeFMUstate(r.fmu.getFMUstate())
+        own = t.fmu.serializeFMUstate(t.fmu.getFMUstate())
+        with pytest.raises(FMICallException):
+            t.fmu.deSerializeFMUstate(foreign)
+        assert any("not a state of WheelTerrain" in m for m in t.errors()), t.log
+        t.fmu.setFMUstate(t.fmu.deSerializeFMUstate(own))  # its own still round-trips
+        t.fmu.doStep(0.0, 1e-3)
+        assert math.isfinite(t.value("normal_force"))
+    finally:
+        t.close()
+        r.close()

@@ -1058,13 +1058,13 @@ def test_a_rig_state_it_cannot_leave_terminates_the_simulation(flavours, flavour
     assert 0.5 < sinkage <= 1.0  # the last good state, inside the rig's range
 
 
-@pytest.mark.parametrize("flavour", ["native", "fmi3"])
+@pytest.mark.parametrize("flavour", ["pythonfmu", "native", "fmi3"])
 def test_exit_initialization_refuses_a_value_refused_when_set(flavours, flavour):
     """soil.phi = 5 rad is refused when set (fmi2Error); leaving initialisation mode with it
     is refused too, naming it (it returned OK, and the problem surfaced at the first step).
     Set right, the instance leaves initialisation mode and steps."""
     folder = "native/fmi3" if flavour == "fmi3" else flavour
-    key = ("fmi3" if flavour == "fmi3" else "native", "WheelTerrain")
+    key = (flavour, "WheelTerrain")
     inst = Instance(flavours["root"] / folder / "WheelTerrain.fmu", flavours["unzip"][key],
                     "exit", log=True)
     try:

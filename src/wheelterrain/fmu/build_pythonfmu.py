@@ -211,11 +211,25 @@ def finish_model_description(fmu: Path, model: str) -> None:
     for name in members:
         if name.startswith("binaries/linux64/") and name.endswith(".so"):
             members[name] = fix_exit_crash(members[name])
+    _install_guard(members, model, root)
     partial = fmu.with_suffix(".rewrite")
     with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
         for name, data in members.items():
             z.writestr(name, data)
     os.replace(partial, fmu)
+
+
+def _install_guard(members: dict[str, bytes], model: str, root: ET.Element) -> None:
+    """Put the guard library (:mod:`wheelterrain.fmu.build_guard`) in front of pythonfmu's
+    linux64 library: the guard becomes ``<model>.so``, pythonfmu's ``<model>_pythonfmu.so``.
+    Without a C compiler the FMU keeps pythonfmu's library alone."""
+    from wheelterrain.fmu import build_guard
+
+    binary = f"binaries/linux64/{model}.so"
+    guard = build_guard.guard_binary(model, root) if binary in members else None
+    if guard is not None:
+        members[f"binaries/linux64/{model}{build_guard.REAL_SUFFIX}.so"] = members[binary]
+        members[binary] = guard
 
 
 def pretty(root: ET.Element) -> bytes:
