@@ -251,14 +251,7 @@ def main() -> None:
             walls[label] = statistics.median(runs)
             print(f"C1-C4, native, FMI calls straight through ctypes, {count} process(es): "
                   f"{walls[label]:.2f} s wall (median of {len(runs)})")
-    from wheelterrain.cosim import ssp
-
-    switched = ssp.ecos_would_ignore(dirs["native"] / "WheelTerrain.fmu", ps) if (
-        "native" in dirs) else []
-    if switched:  # ecos would run another model
-        print(f"C1-C4 with ecos: skipped, {ARC_PRESET} sets {', '.join(switched)} away from "
-              "the FMU's start values and ecos does not apply enumeration parameters")
-    elif "native" in dirs:
+    if "native" in dirs:
         try:
             walls["native+ecos"] = c1_c4_ecos(dirs["native"], ps)
             print(f"C1-C4, ecos master (C++), native: {walls['native+ecos']:.2f} s wall")

@@ -783,14 +783,13 @@ def test_ecos_runs_the_ssp_and_gives_the_fmpy_means(flavours, tmp_path):
         import ecospy  # noqa: F401
     except (ImportError, OSError) as err:
         pytest.skip(f"ecos (PyPI ecospy, needs Debian's libtbb12) cannot be loaded: {err}")
-    # ecos applies no Enumeration binding, so the mode switches must be at the FMU's start
-    # values (the default preset's); the soil values it does set are moved off them.
-    ps = presets.load(presets.DEFAULT_PRESET).with_values({"soil.phi": math.radians(32),
-                                                           "soil.k_phi": 600.0})
-    assert ssp.ecos_would_ignore(flavours["root"] / "native" / "WheelTerrain.fmu", ps) == []
-    assert ssp.ecos_would_ignore(flavours["root"] / "native" / "WheelTerrain.fmu",
-                                 presets.load("paper-table2-arc")) == ["model.shear_kinematics",
-                                                                       "model.contact_form"]
+    # every value is applied now the mode switches are Integers: a preset whose switches and
+    # soil values are both off the FMU's start values (the default preset's) runs as itself
+    ps = presets.load("paper-table2-arc").with_values({"soil.phi": math.radians(32),
+                                                       "soil.k_phi": 600.0})
+    starts = {v.name: v.start for v in read_model_description(
+        str(flavours["root"] / "native" / "WheelTerrain.fmu")).modelVariables}
+    assert float(starts["model.contact_form"]) != ps["model.contact_form"]
     stop, step = 11.0, 1e-3
     root = flavours["root"] / "native"
     path = ssp.write(tmp_path / "C3.ssp", root, "C3", ps, 0.5, 62.0, 0.03, stop, step)
@@ -814,6 +813,40 @@ def test_ecos_runs_the_ssp_and_gives_the_fmpy_means(flavours, tmp_path):
         # ecos couples by Jacobi (forces lag the rig by one step): O(step) apart
         assert theirs == pytest.approx(ours.means[key], rel=1e-3), key
 
+
+
+@pytest.mark.parametrize("flavour", ["native", "pythonfmu"])
+def test_libcosim_runs_the_ssp_with_every_parameter_applied(flavours, tmp_path, flavour):
+    """libcosim (the Open Simulation Platform's engine) runs the SSP file unchanged and, now
+    that the switches are Integers it can set, with every parameter of the case applied: a
+    preset whose switches (model.contact_form = arc) and soil values are off the FMU's start
+    values gives our master's means. libcosim couples by Jacobi (the forces lag the rig by
+    one step): O(step) apart."""
+    try:
+        import libcosimpy  # noqa: F401
+    except (ImportError, OSError) as err:
+        pytest.skip(f"libcosim (PyPI libcosimpy) cannot be loaded: {err}")
+    ps = presets.load("paper-table2-arc").with_values({"soil.phi": math.radians(32),
+                                                       "soil.k_phi": 600.0})
+    root = flavours["root"] / flavour
+    starts = {v.name: v.start for v in read_model_description(
+        str(root / "WheelTerrain.fmu")).modelVariables}
+    assert float(starts["model.contact_form"]) != ps["model.contact_form"]
+    stop, step = 11.0, 1e-3
+    path = ssp.write(tmp_path / "C3.ssp", root, "C3", ps, 0.5, 62.0, 0.03, stop, step)
+    keys = ("drawbar_pull", "normal_force", "sinkage")
+    result = ssp.simulate_with_libcosim(
+        path, stop, step, tuple(f"{ssp.RIG_COMPONENT}.sensor.{k}" for k in keys))
+    unz = {n: flavours["unzip"][(flavour, n)] for n in NAMES}
+    ours = cosim.run_case(root, ps, 0.5, 62.0, 0.03, "C3", stop=stop, step=step, unzipped=unz,
+                          settle=5.0)
+    start, end = ours.window
+    t = result["time"]
+    mask = (t >= start - step / 2) & (t < end - step / 2)
+    for key in keys:
+        theirs = float(np.mean(result[f"{ssp.RIG_COMPONENT}.sensor.{key}"][mask]))
+        assert theirs == pytest.approx(ours.means[key], rel=1e-3), (key, theirs,
+                                                                    ours.means[key])
 
 C_HOST = r"""
 #include <dlfcn.h>

@@ -5,8 +5,8 @@
  * with its fmi2 functions kept internal): one state machine, one set of value checks, the same
  * CasADi-generated model and hooks, so both standards give the same numbers. What FMI 3
  * changes is mapped here: the instantiation token (the model's GUID), the log callback (no
- * format string), typed getters and setters (Float64 for the Reals, Int32 for counts, Int64
- * for the Enumerations, Boolean), the independent variable `time` (value reference
+ * format string), typed getters and setters (Float64 for the Reals, Int32 for counts and
+ * mode switches, Int64 too, Boolean), the independent variable `time` (value reference
  * TIME_VR = N_VARS), the step mode of co-simulation and the event update of model exchange.
  * Clocks, scheduled execution, Float32, the unsigned and 8/16-bit integers, String and
  * Binary are not used by the model: those calls return fmi3Error with a logged reason.
@@ -243,7 +243,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
     return (fmi3Status)fmi2SetReal(INNER(instance), vr, nvr, values);
 }
 
-/* Int32 (counts) and Int64 (Enumerations) are the FMI 2 layer's Integers. */
+/* Int32 (counts, mode switches) and Int64 are the FMI 2 layer's Integers. */
 #define INTEGER_GET(NAME, TYPE)                                                              \
     fmi3Status NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,         \
                     TYPE values[], size_t nValues) {                                          \

@@ -15,6 +15,8 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
+import numpy as np
+
 from wheelterrain.cosim.master import rig_parameters
 from wheelterrain.fmu import variables
 from wheelterrain.model import rig
@@ -131,18 +133,6 @@ def simulate_with_fmpy(path: Path, stop: float, step: float):
     return simulate_ssp(str(path), stop_time=stop, step_size=step, parameter_set=merged)
 
 
-def ecos_would_ignore(fmu: Path, ps: ParameterSet) -> list[str]:
-    """The table parameters ecos would not apply to ``fmu`` (a WheelTerrain FMU) for ``ps``:
-    the switches (Enumeration variables) whose value differs from the FMU's start value. ecos
-    applies no binding to an Enumeration (its SSP reader knows ssv:Real, Integer, Boolean and
-    String; its FMI 2 reader registers Enumerations under no settable type), so with any of
-    these it would run another model than ``ps``."""
-    from fmpy import read_model_description
-
-    starts = {v.name: v.start for v in read_model_description(str(fmu)).modelVariables}
-    return [p.name for p in TABLE if p.kind == "enum" and float(starts[p.name]) != ps[p.name]]
-
-
 def simulate_with_ecos(path: Path, case: str, stop: float, step: float, csv: Path,
                        variables: tuple[str, ...]) -> None:
     """Run an SSP written by :func:`write` in ecos (ecospy), applying the case's parameter set,
@@ -158,3 +148,33 @@ def simulate_with_ecos(path: Path, case: str, stop: float, step: float, csv: Pat
         sim.terminate()
     finally:
         sim.free()
+
+
+def simulate_with_libcosim(path: Path, stop: float, step: float,
+                           variables: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """Run an SSP written by :func:`write` in libcosim (PyPI libcosimpy, the Open Simulation
+    Platform's engine; fixed step, its SSP reader applies the file's parameter set) and return
+    ``time`` and ``variables`` ("component.name", Real) at every step."""
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+
+    log_output_level(CosimLogLevel.ERROR)  # its info and debug lines would flood the output
+    nanoseconds = round(step * 1e9)  # libcosim's time unit
+    execution = CosimExecution.from_ssp_file(str(path), step_size=nanoseconds)
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer)
+    wanted = []
+    for name in variables:
+        component, variable = name.split(".", 1)
+        index = execution.slave_index_from_instance_name(component)
+        refs = {v.name.decode(): v.reference for v in execution.slave_variables(index)}
+        wanted.append((index, refs[variable]))
+    steps = round(stop / step)
+    out = np.empty((steps, len(variables)))
+    for k in range(steps):
+        execution.step()
+        for j, (index, ref) in enumerate(wanted):
+            out[k, j] = observer.last_real_values(index, [ref])[0]
+    return {"time": step * np.arange(1, steps + 1),
+            **{name: out[:, j] for j, name in enumerate(variables)}}

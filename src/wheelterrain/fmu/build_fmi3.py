@@ -2,13 +2,13 @@
 
 The modelDescription.xml is a translation of the native FMI 2 one (:mod:`build_native`), so
 names, value references, units, types, ranges, starts, nominals and structure cannot drift
-apart: Real -> Float64, Integer -> Int32, Enumeration -> Enumeration (Int64 API), Boolean ->
-Boolean; a state derivative names its state by value reference; ModelStructure by value
-reference; the instantiation token is the FMI 2 GUID (one model, one token). FMI 3 adds the
-independent variable ``time`` (value reference: the first one after the FMI 2 variables,
-``TIME_VR`` in fmi3_native.c). sources/buildDescription.xml says how to compile the binary:
-one translation unit, fmi3_native.c, which includes the FMI 2 wrapper with its fmi2 functions
-internal.
+apart: Real -> Float64, Integer -> Int32 (the mode switches too: an Int32 type of their own
+with min and max), Boolean -> Boolean; a state derivative names its state by value
+reference; ModelStructure by value reference; the instantiation token is the FMI 2 GUID (one
+model, one token). FMI 3 adds the independent variable ``time`` (value reference: the first
+one after the FMI 2 variables, ``TIME_VR`` in fmi3_native.c). sources/buildDescription.xml
+says how to compile the binary: one translation unit, fmi3_native.c, which includes the FMI 2
+wrapper with its fmi2 functions internal.
 """
 
 from __future__ import annotations
@@ -58,7 +58,7 @@ def description(fmi2: ET.Element) -> ET.Element:
     for simple in fmi2.find("TypeDefinitions"):
         kind = simple[0]
         element = ET.SubElement(types, f"{_TYPE[kind.tag]}Type", name=simple.get("name"))
-        _copy(kind, element, ("quantity", "unit", "displayUnit"))
+        _copy(kind, element, ("quantity", "unit", "displayUnit", "min", "max"))
         for item in kind.findall("Item"):
             ET.SubElement(element, "Item", name=item.get("name"), value=item.get("value"))
     for tag in ("LogCategories", "DefaultExperiment"):

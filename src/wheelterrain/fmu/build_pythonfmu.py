@@ -8,7 +8,8 @@ same :class:`wheelterrain.fmu.variables.Var` lists the slaves register:
 - UnitDefinitions with SI base-unit exponents, display units deg (angles) and mm (sinkage);
 - TypeDefinitions: one SimpleType per quantity, named after its Modelica.Units.SI type where
   one exists (``Modelica.Units.SI.Velocity``), else ``wheelterrain.<Quantity>``; each mode
-  switch an Enumeration of its own (``wheelterrain.model.contact_form``: arc, patch);
+  switch an Integer type of its own (``wheelterrain.model.contact_form``, 0..1; its
+  description names the choices: an Enumeration would be set by neither libcosim nor ecos);
 - declaredType, unit, min/max and a description on every variable, displayUnit where useful;
 - ModelStructure: Outputs with their direct dependencies on inputs, InitialUnknowns;
 - a DefaultExperiment (from the slave class);
@@ -119,7 +120,7 @@ def build(out: Path, models: tuple[str, ...] = tuple(SOURCES),
 
 def _type_name(v: variables.Var) -> str:
     if v.choices:
-        return f"wheelterrain.{v.name}"  # an Enumeration of its own
+        return f"wheelterrain.{v.name}"  # an Integer type of its own
     if v.type == "Boolean":
         return "wheelterrain.Switch"
     if v.type == "Integer":
@@ -270,9 +271,7 @@ def describe(root: ET.Element, model: str, rows: list[variables.Var],
         v = types[name]
         st = ET.SubElement(type_defs, "SimpleType", name=name)
         if v.choices:
-            enum = ET.SubElement(st, "Enumeration")
-            for value, item in sorted(v.choices.items()):
-                ET.SubElement(enum, "Item", name=item, value=str(value))
+            ET.SubElement(st, "Integer", min=str(min(v.choices)), max=str(max(v.choices)))
         elif v.type == "Real":
             ET.SubElement(st, "Real", quantity=name.rsplit(".", 1)[1], unit=v.unit)
         else:
@@ -286,8 +285,6 @@ def describe(root: ET.Element, model: str, rows: list[variables.Var],
         v = variables[sv.get("name")]
         sv.set("description", v.description)
         typed = sv[0]
-        if v.choices:
-            typed.tag = "Enumeration"  # set and read with fmi2SetInteger/fmi2GetInteger
         typed.set("declaredType", _type_name(v))
         if v.type == "Real":
             typed.set("unit", v.unit)

@@ -40,8 +40,10 @@ class Var:
     depends_on: tuple[str, ...] | None = None  # outputs: the inputs they depend on directly
     integrated: bool = False  # outputs: kept by the wrapper (a state), not a Function output
     choices: Mapping[int, str] | None = None
-    """A mode switch: its values and their names. Registered with pythonfmu as an Integer,
-    described in modelDescription.xml as an Enumeration of these items."""
+    """A mode switch: its values and their names. An Integer in the FMU (min and max its
+    first and last value; its description names each), not an FMI Enumeration: libcosim
+    and ecos set no Enumeration variable, so a switch in an SSP would silently stay at its
+    start value there."""
     nominal: float | None = None
     """A continuous state's typical magnitude: a model-exchange host scales its error
     tolerance with it (absolute tolerance = relative tolerance * nominal)."""
