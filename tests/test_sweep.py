@@ -103,7 +103,8 @@ def test_a_thousand_point_sweep_is_identical_on_a_local_dask_cluster(fmu, tmp_pa
     ps = presets.load(presets.DEFAULT_PRESET)  # the CLI's default
     axes = {"slip": sweeper.parse_axis("slip", "0:0.75:40"),
             "load": sweeper.parse_axis("load", "10:100:25")}
-    on_dask = sweeper.run(fmu, sweeper.base_values(ps), axes, "paper", dask_address="local")
+    on_dask = sweeper.run(fmu, sweeper.base_values(ps), axes, "traction",
+                          dask_address="local")
     assert len(on_dask) == 1000
     for a, b in zip(pooled, on_dask, strict=True):
         assert a["status"] == b["status"]
@@ -125,3 +126,59 @@ def test_paper_findings_hold_in_an_fmu_sweep_with_the_calibrated_preset(fmu):
     assert pull == sorted(pull)
     assert sinkage == sorted(sinkage)
     assert all(r["normal_force"] == pytest.approx(62.0, rel=1e-9) for r in rows)
+
+
+def _children(pid: int) -> set[int]:
+    """The process ids whose parent is ``pid`` (from /proc)."""
+    from pathlib import Path
+
+    found = set()
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            found.add(int(stat.parent.name))
+    return found
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not __import__("pathlib").Path("/proc/self/stat").is_file(),
+                    reason="reads the process table from /proc")
+def test_ctrl_c_stops_a_parallel_sweep_at_once_and_leaves_no_worker(fmu, tmp_path):
+    """Ctrl-C during a long parallel sweep hung in 2 of 5 tries (the pool waited for every
+    queued chunk) and killing the parent orphaned the workers. Now the parent ends the pool at
+    once, says so, writes no results, and its workers are gone."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-m", "wheelterrain.cli", "sweep", "--fmu",
+                             str(fmu), "--slip", "0:0.9:400", "--load", "20:60:200",
+                             "--workers", "2", "--out", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    workers: set[int] = set()
+    deadline = time.monotonic() + 120
+    while len(workers) < 2 and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.2)
+        workers |= _children(proc.pid)
+    assert len(workers) >= 2, "the sweep did not start its workers"
+    time.sleep(2.0)  # working on their chunks
+    proc.send_signal(signal.SIGINT)
+    try:
+        _, err = proc.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        pytest.fail("the sweep did not stop within 30 s of Ctrl-C")
+    assert proc.returncode != 0
+    assert "Traceback" not in err, err[-2000:]
+    assert not (out / "sweep.csv").exists()
+    time.sleep(1.0)
+    alive = [pid for pid in workers if os.path.exists(f"/proc/{pid}")
+             and "Z" not in Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]]
+    assert not alive, f"workers left running: {alive}"

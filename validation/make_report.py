@@ -209,8 +209,9 @@ def sweeps_section(fmu: Path, out: list[str]) -> None:
         return {frozenset({1}): "grows", frozenset({-1}): "falls"}.get(
             frozenset(signs), "is not monotone")
 
-    out += [f"`wheelterrain sweep --preset {presets.DEFAULT_PRESET} --slip 0:0.75:16 --load "
-            "20,40,62,80,100` (quasi-static mode through fmpy):", "",
+    out += [f"`wheelterrain sweep --preset {presets.DEFAULT_PRESET} --slip 0:0.75:16 "
+            "--slip-definition paper --load 20,40,62,80,100` (quasi-static mode through fmpy):",
+            "",
             "![sweep](report/sweep_slip_load.png)", "",
             f"{len(rows)} points, {bad} infeasible (load beyond what the wheel carries fully "
             f"buried). Read from the sweep: drawbar pull {trend('drawbar_pull', 'slip', 'load')} "

@@ -26,6 +26,7 @@ from wheelterrain.errors import (
     ParameterError,
     WheelTerrainError,
 )
+from wheelterrain.model import slip as slips
 from wheelterrain.parameters import DEG, TABLE, parse_assignments
 
 EXIT_USAGE, EXIT_INFEASIBLE, EXIT_NUMERICAL = 2, 3, 4
@@ -96,6 +97,16 @@ def _can_create_in(folder) -> bool:
             return True
     except OSError:
         return False
+
+
+def slip_definition_option(what: str):
+    """--slip-definition, one default for every command (slips.DEFAULT_DEFINITION)."""
+    return click.option(
+        "--slip-definition", type=click.Choice(slips.DEFINITIONS),
+        default=slips.DEFAULT_DEFINITION, show_default=True,
+        help=f"Which slip {what} is in. traction: i = (wR - V)/(wR), the model's own. paper: "
+        "s = (wR - V)/V as in the source paper (C1-C4 are s = 0, 0.25, 0.5, 0.75); "
+        "i = s/(1 + s).")
 
 
 def _check_out_dir(out: str, option: str = "--out") -> None:
@@ -230,10 +241,7 @@ def params(preset: str, assignments: tuple[str, ...], json_target: str | None) -
 @set_option
 @click.option("--slip", required=True, type=float,
               help="Slip, in the definition chosen by --slip-definition.")
-@click.option("--slip-definition", type=click.Choice(["traction", "paper"]), default="traction",
-              show_default=True,
-              help="traction: i = (wR - V)/(wR). paper: s = (wR - V)/V as in the source paper "
-                   "(C1-C4 are s = 0, 0.25, 0.5, 0.75); i = s/(1 + s).")
+@slip_definition_option("--slip")
 @click.option("--load", required=True, type=float, help="Vertical load on the wheel [N], >= 0.")
 @json_option("One object (the contract's keys, with `preset`)")
 def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definition: str,
@@ -564,8 +572,7 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
               "flavour).")
 @click.option("--slip", default="0:0.75:7", show_default=True, metavar="GRID",
               help="Slip grid: a:b:n, a,b,c or a value.")
-@click.option("--slip-definition", type=click.Choice(["paper", "traction"]), default="paper",
-              show_default=True, help="Which slip the grid is in.")
+@slip_definition_option("the --slip grid")
 @click.option("--load", "load_grid", default="62", show_default=True, metavar="GRID",
               help="Vertical load grid [N].")
 @click.option("--grid", "extra", multiple=True, metavar="NAME=GRID",

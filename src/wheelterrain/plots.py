@@ -28,14 +28,12 @@ def time_series(result: CaseResult, experiment: dict, path: Path) -> None:
     experiment's mean as a dashed line."""
     s = result.series
     fig, axes = plt.subplots(3, 1, figsize=(8, 7.5), sharex=True)
-    rows = (("drawbar_pull", "drawbar pull [N]", 1.0), ("normal_force", "normal force [N]", 1.0),
-            ("sinkage", "sinkage [mm]", 1e3))
-    for ax, (key, label, scale) in zip(axes, rows, strict=True):
-        ax.plot(s["time"], scale * s[key], lw=0.8, label="co-simulation (fmpy)")
+    for ax, (key, label, scale, unit) in zip(axes, QUANTITIES, strict=True):
+        ax.plot(s["time"], scale * s[key], lw=0.8, label=result.master or "co-simulation")
         ax.axhline(scale * result.means[key], color="C0", ls=":",
-                   label=f"window mean {scale * result.means[key]:.2f}")
+                   label=f"window mean {scale * result.means[key]:.2f} {unit}")
         ax.axhline(scale * experiment[key], color="C3", ls="--",
-                   label=f"experiment mean {scale * experiment[key]:.2f}")
+                   label=f"experiment mean {scale * experiment[key]:.2f} {unit}")
         ax.axvspan(*result.window, color="0.9", zorder=0)
         ax.set_ylabel(label)
         ax.legend(loc="best", fontsize=8)
@@ -46,25 +44,42 @@ def time_series(result: CaseResult, experiment: dict, path: Path) -> None:
     _save(fig, path)
 
 
+QUANTITIES = (("drawbar_pull", "drawbar pull [N]", 1.0, "N"),
+              ("normal_force", "normal force [N]", 1.0, "N"),
+              ("sinkage", "sinkage [mm]", 1e3, "mm"))
+"""The rig's three measured quantities: key, axis label, scale to the shown unit, unit."""
+
+
 def means_bar_chart(rows: list[dict], path: Path, preset: str) -> None:
-    """Simulated means, experiment and the paper's own simulation per case."""
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4))
+    """Simulated means, experiment and the paper's own simulation per case (top), and the
+    residuals against the experiment, this model's and the paper's simulation's (bottom)."""
+    fig, axes = plt.subplots(2, 3, figsize=(13, 7), sharex=True,
+                             gridspec_kw={"height_ratios": (3, 2)})
     cases = [r["case"] for r in rows]
     x = np.arange(len(cases))
-    for ax, (key, label, scale) in zip(axes, (("drawbar_pull", "drawbar pull [N]", 1.0),
-                                              ("normal_force", "normal force [N]", 1.0),
-                                              ("sinkage", "sinkage [mm]", 1e3)), strict=True):
-        w = 0.27
-        ax.bar(x - w, [scale * r[key] for r in rows], w, label=f"this model ({preset})")
-        ax.bar(x, [scale * r[f"{key}_experiment"] for r in rows], w, label="experiment")
-        ax.bar(x + w, [scale * r[f"{key}_paper_simulation"] for r in rows], w,
-               label="paper's simulation")
-        ax.axhline(0, color="k", lw=0.6)
-        ax.set_xticks(x, cases)
-        ax.set_ylabel(label)
-        ax.grid(axis="y", alpha=0.3)
-    axes[0].legend(fontsize=8)
-    fig.suptitle("C1-C4 means against Table III")
+    w = 0.27
+    for k, (key, label, scale, unit) in enumerate(QUANTITIES):
+        top, bottom = axes[0, k], axes[1, k]
+        ours = np.array([scale * r[key] for r in rows])
+        measured = np.array([scale * r[f"{key}_experiment"] for r in rows])
+        paper = np.array([scale * r[f"{key}_paper_simulation"] for r in rows])
+        top.bar(x - w, ours, w, label=f"this model ({preset})")
+        top.bar(x, measured, w, label="experiment")
+        top.bar(x + w, paper, w, label="paper's simulation")
+        top.set_ylabel(label)
+        bottom.bar(x - w / 2, ours - measured, w, color="C0",
+                   label=f"this model: MAE {np.mean(np.abs(ours - measured)):.2f} {unit}")
+        bottom.bar(x + w / 2, paper - measured, w, color="C2",
+                   label=f"paper's simulation: MAE {np.mean(np.abs(paper - measured)):.2f} "
+                   f"{unit}")
+        bottom.set_ylabel(f"{label.split(' [')[0]} - experiment [{unit}]")
+        bottom.legend(fontsize=7)
+        for ax in (top, bottom):
+            ax.axhline(0, color="k", lw=0.6)
+            ax.grid(axis="y", alpha=0.3)
+        bottom.set_xticks(x, cases)
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle("C1-C4 means against Table III (bottom: residuals against the experiment)")
     fig.tight_layout()
     _save(fig, path)
 
@@ -72,18 +87,22 @@ def means_bar_chart(rows: list[dict], path: Path, preset: str) -> None:
 def sweep_curves(rows: list[dict], x: str, group: list[str], path: Path, title: str) -> None:
     """Drawbar pull and sinkage against ``x``, one line per combination of the ``group`` axes
     (infeasible points are gaps)."""
+    from wheelterrain.fmu.variables import units as variable_units
+
+    units = {**variable_units(), "slip": "1"}  # the sweep's axes: slip, load, table names
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
     keys = sorted({tuple(r[g] for g in group) for r in rows})
     for key in keys:
         sel = [r for r in rows if tuple(r[g] for g in group) == key]
         sel.sort(key=lambda r: r[x])
         xs = [r[x] for r in sel]
-        label = ", ".join(f"{g} = {v:.4g}" for g, v in zip(group, key, strict=True)) or None
+        label = ", ".join(f"{g} = {v:.4g} {units.get(g, '')}".rstrip()
+                          for g, v in zip(group, key, strict=True)) or None
         axes[0].plot(xs, [r["drawbar_pull"] for r in sel], marker="o", ms=3, label=label)
         axes[1].plot(xs, [1e3 * r["contact_sinkage"] for r in sel], marker="o", ms=3,
                      label=label)
     for ax, label in zip(axes, ("drawbar pull [N]", "sinkage [mm]"), strict=True):
-        ax.set_xlabel(x)
+        ax.set_xlabel(f"{x} [{units.get(x, '1')}]")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
     if group:
@@ -101,10 +120,10 @@ def sensitivity_bars(elasticity: dict, swing: dict, path: Path, title: str) -> N
     axes[0].barh(y - 0.2, [abs(elasticity[n]["drawbar_pull"]) for n in names], 0.4,
                  label="drawbar pull")
     axes[0].barh(y + 0.2, [abs(elasticity[n]["sinkage"]) for n in names], 0.4, label="sinkage")
-    axes[0].set_xlabel("|elasticity| (dy/dp)(p/y) at the preset")
+    axes[0].set_xlabel("|elasticity| (dy/dp)(p/y) at the preset [1]")
     axes[1].barh(y - 0.2, [swing[n]["drawbar_pull"] for n in names], 0.4, label="drawbar pull [N]")
     axes[1].barh(y + 0.2, [1e3 * swing[n]["sinkage"] for n in names], 0.4, label="sinkage [mm]")
-    axes[1].set_xlabel("swing over the plausible range (one at a time, FMU sweep)")
+    axes[1].set_xlabel("swing over the plausible range (one at a time, FMU sweep) [N, mm]")
     for ax in axes:
         ax.set_yticks(y, names)
         ax.invert_yaxis()
@@ -123,10 +142,10 @@ def closed_loop(result, scenario, path: Path) -> None:
     fig, axes = plt.subplots(5, 1, figsize=(8, 10), sharex=True)
     axes[0].plot(t, s["slip"], lw=0.8, label="slip (plant)")
     axes[0].plot(t, s["slip_reference"], "k--", lw=0.8, label="reference")
-    axes[0].set_ylabel("traction slip [-]")
+    axes[0].set_ylabel("traction slip [1]")
     axes[1].plot(t, s["motor_torque"], lw=0.8, label="motor torque [N.m]")
     axes[1].plot(t, s["command"], lw=0.8, label="speed command [rad/s]")
-    axes[1].set_ylabel("drive")
+    axes[1].set_ylabel("drive [N.m, rad/s]")
     axes[2].plot(t, 1e3 * s["sinkage"], lw=0.8)
     axes[2].set_ylabel("sinkage [mm]")
     axes[3].plot(t, s["drawbar_pull"], lw=0.8)

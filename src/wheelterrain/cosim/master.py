@@ -51,6 +51,7 @@ class CaseResult:
     window: tuple[float, float]
     series: dict[str, np.ndarray] = field(repr=False)
     wall_time: float = 0.0
+    master: str = ""  # how the pair was run, in words (plots and reports name it)
 
 
 def rig_parameters(ps: ParameterSet, slip_paper: float, load: float,
@@ -284,6 +285,11 @@ def _cosimulate_direct(pair: Coupling, where: list[int], n: int, step: float) ->
 
 
 INTERFACES = {"cs": _cosimulate, "me": _integrate}
+MASTER_NAMES = {
+    "direct": "wheelterrain master, co-simulation (FMI calls through ctypes)",
+    "cs": "wheelterrain master, co-simulation (fmpy's FMI wrappers)",
+    "me": "wheelterrain master, model exchange (RK4)",
+}
 """How the pair runs: FMI co-simulation (each FMU steps itself) or model exchange (the master
 integrates the FMUs' states)."""
 
@@ -328,7 +334,14 @@ def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, ri
     # samples at t in [start, end): a whole number of periods of a sampled signal
     mask = (series["time"] >= start - 0.5 * step) & (series["time"] < end - 0.5 * step)
     means = {name: float(np.mean(series[name][mask])) for name in RECORD}
-    return CaseResult(case, slip_paper, means, (start, end), series, wall)
+    master = MASTER_NAMES["direct" if interface == "cs" and direct else interface]
+    return CaseResult(case, slip_paper, means, (start, end), series, wall,
+                      f"{master}, {flavour_of(terrain.md)} FMUs, step {step:g} s")
+
+
+def flavour_of(md) -> str:
+    """'pythonfmu' or 'native': which build wrote the FMU of model description ``md``."""
+    return "pythonfmu" if (md.generationTool or "").startswith("PythonFMU") else "native"
 
 
 def fmu_paths(fmu_dir: Path) -> dict[str, Path]:
@@ -366,7 +379,7 @@ def choose_fmus(fmu_dir: Path | None, interface: str = "cs",
     paths = fmu_paths(fmu_dir)
     md = read_model_description(str(paths["WheelTerrain"]))
     flavour = ("pythonfmu flavour (Python inside the FMUs; `wheelterrain build --flavor all` "
-               "adds the faster native ones)" if (md.generationTool or "").startswith("PythonFMU")
+               "adds the faster native ones)" if flavour_of(md) == "pythonfmu"
                else "native flavour (generated C, no Python at run time)")
     how = ("FMI calls straight through ctypes" if interface == "cs" and md.fmiVersion == "2.0"
            else "FMI calls through fmpy")

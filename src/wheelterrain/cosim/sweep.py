@@ -24,7 +24,7 @@ import numpy as np
 from wheelterrain.errors import ParameterError
 from wheelterrain.fmu.instance import Instance, read_description
 from wheelterrain.fmu.variables import TERRAIN_OUTPUTS
-from wheelterrain.model.slip import reference_radius, traction_from_paper
+from wheelterrain.model.slip import DEFAULT_DEFINITION, reference_radius, traction_from_paper
 from wheelterrain.parameters import BY_NAME, DEG, TABLE
 
 OUTPUTS = TERRAIN_OUTPUTS  # every output WheelTerrain.fmu computes, one column each
@@ -142,8 +142,9 @@ def _close_worker() -> None:
 # --- master side ----------------------------------------------------------------------------
 
 def run(fmu: Path, base: dict[str, float], axes: dict[str, list[float]],
-        slip_definition: str = "paper", workers: int = 0, dask_address: str | None = None,
-        chunk: int = 16, progress: Callable[[int], None] | None = None) -> list[dict]:
+        slip_definition: str = DEFAULT_DEFINITION, workers: int = 0,
+        dask_address: str | None = None, chunk: int = 16,
+        progress: Callable[[int], None] | None = None) -> list[dict]:
     """The whole sweep, in grid order. ``workers`` = 0: one per core; 1: in this process.
     ``dask_address``: a dask.distributed scheduler ("tcp://host:8786") or "local" for a
     LocalCluster on this machine; the workers there need wheelterrain and the FMU's runtime."""
@@ -164,18 +165,48 @@ def run(fmu: Path, base: dict[str, float], axes: dict[str, list[float]],
         finally:
             _close_worker()
     else:
-        from concurrent.futures import ProcessPoolExecutor, as_completed
-
-        count = workers or os.cpu_count() or 1
-        with ProcessPoolExecutor(max_workers=count) as pool:
-            futures = {pool.submit(run_points, fmu, base, c, slip_definition): k
-                       for k, c in enumerate(chunks)}
-            for future in as_completed(futures):
-                k = futures[future]
-                results[k] = future.result()
-                if progress:
-                    progress(len(chunks[k]))
+        _run_pool(min(workers or os.cpu_count() or 1, len(chunks)),
+                  [(k, fmu, base, c, slip_definition) for k, c in enumerate(chunks)], results,
+                  progress)
     return [row for chunk_rows in results for row in chunk_rows]
+
+
+def _run_pool(count: int, tasks: list[tuple], results: list, progress) -> None:
+    """The chunks on ``count`` worker processes. Ctrl-C (or any error) in this process ends the
+    pool at once: the workers ignore SIGINT (it is the parent's to handle) and are terminated,
+    not waited for; a worker that is terminated or ends normally frees its FMU instance.
+    A worker whose parent dies reads the end of its task queue and exits: no orphans."""
+    import multiprocessing
+
+    pool = multiprocessing.Pool(count, initializer=_worker_start)
+    try:
+        for k, rows in pool.imap_unordered(_run_chunk, tasks):
+            results[k] = rows
+            if progress:
+                progress(len(rows))
+        pool.close()
+    except BaseException:
+        pool.terminate()
+        raise
+    finally:
+        pool.join()
+
+
+def _worker_start() -> None:
+    """Pool initializer: leave Ctrl-C to the parent; on SIGTERM (the pool's terminate) exit
+    through Python, so the finalizer frees the FMU instance and removes its unzip folder."""
+    import signal
+    import sys
+    from multiprocessing.util import Finalize
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
+    Finalize(None, _close_worker, exitpriority=10)
+
+
+def _run_chunk(task: tuple) -> tuple[int, list[dict]]:
+    k, *args = task
+    return k, run_points(*args)
 
 
 def _run_dask(fmu, base, chunks, slip_definition, address, results, progress) -> None:

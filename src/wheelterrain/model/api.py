@@ -18,7 +18,13 @@ import numpy as np
 from wheelterrain.errors import InputError, LoadTooLargeError, SolveError
 from wheelterrain.model import contact as _contact
 from wheelterrain.model.contact import RESIDUAL_TOLERANCE, STEP_TOLERANCE  # noqa: F401 (public)
-from wheelterrain.model.slip import PAPER_RANGE, TRACTION_RANGE, paper_from_traction, to_traction
+from wheelterrain.model.slip import (
+    DEFAULT_DEFINITION,
+    PAPER_RANGE,
+    TRACTION_RANGE,
+    paper_from_traction,
+    to_traction,
+)
 from wheelterrain.parameters import ParameterSet
 
 
@@ -51,7 +57,7 @@ def _named(values, names) -> dict[str, float]:
 
 def contact_forces(params: Mapping[str, float] | ParameterSet, sinkage: float, slip: float, *,
                    sinkage_rate: float = 0.0, wheel_angle: float = 0.0,
-                   slip_definition: str = "traction") -> dict[str, float]:
+                   slip_definition: str = DEFAULT_DEFINITION) -> dict[str, float]:
     """Forces and contact geometry at a given sinkage (the dynamic-sinkage face).
 
     sinkage [m] (to the contact circle; <= 0 means no contact), sinkage_rate [m/s], slip (see
@@ -69,7 +75,7 @@ def contact_forces(params: Mapping[str, float] | ParameterSet, sinkage: float, s
 
 
 def capacity(params: Mapping[str, float] | ParameterSet, slip: float,
-             slip_definition: str = "traction") -> float:
+             slip_definition: str = DEFAULT_DEFINITION) -> float:
     """Static normal force [N] with the wheel buried to its contact radius: the largest load."""
     ps = _params(params)
     i = to_traction(slip, slip_definition)
@@ -77,7 +83,7 @@ def capacity(params: Mapping[str, float] | ParameterSet, slip: float,
 
 
 def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: float,
-                 slip_definition: str = "traction") -> dict[str, float]:
+                 slip_definition: str = DEFAULT_DEFINITION) -> dict[str, float]:
     """Quasi-static operating point: the sinkage at which the static normal force carries ``load``.
 
     load [N] >= 0 (0 gives zero sinkage and zero forces). The result is the grouser-period mean
@@ -135,7 +141,7 @@ def _traction_array(name: str, values, definition: str) -> np.ndarray:
 
 
 def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,
-                  slip_definition: str = "traction", guess=None,
+                  slip_definition: str = DEFAULT_DEFINITION, guess=None,
                   over_capacity: str = "raise") -> dict[str, np.ndarray]:
     """:func:`steady_state` at many points at once: ``load`` and ``slip`` are arrays of one
     length (or scalars, shared). Returns one array per ``contact.STEADY_OUTPUTS`` key plus
@@ -241,7 +247,7 @@ def _finite_array(name: str, values, lo: float = -math.inf, hi: float = math.inf
 
 def contact_forces_many(params: Mapping[str, float] | ParameterSet, sinkage, slip, *,
                         sinkage_rate=0.0, wheel_angle=0.0,
-                        slip_definition: str = "traction") -> dict[str, np.ndarray]:
+                        slip_definition: str = DEFAULT_DEFINITION) -> dict[str, np.ndarray]:
     """:func:`contact_forces` at many points at once (arrays of one length, or scalars shared):
     one array per ``contact.CONTACT_OUTPUTS`` key. Lane-parallel C (:mod:`.lanes`, compiled on
     first use, about 20 s, then cached; ~0.7 us a point on one core), or CasADi's virtual
@@ -292,7 +298,7 @@ def _lanes_or_vm(compiled, function: ca.Function, used: tuple[int, ...]):
 
 
 def steady_map(params: Mapping[str, float] | ParameterSet, loads, slips, *,
-               slip_definition: str = "traction") -> dict[str, np.ndarray]:
+               slip_definition: str = DEFAULT_DEFINITION) -> dict[str, np.ndarray]:
     """Steady states on the grid loads x slips (two 1-D arrays): each output an array of shape
     (len(loads), len(slips)); NaN where the wheel cannot carry the load (``capacity`` says
     what it can carry there).

@@ -18,6 +18,9 @@ PAPER_RANGE = (-0.5, math.inf)
 """Valid paper slip, the image of TRACTION_RANGE: s = -0.5 <-> i = -1; s -> inf <-> i -> 1."""
 
 DEFINITIONS = ("traction", "paper")
+DEFAULT_DEFINITION = "traction"
+"""The slip every command and API takes unless told otherwise: the model's own (and the FMU's
+``slip`` output); the paper's s is one option away (``--slip-definition paper``)."""
 
 
 def reference_radius(values):
