@@ -38,7 +38,7 @@ import casadi as ca
 import numpy as np
 
 from wheelterrain import model, presets
-from wheelterrain.model import contact, lanes
+from wheelterrain.model import contact, lanes, solve
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -103,7 +103,7 @@ def main(argv: list[str] | None = None) -> None:
     figures = {"points": n, "repeats": args.repeats, "input_conversion_s": conversion}
 
     say(f"core benchmark: {n} points, median of {args.repeats}, one core, "
-        f"{fns.nodes} nodes per panel, at most {contact.NEWTON_ITERATIONS} Newton steps (the "
+        f"{fns.nodes} nodes per panel, at most {solve.NEWTON_ITERATIONS} Newton steps (the "
         "solve stops once converged)")
     single = median_time(lambda: [fns.contact(0.03, 0.0, 0.2, 0.0, p) for _ in range(200)],
                          args.repeats) / 200
@@ -164,7 +164,7 @@ def main(argv: list[str] | None = None) -> None:
         # the scan's ends, lanes.compiled_scan_ends)
         ends = lanes.compiled_scan_ends()
         t_value = median_time(lambda: ends(slip, P), args.repeats) / (2 * n)
-        scan = contact.scan_angles().size
+        scan = solve.scan_angles().size
         figures.update(scan_value_eval_s=t_value, solve_in_values=tl_solve / t_value)
         figures.update(force_eval_s=tl_map, force_eval_how=how, force_eval_casadi_c_s=tc_map,
                        solve_s=tl_solve, solve_how=how + ", cold (pruned scan)",

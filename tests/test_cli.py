@@ -12,7 +12,7 @@ from click.testing import CliRunner
 
 from wheelterrain import model, presets
 from wheelterrain.cli import main
-from wheelterrain.model import contact
+from wheelterrain.model import solve
 from wheelterrain.parameters import NAMES
 
 STEADY_KEYS = {"sinkage", "drawbar_pull", "normal_force", "torque", "slip", "slip_paper",
@@ -99,8 +99,8 @@ def test_console_script_runs_as_installed():
 
 def test_solve_error_is_a_clear_numerical_failure(monkeypatch):
     """A non-converged solve is refused with exit code 4 and the residual, never printed as data."""
-    monkeypatch.setattr(contact, "RESIDUAL_TOLERANCE", -1.0)  # no residual can pass now
-    monkeypatch.setattr(contact, "STEP_TOLERANCE", -1.0)  # nor any step
+    monkeypatch.setattr(solve, "RESIDUAL_TOLERANCE", -1.0)  # no residual can pass now
+    monkeypatch.setattr(solve, "STEP_TOLERANCE", -1.0)  # nor any step
     result = run("steady", "--slip", "0.3", "--load", "62", "--json")
     assert result.exit_code == 4
     assert "did not converge" in result.output

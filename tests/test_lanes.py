@@ -17,7 +17,7 @@ import pytest
 from wheelterrain import compiled as native
 from wheelterrain import presets
 from wheelterrain.model import api as model_api
-from wheelterrain.model import contact, lanes
+from wheelterrain.model import contact, lanes, solve
 
 pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
 
@@ -174,7 +174,7 @@ CONTACT_ROWS = slice(ROW["normal_force"], ROW["normal_force_static"] + 1)
 
 def converged(out: np.ndarray) -> np.ndarray:
     """model.steady_state's acceptance test, per point."""
-    return contact.solve_converged(out[ROW["residual"]], out[ROW["last_step"]])
+    return solve.solve_converged(out[ROW["residual"]], out[ROW["last_step"]])
 
 
 def steady_reference(load, slip, P: np.ndarray) -> np.ndarray:
@@ -271,7 +271,7 @@ def test_steady_from_solves_again_cold_where_the_warm_start_fails(monkeypatch, t
     """With one Newton iteration allowed, a warm start from the root converges and stands; one
     from 30 % off does not, and steady_from returns the cold solve's outputs, bit for bit."""
     root = contact.build().steady(40.0, 0.3, table2.vector())[0]
-    monkeypatch.setattr(contact, "NEWTON_ITERATIONS", 1)
+    monkeypatch.setattr(solve, "NEWTON_ITERATIONS", 1)
     fns = contact.build.__wrapped__(contact.DEFAULT_NODES)  # not the cached build
     p = table2.vector()
     cold = np.array(fns.steady(40.0, 0.3, p)).ravel()

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from wheelterrain import presets
-from wheelterrain.model import contact
+from wheelterrain.model import contact, solve
 from wheelterrain.parameters import NAMES, TABLE
 
 PRESETS = ("paper-table2-arc", "rashid-patch", "paper-table1", "paper-table2", "rashid-calibrated")
@@ -25,7 +25,7 @@ def random_parameters(rng: np.random.Generator) -> np.ndarray:
 def bound_and_force():
     th, sl, pp = ca.SX.sym("theta_f"), ca.SX.sym("slip"), ca.SX.sym("p", len(NAMES))
     bound = ca.Function("bound", [th, sl, pp], [contact.static_bound(th, sl, contact._P(pp))])
-    return bound, contact._static_functions(contact.DEFAULT_NODES)[1]
+    return bound, solve._static_functions(contact.DEFAULT_NODES)[1]
 
 
 def test_the_bound_is_above_the_static_normal_force_everywhere_in_range(bound_and_force):
@@ -35,7 +35,7 @@ def test_the_bound_is_above_the_static_normal_force_everywhere_in_range(bound_an
     rng = np.random.default_rng(11)
     n = 4000
     p = np.stack([random_parameters(rng) for _ in range(n)], axis=1)
-    theta = np.exp(rng.uniform(np.log(contact.THETA_MIN), np.log(contact.FULL_BURIAL), n))
+    theta = np.exp(rng.uniform(np.log(solve.THETA_MIN), np.log(contact.FULL_BURIAL), n))
     theta[:50] = contact.FULL_BURIAL
     slip = rng.uniform(-1.0, 1.0, n)
     u = np.asarray(bound.map(n)(theta, slip, p)).ravel()
@@ -54,7 +54,7 @@ def test_the_bound_is_close_enough_to_prune(bound_and_force):
     crossing's neighbours only. (At tiny sinkage, cohesion makes the bound looser: there
     the full shear strength is assumed where little of it is mobilised.)"""
     bound, fz = bound_and_force
-    scan = contact.scan_angles()[1:]
+    scan = solve.scan_angles()[1:]
     for name in ("paper-table2-arc", "rashid-calibrated"):
         p = presets.load(name).vector()
         for slip in (-0.3, 0.0, 0.2, 0.5):
@@ -67,9 +67,9 @@ def test_the_bound_is_close_enough_to_prune(bound_and_force):
 
 
 def full_scan_start(load, slip, p):
-    fz = contact._static_functions(contact.DEFAULT_NODES)[1]
-    values = [fz(t, slip, p) for t in contact.scan_angles()]
-    return contact._solve_start(load, values)
+    fz = solve._static_functions(contact.DEFAULT_NODES)[1]
+    values = [fz(t, slip, p) for t in solve.scan_angles()]
+    return solve._solve_start(load, values)
 
 
 @pytest.mark.parametrize("name", PRESETS)
@@ -78,8 +78,8 @@ def test_the_pruned_scan_brackets_exactly_as_the_full_scan(name):
     13-point scan, bit for bit: loads from 0 to past the capacity, driving and braking."""
     load, slip, pp = ca.MX.sym("load"), ca.MX.sym("slip"), ca.MX.sym("p", len(NAMES))
     P = contact._P(pp)
-    pruned = ca.Function("pruned", [load, slip, pp], list(contact._solve_start(
-        load, contact._scan_values(load, slip, P, contact.DEFAULT_NODES))))
+    pruned = ca.Function("pruned", [load, slip, pp], list(solve._solve_start(
+        load, solve._scan_values(load, slip, P, contact.DEFAULT_NODES))))
     full = ca.Function("full", [load, slip, pp], list(full_scan_start(load, slip, pp)))
     p = presets.load(name).vector()
     rng = np.random.default_rng(len(name))
@@ -97,9 +97,9 @@ def test_the_pruned_scan_brackets_exactly_as_the_full_scan(name):
 def count_evaluations(load: float, slip: float, p: np.ndarray) -> tuple[int, int]:
     """(Fz_static values, Fz_static-with-derivative evaluations) of a cold solve, replayed
     through the lane solve's pieces in the order the generated driver calls them."""
-    k = contact.solve_lane_kernels(contact.DEFAULT_NODES)
-    fz_d, fz, _ = contact._static_functions(contact.DEFAULT_NODES)
-    scan = contact.scan_angles()
+    k = solve.solve_lane_kernels(contact.DEFAULT_NODES)
+    fz_d, fz, _ = solve._static_functions(contact.DEFAULT_NODES)
+    scan = solve.scan_angles()
     plan = np.asarray(k["scan_plan"](load, slip, p)).ravel()
     values = [np.nan] + [float(fz(scan[j], slip, p)) if plan[j - 1] else np.nan
                          for j in range(1, len(scan) - 1)] + [float(fz(scan[-1], slip, p))]
@@ -109,11 +109,11 @@ def count_evaluations(load: float, slip: float, p: np.ndarray) -> tuple[int, int
     state, _, w_safe = k["start"](load, values)
     state = k["refine"](state, fz(np.exp(float(state[0])), slip, p), w_safe)
     newton = 0
-    while float(state[contact.STATE_DONE]) == 0 and newton < contact.NEWTON_ITERATIONS:
+    while float(state[solve.STATE_DONE]) == 0 and newton < solve.NEWTON_ITERATIONS:
         f, df = fz_d(np.exp(float(state[0])), slip, p)
         state = k["newton_update"](state, f, df, w_safe)
         newton += 1
-    assert float(state[contact.STATE_DONE]) == 1
+    assert float(state[solve.STATE_DONE]) == 1
     return 1 + int(plan.sum()) + int(absent) + 1, newton
 
 

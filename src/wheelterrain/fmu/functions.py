@@ -37,7 +37,7 @@ from wheelterrain.fmu.variables import (
     TERRAIN_INPUTS,
     TERRAIN_OUTPUTS,
 )
-from wheelterrain.model import contact, rig
+from wheelterrain.model import contact, rig, solve
 from wheelterrain.model.slip import reference_radius
 from wheelterrain.parameters import NAMES
 
@@ -173,7 +173,7 @@ def terrain_functions() -> tuple[ca.Function, ca.Function]:
                   ripple_amplitude=0)
     y = ca.vertcat(*(steady[k] for k in TERRAIN_OUTPUTS))
     too_heavy = load > steady["capacity"]
-    converged = contact.solve_converged(steady["residual"], steady["last_step"])
+    converged = solve.solve_converged(steady["residual"], steady["last_step"])
     status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(
         too_heavy, STATUS_LOAD, ca.if_else(converged, ca.if_else(
             _finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE), STATUS_UNCONVERGED)))

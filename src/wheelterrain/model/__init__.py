@@ -1,8 +1,10 @@
 """The model: the wheel-terrain contact physics and the rig, written once.
 
 - :mod:`.slip`: the two slip definitions and the slip's reference radius (no CasADi).
-- :mod:`.contact`: the contact model (arc and patch forms), the sinkage solve and their exact
-  Jacobians as CasADi Functions.
+- :mod:`.contact`: the contact model (arc and patch forms) and :func:`.contact.build`, which
+  makes every CasADi Function of the model, exact Jacobians included.
+- :mod:`.solve`: the quasi-static sinkage solve those Functions contain (scan, Newton, the
+  acceptance test).
 - :mod:`.rig`: the single-wheel test rig (carriage, wheel drive, vertical motion).
 - :mod:`.api`: the validated float API, also reachable here: ``model.steady_state``,
   ``model.contact_forces``, ``model.capacity``, ``model.steady_jacobian``, and for many points

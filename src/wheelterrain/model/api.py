@@ -17,7 +17,7 @@ import numpy as np
 
 from wheelterrain.errors import InputError, LoadTooLargeError, SolveError
 from wheelterrain.model import contact as _contact
-from wheelterrain.model.contact import RESIDUAL_TOLERANCE, STEP_TOLERANCE  # noqa: F401 (public)
+from wheelterrain.model import solve as _solve
 from wheelterrain.model.slip import (
     DEFAULT_DEFINITION,
     PAPER_RANGE,
@@ -25,6 +25,7 @@ from wheelterrain.model.slip import (
     paper_from_traction,
     to_traction,
 )
+from wheelterrain.model.solve import RESIDUAL_TOLERANCE, STEP_TOLERANCE  # noqa: F401 (public)
 from wheelterrain.parameters import ParameterSet
 
 
@@ -106,12 +107,12 @@ def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: 
     return out
 
 
-_converged = _contact.solve_converged
+_converged = _solve.solve_converged
 
 
 def _unconverged(residual: float, last_step: float) -> str:
-    return (f"relative residual {residual:.3g} > {_contact.RESIDUAL_TOLERANCE:g} and last step "
-            f"{last_step:.3g} > {_contact.STEP_TOLERANCE:g} in log(entry angle)")
+    return (f"relative residual {residual:.3g} > {_solve.RESIDUAL_TOLERANCE:g} and last step "
+            f"{last_step:.3g} > {_solve.STEP_TOLERANCE:g} in log(entry angle)")
 
 
 def steady_jacobian(params: Mapping[str, float] | ParameterSet, load: float, slip: float,

@@ -38,6 +38,7 @@ import numpy as np
 
 from wheelterrain.compiled import CompileError, cache_directory, compiler, install, run_compiler
 from wheelterrain.model import contact as _contact
+from wheelterrain.model import solve as _solve
 
 LANES = 8  # points per kernel call; 8 measured faster than 4 and 16 (two AVX2 vectors)
 
@@ -185,19 +186,19 @@ static void wt_strides(long n, int n_in, const long* shared, long* js, long* is)
 def solve_source(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> str:
     """The C of ``wt_solve(n, in, shared, out)``: the steady state at n points (inputs load,
     slip, guess, first, last, p; outputs STEADY_OUTPUTS, as ``build().steady``), in chunks of
-    WT_CHUNK points: the pruned scan (:func:`~wheelterrain.model.contact._scan_values`), the
+    WT_CHUNK points: the pruned scan (:func:`~wheelterrain.model.solve._scan_values`), the
     bracket, the refined second iterate, at most NEWTON_ITERATIONS Newton iterations for the
     points not yet converged, the final angle, the ripple-free contact there and the outputs:
     the order in which ``build().steady`` evaluates the same pieces. A point with a sinkage guess
-    (finite, > 0) starts warm instead (:func:`~wheelterrain.model.contact._solve_start_warm`):
+    (finite, > 0) starts warm instead (:func:`~wheelterrain.model.solve._solve_start_warm`):
     the scan's two ends and Newton from the guess; ``first`` and ``last``, where finite, are
     those two ends' Fz_static (from ``wt_scan_ends``: a sweep computes them once per slip)."""
-    k = _contact.solve_lane_kernels(nodes)
+    k = _solve.solve_lane_kernels(nodes)
     singles = ("case", "scan_plan", "scan_low", "start", "start_warm", "refine",
                "newton_angle", "newton_update", "solve_angle", "finish")
     kernels = [kernel_c(k[name], f"k_{name}") for name in singles]
     kernels += [kernel_c(f, f"k_{f.name()}") for f in (*k["fz"], *k["fz_d"], *k["static"])]
-    scan = _contact.scan_angles()
+    scan = _solve.scan_angles()
     n_scan = len(scan)
     fz = ", ".join(f"k_{f.name()}" for f in k["fz"])
     fz_d = ", ".join(f"k_{f.name()}" for f in k["fz_d"])
@@ -205,7 +206,7 @@ def solve_source(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> str:
     rows = {name: row for row, name in enumerate(_contact.STEADY_OUTPUTS)}
     f_row = rows["normal_force_static"]
     angles = ", ".join(repr(float(a)) for a in scan)
-    size, done = _contact.STATE_SIZE, _contact.STATE_DONE
+    size, done = _solve.STATE_SIZE, _solve.STATE_DONE
     entry = f"""
 #define WT_CHUNK 256
 /* The points idx[0..m) take their next Newton state (rows of WT_CHUNK, {size} of them). */
@@ -261,7 +262,7 @@ int wt_solve(long n, const double* const* in, const long* shared, double* const*
       wt_cases(n_first, first_end, at, at_js, at_is, o, 0, k_case, fz, 3);
     }}
     {{  /* a cold point: the inner angles its scan plan keeps, then its bracket's low end
-         (contact._scan_values); the rest stay NaN, angles below the load */
+         (solve._scan_values); the rest stay NaN, angles below the load */
       const double* a[3] = {{load, slip, p}};
       long a_js[3] = {{js[0], js[1], js[5]}}, a_is[3] = {{is[0], is[1], is[5]}};
       double* o[1] = {{plan}};
@@ -305,7 +306,7 @@ int wt_solve(long n, const double* const* in, const long* shared, double* const*
       double* o[3] = {{state, capacity, w_safe}};
       wt_each(n_warm, warm, k_start_warm, a, a_js, a_is, o, WT_CHUNK);
     }}
-    {{  /* a cold point's second iterate, from Fz_static at its first (contact._refine) */
+    {{  /* a cold point's second iterate, from Fz_static at its first (solve._refine) */
       const double* s_in[1] = {{state}};
       long s_js[1] = {{WT_CHUNK}}, s_is[1] = {{1}};
       double* s_out[1] = {{theta}};
@@ -318,7 +319,7 @@ int wt_solve(long n, const double* const* in, const long* shared, double* const*
       wt_each(n_cold, cold, k_refine, r_in, r_js, r_is, r_out, WT_CHUNK);
       wt_take(n_cold, cold, next, state);
     }}
-    for (int iteration = 0; iteration < {_contact.NEWTON_ITERATIONS}; ++iteration) {{
+    for (int iteration = 0; iteration < {_solve.NEWTON_ITERATIONS}; ++iteration) {{
       long n_active = 0;
       for (i = 0; i < m; ++i)
         if (state[{done} * WT_CHUNK + i] == 0) active[n_active++] = i;
