@@ -324,18 +324,19 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
              : fmi2Error;
 }
 
+/* ``status`` of a call that moves the instance to ``mode`` when it succeeds. */
+static fmi2Status moved(Guard *g, fmi2Status status, int mode) {
+    if (status <= fmi2Warning) g->mode = mode;
+    return status;
+}
+
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
     Guard *g = legal(c, "fmi2EnterInitializationMode", M_INSTANTIATED);
-    fmi2Status status;
-    if (g == NULL) return fmi2Error;
-    status = F.enter_initialization(g->real);
-    if (status <= fmi2Warning) g->mode = M_INITIALIZATION;
-    return status;
+    return g ? moved(g, F.enter_initialization(g->real), M_INITIALIZATION) : fmi2Error;
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     Guard *g = legal(c, "fmi2ExitInitializationMode", M_INITIALIZATION);
-    fmi2Status status;
     if (g == NULL) return fmi2Error;
     for (int k = 0; k < GUARD_N_VARS; k++) {
         if (g->invalid[k]) {
@@ -346,29 +347,20 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
             return fmi2Error;
         }
     }
-    status = F.exit_initialization(g->real);
-    if (status <= fmi2Warning) g->mode = M_STEP_COMPLETE;
-    return status;
+    return moved(g, F.exit_initialization(g->real), M_STEP_COMPLETE);
 }
 
 fmi2Status fmi2Terminate(fmi2Component c) {
     Guard *g = legal(c, "fmi2Terminate", M_STEP_COMPLETE);
-    fmi2Status status;
-    if (g == NULL) return fmi2Error;
-    status = F.terminate(g->real);
-    if (status <= fmi2Warning) g->mode = M_TERMINATED;
-    return status;
+    return g ? moved(g, F.terminate(g->real), M_TERMINATED) : fmi2Error;
 }
 
 fmi2Status fmi2Reset(fmi2Component c) {
     Guard *g = legal(c, "fmi2Reset", M_ANY);
     fmi2Status status;
     if (g == NULL) return fmi2Error;
-    status = F.reset(g->real);
-    if (status <= fmi2Warning) {
-        g->mode = M_INSTANTIATED;
-        memset(g->invalid, 0, sizeof g->invalid);
-    }
+    status = moved(g, F.reset(g->real), M_INSTANTIATED);
+    if (status <= fmi2Warning) memset(g->invalid, 0, sizeof g->invalid);
     return status;
 }
 
