@@ -150,6 +150,7 @@ def test_ctrl_c_stops_a_parallel_sweep_at_once_and_leaves_no_worker(fmu, tmp_pat
     """Ctrl-C during a long parallel sweep hung in 2 of 5 tries (the pool waited for every
     queued chunk) and killing the parent orphaned the workers. Now the parent ends the pool at
     once, says so, writes no results, and its workers are gone."""
+    import contextlib
     import os
     import signal
     import subprocess
@@ -157,11 +158,19 @@ def test_ctrl_c_stops_a_parallel_sweep_at_once_and_leaves_no_worker(fmu, tmp_pat
     import time
     from pathlib import Path
 
+    def as_from_a_terminal() -> None:
+        """Ctrl-C as a terminal delivers it: the default disposition, not blocked. A process
+        inherits an ignored or blocked SIGINT from its parent (a shell's background job, or a
+        test run that ignores it), and a Python started so keeps ignoring Ctrl-C."""
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+
     out = tmp_path / "out"
     proc = subprocess.Popen([sys.executable, "-m", "wheelterrain.cli", "sweep", "--fmu",
                              str(fmu), "--slip", "0:0.9:400", "--load", "20:60:200",
                              "--workers", "2", "--out", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=as_from_a_terminal)
     workers: set[int] = set()
     deadline = time.monotonic() + 120
     while len(workers) < 2 and time.monotonic() < deadline and proc.poll() is None:
@@ -173,7 +182,10 @@ def test_ctrl_c_stops_a_parallel_sweep_at_once_and_leaves_no_worker(fmu, tmp_pat
     try:
         _, err = proc.communicate(timeout=30)
     except subprocess.TimeoutExpired:
-        proc.kill()
+        for pid in (proc.pid, *workers):
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
+        proc.communicate()
         pytest.fail("the sweep did not stop within 30 s of Ctrl-C")
     assert proc.returncode != 0
     assert "Traceback" not in err, err[-2000:]

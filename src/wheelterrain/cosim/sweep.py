@@ -94,24 +94,31 @@ def check_axes(axes: dict[str, list[float]], slip_definition: str) -> None:
 _WORKER: dict = {}
 
 
-def _worker_instance(fmu: str) -> Instance:
-    """The worker's FMU instance, quasi-static: extracted and initialised once per process.
-    Every point is solved cold (warm_start off), so a point's result does not depend on which
-    points the worker solved before it."""
+def _worker_instance(fmu: str, unzip_root: str | None = None) -> Instance:
+    """The worker's FMU instance, quasi-static: extracted and initialised once per process
+    (into ``unzip_root``/<pid> when given: the parent removes that folder whatever becomes of
+    the worker; else into a folder of its own, removed when it is closed). Every point is
+    solved cold (warm_start off), so a point's result does not depend on which points the
+    worker solved before it."""
     if _WORKER.get("fmu") != fmu:
         _close_worker()
-        inst = Instance(fmu, name=f"sweep{os.getpid()}").start({"quasi_static": True,
-                                                                 "warm_start": False})
+        unzip = None
+        if unzip_root is not None:
+            from fmpy import extract
+
+            unzip = extract(fmu, unzipdir=os.path.join(unzip_root, str(os.getpid())))
+        inst = Instance(fmu, unzip, name=f"sweep{os.getpid()}").start({"quasi_static": True,
+                                                                        "warm_start": False})
         _WORKER.update(fmu=fmu, inst=inst, time=0.0)
     return _WORKER["inst"]
 
 
 def run_points(fmu: str, base: dict[str, float], points: list[dict[str, float]],
-               slip_definition: str) -> list[dict]:
+               slip_definition: str, unzip_root: str | None = None) -> list[dict]:
     """Evaluate ``points`` (each: slip, load and parameter values) in this process."""
     from fmpy.fmi1 import FMICallException
 
-    inst = _worker_instance(fmu)
+    inst = _worker_instance(fmu, unzip_root)
     rows = []
     for point in points:
         values = {**base, **{k: v for k, v in point.items() if k not in ("slip", "load")}}
@@ -165,19 +172,25 @@ def run(fmu: Path, base: dict[str, float], axes: dict[str, list[float]],
         finally:
             _close_worker()
     else:
-        _run_pool(min(workers or os.cpu_count() or 1, len(chunks)),
-                  [(k, fmu, base, c, slip_definition) for k, c in enumerate(chunks)], results,
-                  progress)
+        _run_pool(min(workers or os.cpu_count() or 1, len(chunks)), fmu, base, chunks,
+                  slip_definition, results, progress)
     return [row for chunk_rows in results for row in chunk_rows]
 
 
-def _run_pool(count: int, tasks: list[tuple], results: list, progress) -> None:
+def _run_pool(count: int, fmu: str, base: dict[str, float], chunks: list, slip_definition: str,
+              results: list, progress) -> None:
     """The chunks on ``count`` worker processes. Ctrl-C (or any error) in this process ends the
-    pool at once: the workers ignore SIGINT (it is the parent's to handle) and are terminated,
-    not waited for; a worker that is terminated or ends normally frees its FMU instance.
-    A worker whose parent dies reads the end of its task queue and exits: no orphans."""
+    pool at once: the workers ignore SIGINT (it is the parent's to handle) and are terminated
+    (SIGTERM's default: no Python code of theirs runs, so none can be caught half-way inside
+    an FMU call), not waited for. They extract the FMU into a folder this process removes
+    afterwards. A worker whose parent dies reads the end of its task queue and exits: no
+    orphans."""
     import multiprocessing
+    import shutil
+    import tempfile
 
+    root = tempfile.mkdtemp(prefix="wheelterrain_sweep_")
+    tasks = [(k, fmu, base, c, slip_definition, root) for k, c in enumerate(chunks)]
     pool = multiprocessing.Pool(count, initializer=_worker_start)
     try:
         for k, rows in pool.imap_unordered(_run_chunk, tasks):
@@ -190,17 +203,16 @@ def _run_pool(count: int, tasks: list[tuple], results: list, progress) -> None:
         raise
     finally:
         pool.join()
+        shutil.rmtree(root, ignore_errors=True)
 
 
 def _worker_start() -> None:
-    """Pool initializer: leave Ctrl-C to the parent; on SIGTERM (the pool's terminate) exit
-    through Python, so the finalizer frees the FMU instance and removes its unzip folder."""
+    """Pool initializer: leave Ctrl-C to the parent; free the FMU instance when the worker
+    ends normally (a terminated worker's folder is removed by the parent)."""
     import signal
-    import sys
     from multiprocessing.util import Finalize
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
     Finalize(None, _close_worker, exitpriority=10)
 
 
