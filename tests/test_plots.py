@@ -61,7 +61,8 @@ def test_means_chart_has_a_residual_panel_per_quantity(figures, tmp_path):
     for r in rows:
         r["drawbar_pull"] += 1.5  # this model 1.5 N off the experiment
     plots.means_bar_chart(rows, tmp_path / "means.png", "rashid-patch")
-    (fig,) = figures
+    plots.means_bar_chart(rows, tmp_path / "fitted.png", "rashid-patch", ["C1", "C2"])
+    fig, fitted = figures
     axes = _labelled_axes(fig)
     assert len(axes) == 6
     for ax in axes:
@@ -71,6 +72,10 @@ def test_means_chart_has_a_residual_panel_per_quantity(figures, tmp_path):
     pull = next(ax for ax in residual if ax.get_ylabel().startswith("drawbar pull"))
     texts = [t.get_text() for t in pull.get_legend().get_texts()]
     assert "this model: MAE 1.50 N" in texts
+    # a preset fitted on these cases has its MAE labelled in-sample
+    pull = next(ax for ax in fitted.axes if ax.get_ylabel().startswith("drawbar pull - "))
+    assert "this model: MAE 1.50 N (in-sample)" in [t.get_text()
+                                                   for t in pull.get_legend().get_texts()]
 
 
 def test_sweep_curves_carry_units_on_axes_and_legend(figures, tmp_path):

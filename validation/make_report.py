@@ -77,7 +77,7 @@ def table3_section(fmu_dir: Path, preset: str, label: str, out: list[str]) -> No
             f"N, normal force {mae['normal_force_vs_paper_simulation']:.2f} N, sinkage "
             f"{1e3 * mae['sinkage_vs_paper_simulation']:.2f} mm.", ""]
     name = f"means_{preset}.png"
-    plots.means_bar_chart(rows, FIGURES / name, preset)
+    plots.means_bar_chart(rows, FIGURES / name, preset, fitted_on)
     out += [f"![C1-C4 means, {preset}](report/{name})", ""]
 
 

@@ -428,7 +428,7 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str | None,
         plots.time_series(r, experiment[r.case], out_dir / f"{r.case}.png")
         ssp.write(out_dir / f"{r.case}.ssp", folder, r.case, ps, r.slip_paper,
                   paper["load_N"], paper["wheel_speed_m_per_s"], stop, step)
-    plots.means_bar_chart(rows, out_dir / "means.png", preset)
+    plots.means_bar_chart(rows, out_dir / "means.png", preset, fitted_on)
     say(f"wrote {out_dir}/C1..C4.csv, C1..C4.png, means.png, C1..C4.ssp")
     if json_target:  # the JSON document: replacing the text, or beside it in a file
         payload = {"preset": preset, "set": list(assignments), "interface": interface,

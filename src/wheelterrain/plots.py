@@ -50,9 +50,12 @@ QUANTITIES = (("drawbar_pull", "drawbar pull [N]", 1.0, "N"),
 """The rig's three measured quantities: key, axis label, scale to the shown unit, unit."""
 
 
-def means_bar_chart(rows: list[dict], path: Path, preset: str) -> None:
+def means_bar_chart(rows: list[dict], path: Path, preset: str,
+                    fitted_on: list[str] | None = None) -> None:
     """Simulated means, experiment and the paper's own simulation per case (top), and the
-    residuals against the experiment, this model's and the paper's simulation's (bottom)."""
+    residuals against the experiment, this model's and the paper's simulation's (bottom).
+    ``fitted_on``: the cases the preset was fitted on; its MAE is then labelled in-sample."""
+    in_sample = " (in-sample)" if set(fitted_on or ()) & {r["case"] for r in rows} else ""
     fig, axes = plt.subplots(2, 3, figsize=(13, 7), sharex=True,
                              gridspec_kw={"height_ratios": (3, 2)})
     cases = [r["case"] for r in rows]
@@ -68,7 +71,8 @@ def means_bar_chart(rows: list[dict], path: Path, preset: str) -> None:
         top.bar(x + w, paper, w, label="paper's simulation")
         top.set_ylabel(label)
         bottom.bar(x - w / 2, ours - measured, w, color="C0",
-                   label=f"this model: MAE {np.mean(np.abs(ours - measured)):.2f} {unit}")
+                   label=f"this model: MAE {np.mean(np.abs(ours - measured)):.2f} {unit}"
+                   f"{in_sample}")
         bottom.bar(x + w / 2, paper - measured, w, color="C2",
                    label=f"paper's simulation: MAE {np.mean(np.abs(paper - measured)):.2f} "
                    f"{unit}")
