@@ -519,27 +519,15 @@ fmi2Status fmi2CancelStep(fmi2Component c) {
     return fmi2Error;
 }
 
-fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
-    Guard *g = legal(c, "fmi2GetStatus", M_ANY);
-    return g ? F.get_status(g->real, s, value) : fmi2Error;
-}
-
-fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
-    Guard *g = legal(c, "fmi2GetRealStatus", M_ANY);
-    return g ? F.get_real_status(g->real, s, value) : fmi2Error;
-}
-
-fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
-    Guard *g = legal(c, "fmi2GetIntegerStatus", M_ANY);
-    return g ? F.get_integer_status(g->real, s, value) : fmi2Error;
-}
-
-fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
-    Guard *g = legal(c, "fmi2GetBooleanStatus", M_ANY);
-    return g ? F.get_boolean_status(g->real, s, value) : fmi2Error;
-}
-
-fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
-    Guard *g = legal(c, "fmi2GetStringStatus", M_ANY);
-    return g ? F.get_string_status(g->real, s, value) : fmi2Error;
-}
+/* The status queries, legal in every mode, forwarded as they are. */
+#define STATUS_QUERY(NAME, TYPE, FIELD)                                                      \
+    fmi2Status NAME(fmi2Component c, const fmi2StatusKind s, TYPE *value) {                  \
+        Guard *g = legal(c, #NAME, M_ANY);                                                   \
+        return g ? F.FIELD(g->real, s, value) : fmi2Error;                                   \
+    }
+STATUS_QUERY(fmi2GetStatus, fmi2Status, get_status)
+STATUS_QUERY(fmi2GetRealStatus, fmi2Real, get_real_status)
+STATUS_QUERY(fmi2GetIntegerStatus, fmi2Integer, get_integer_status)
+STATUS_QUERY(fmi2GetBooleanStatus, fmi2Boolean, get_boolean_status)
+STATUS_QUERY(fmi2GetStringStatus, fmi2String, get_string_status)
+#undef STATUS_QUERY

@@ -285,13 +285,14 @@ def _cosimulate_direct(pair: Coupling, where: list[int], n: int, step: float) ->
 
 
 INTERFACES = {"cs": _cosimulate, "me": _integrate}
+"""How the pair runs: FMI co-simulation (each FMU steps itself) or model exchange (the master
+integrates the FMUs' states)."""
 MASTER_NAMES = {
     "direct": "wheelterrain master, co-simulation (FMI calls through ctypes)",
     "cs": "wheelterrain master, co-simulation (fmpy's FMI wrappers)",
     "me": "wheelterrain master, model exchange (RK4)",
 }
-"""How the pair runs: FMI co-simulation (each FMU steps itself) or model exchange (the master
-integrates the FMUs' states)."""
+"""The master's loop in words (CaseResult.master): the direct ctypes loop or an INTERFACES one."""
 
 
 def run_case(fmu_dir: Path, ps: ParameterSet, slip_paper: float, load: float, rim_speed: float,
