@@ -19,6 +19,9 @@ POINT = {
     "model.exit_ratio": 0.6, "model.shear_model": 1, "model.contact_radius_factor": 0.5,
     "model.shear_radius_factor": 0.7, "model.slip_radius_factor": 0.2, "soil.cohesion": 500.0,
     "soil.residual_ratio": 0.7,
+    # the cross-wheel mechanisms on, away from their exact-reduction values
+    "model.shear_length_ratio": 0.4, "model.interface_ratio": 0.7,
+    "model.grouser_shear_height": 0.005, "model.diameter_exponent": -0.3,
 }
 
 

@@ -89,6 +89,10 @@ def _random_terrain_values(rng):
             "model.exit_ratio": rng.uniform(0, 0.9), "grouser.height": rng.uniform(0, 0.02),
             "model.slip_radius_factor": rng.uniform(0, 1),
             "model.shear_kinematics": int(rng.integers(0, 2)),
+            "model.shear_length_ratio": rng.uniform(0, 1),
+            "model.interface_ratio": rng.uniform(0.5, 1),
+            "model.grouser_shear_height": rng.uniform(0, 0.02),
+            "model.diameter_exponent": rng.uniform(-1, 1),
             "sinkage": rng.uniform(0.0, 0.04), "sinkage_rate": rng.uniform(-0.05, 0.05),
             "wheel_speed": rng.uniform(0.2, 1.0), "carriage_speed": rng.uniform(0.0, 0.03),
             "load": rng.uniform(5, 60)}
@@ -124,6 +128,16 @@ def test_flavours_agree_on_wheelterrain(flavours, quasi_static, contact_form):
         if out[0] is not None:
             np.testing.assert_allclose(out[1], out[0], rtol=1e-9, atol=1e-12)
             checked += 1
+            if quasi_static:  # and the core's steady state, every mechanism included
+                from wheelterrain import model
+
+                ps = presets.load(presets.DEFAULT_PRESET).with_values(
+                    {k: v for k, v in values.items() if "." in k})
+                first = dict(zip(TERRAIN_OUT, out[1][0], strict=True))
+                ref = model.steady_state(ps, values["load"], first["slip"])
+                assert first["contact_sinkage"] == pytest.approx(ref["sinkage"], rel=1e-9)
+                assert first["drawbar_pull"] == pytest.approx(ref["drawbar_pull"], rel=1e-9,
+                                                              abs=1e-9)
     assert checked >= 15
 
 

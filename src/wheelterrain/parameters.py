@@ -246,6 +246,36 @@ TABLE: tuple[Parameter, ...] = (
        "Wong & Reece 1967 (0); Bekker 1956/1960 and Wong, Theory of Ground Vehicles, ch. 2 and "
        "4 (1), the soft-soil reading of Abubakar et al.'s eq. 1", kind="enum",
        choices=MappingProxyType({0: "arc", 1: "patch"})),
+    # --- cross-wheel mechanisms (validation/DATA.md; chosen by leave-one-dataset-out) ----------
+    _P("model.shear_length_ratio", "1", 0.0, 0.0, 2.0,
+       "Growth of the shear deformation modulus with the length of the shearing surface: "
+       "K_eff = K + ratio*l, l the contact length. 0 = Janosi's K for every contact; > 0 makes "
+       "the mobilisation x*l/K_eff tend to x/ratio on long contacts instead of to full strength.",
+       "Wiendieck 1968 (US Army WES Misc. Paper M-68-6): the shear stress-displacement curve "
+       "depends on the size of the sheared surface; the linear form is this project's",
+       plausible=(0.0, 1.0, "K_eff between Janosi's K and K + contact length")),
+    _P("model.interface_ratio", "1", 1.0, 0.1, 1.0,
+       "Rim-soil interface friction as a share of the soil's: delta = ratio*phi and adhesion "
+       "c_a = ratio*c on the rim between grousers (see model.grouser_shear_height). 1 = the "
+       "classical model (the rim shears the soil at its full strength).",
+       "Potyondy 1961, Geotechnique 11(4):339-353 (skin friction of sands on steel, "
+       "delta/phi ~0.5-0.9); Higa, Nagaoka & Yoshida 2019 (grousered wheels: traction acts at "
+       "the grousers)",
+       plausible=(0.5, 1.0, "Potyondy 1961: delta/phi of sand on steel, wood, concrete")),
+    _P("model.grouser_shear_height", "m", 0.0, 0.0, 0.1,
+       "Grouser height at which half the shearing surface is soil on soil (at the grouser "
+       "tips) and half rim on soil: the soil-on-soil share is h_g/(h_g + this); 0 = any "
+       "grouser makes it all soil on soil, a smooth rim none. Unused when "
+       "model.interface_ratio = 1.",
+       "Higa, Nagaoka & Yoshida 2019 (nearly all traction of a grousered wheel acts at the "
+       "grousers); the saturating form is this project's", quantity="Length",
+       plausible=(0.0, 0.02, "0 (any grouser engages) to 20 mm")),
+    _P("model.diameter_exponent", "1", 0.0, -1.0, 1.0,
+       "Diameter dependence of the pressure-sinkage modulus: multiplied by "
+       "(2R/0.5 m)**exponent. 0 = the flat-plate (Bekker/Reece) law.",
+       "Meirion-Griffith & Spenko 2011, J. Terramechanics 48(2):149-155 (the flat-plate "
+       "assumption fails below ~50 cm diameter; pressure-sinkage with a power of the diameter)",
+       plausible=(-1.0, 1.0, "Meirion-Griffith & Spenko 2011: exponent of the diameter")),
 )
 
 # --- the single-wheel rig (SingleWheelRig.fmu) ------------------------------------------------

@@ -27,7 +27,11 @@ Equations (Wong & Reece 1967; Wong, *Theory of Ground Vehicles*; Ishigami et al.
     j(theta) = R_s*(theta_f - theta) - (1 - i)*R_ref*(sin(theta_f) - sin(theta))  (wheel element)
     j(theta) = R_c*[R_s/((1 - i)*R_ref)*(sin(theta_f) - sin(theta))                  (soil element,
                - (theta_f - theta)/2 - (sin(2*theta_f) - sin(2*theta))/4]           SCM; see below)
-    tau = (c + sigma*tan(phi)) * g(j),   g = 1 - exp(-j/K)  (Janosi)  or Wong's hump form
+    tau = (c' + sigma*tan(phi')) * g(j),  g = 1 - exp(-j/K')  (Janosi)  or Wong's hump form
+    K' = K + kappa*l_c                                                   (Wiendieck 1968)
+    c' = c - (1 - chi)*(1 - rho)*c,  tan(phi') = tan(phi) - (1 - chi)*(tan(phi) - tan(rho*phi))
+        chi = h_g/(h_g + h_e) (0 smooth)           (Potyondy 1961; Higa et al. 2019)
+    k_eq also carries (2R/0.5 m)**m                       (Meirion-Griffith & Spenko 2011)
     Fz = b*int(R_c*sigma*cos + R_s*tau*sin),  DP = b*int(R_s*tau*cos - R_c*sigma*sin),
     T  = b*R_s**2*int(tau)                                               over [theta_r, theta_f]
 
@@ -36,6 +40,12 @@ above; 1, the patch (:func:`_patch_form`), the Reece pressure acting uniformly o
 contact patch with Bekker's patch thrust and compaction resistance, the soft-soil reading of the
 paper's eq. 1. Every Function below (contact, Jacobians, sinkage solve, steady state) takes the
 switch from the parameter vector, so the FMUs, the MPC, the calibration and the sweeps get both.
+
+The cross-wheel mechanisms (kappa = ``model.shear_length_ratio``, rho =
+``model.interface_ratio``, h_e = ``model.grouser_shear_height``, m =
+``model.diameter_exponent``; :func:`effective_shear_modulus`, :func:`shear_strength`,
+:func:`_reece`) act in both forms and are off at their defaults (kappa = 0, rho = 1, m = 0),
+where the expressions reduce to the classical ones exactly.
 
 The shear-displacement kinematics (``model.shear_kinematics``) is documented at
 :class:`_Displacement`. With every extension off (n1 = 0, f_c = f_s = f_ref = 0, Janosi,
@@ -253,17 +263,47 @@ def _radii(P: _P) -> tuple[ca.SX, ca.SX, ca.SX]:
             reference_radius(P))
 
 
-def shear_function(j: ca.SX, P: _P) -> ca.SX:
-    """Mobilised fraction g(j) of the shear strength (odd in j).
+def shear_function(j: ca.SX, P: _P, K: ca.SX) -> ca.SX:
+    """Mobilised fraction g(j) of the shear strength (odd in j), for the shear deformation
+    modulus ``K`` (:func:`effective_shear_modulus`).
 
     Janosi: 1 - exp(-j/K). Wong's hump form (paper eq. 3, with its last factor restored):
     K_r*(1 + (1/(K_r*(1 - 1/e)) - 1)*exp(1 - j/K))*(1 - exp(-j/K)), peak 1 at j = K, tending to K_r.
     """
-    K, Kr, hump = P["soil.shear_modulus"], P["soil.residual_ratio"], P["model.shear_model"]
+    Kr, hump = P["soil.residual_ratio"], P["model.shear_model"]
     E = ca.exp(-ca.fabs(j) / K)
     janosi = 1 - E
     wong = Kr * (1 + (1 / (Kr * (1 - math.exp(-1))) - 1) * math.e * E) * (1 - E)
     return ca.sign(j) * ((1 - hump) * janosi + hump * wong)
+
+
+def effective_shear_modulus(length: ca.SX, P: _P) -> ca.SX:
+    """K_eff = K + kappa*l: the shear deformation modulus of a shearing surface of length ``l``
+    (the contact length), kappa = ``model.shear_length_ratio``. The shear stress-displacement
+    curve of a soil depends on the size of the surface sheared (Wiendieck 1968); with kappa > 0
+    the patch mobilisation x*l/K_eff tends to x/kappa on long contacts rather than to full
+    strength, and stays x*l/K on short ones. kappa = 0 is Janosi's K exactly."""
+    return P["soil.shear_modulus"] + P["model.shear_length_ratio"] * length
+
+
+def shear_strength(P: _P) -> tuple[ca.SX, ca.SX]:
+    """(c_eff, tan(phi_eff)): the Mohr-Coulomb strength of the wheel's shearing surface.
+
+    A share chi of it is soil on soil at the grouser tips (strength c, tan(phi)); the rest is
+    the rim on soil (adhesion rho*c, interface friction tan(rho*phi), Potyondy 1961), with
+    rho = ``model.interface_ratio`` and chi = h_g/(h_g + h_e) for a grousered wheel
+    (h_e = ``model.grouser_shear_height``; 0 for a smooth rim): Higa, Nagaoka & Yoshida 2019
+    find nearly all of a grousered wheel's traction at its grousers. Written as the soil's
+    strength minus the rim's deficit, so rho = 1 gives c and tan(phi) exactly."""
+    c, phi = P["soil.cohesion"], P["soil.phi"]
+    h_g, rho = P["grouser.height"], P["model.interface_ratio"]
+    chi = ca.if_else(h_g > 0, h_g / (h_g + P["model.grouser_shear_height"]), 0)
+    tan_phi = ca.tan(phi)
+    rim = 1 - chi
+    return c - rim * (1 - rho) * c, tan_phi - rim * (tan_phi - ca.tan(rho * phi))
+
+
+DIAMETER_REFERENCE = 0.5  # m: below it the flat-plate law fails (Meirion-Griffith & Spenko)
 
 
 def shear_peak(P: _P) -> ca.SX:
@@ -291,10 +331,14 @@ def exit_angle(theta_f: ca.SX, P: _P) -> ca.SX:
 
 def _reece(slip: ca.SX, P: _P) -> tuple[ca.SX, ca.SX]:
     """Reece's pressure-sinkage law: the exponent n = n0 + n1*|i| (Ding et al. 2011) and the
-    modulus c*k_c' + gamma*b*k_phi' (p = modulus*(z/b)**n), shared by both contact forms."""
+    modulus (c*k_c' + gamma*b*k_phi')*(2R/D_ref)**m (p = modulus*(z/b)**n), shared by both
+    contact forms. The diameter factor, m = ``model.diameter_exponent`` and D_ref =
+    DIAMETER_REFERENCE, is the small-wheel correction in the form of Meirion-Griffith & Spenko
+    2011 (a power of the diameter); m = 0 is the flat-plate law exactly."""
     n = P["soil.n0"] + P["soil.n1"] * ca.fabs(slip)
+    diameter = (2 * P["wheel.radius"] / DIAMETER_REFERENCE) ** P["model.diameter_exponent"]
     modulus = (P["soil.cohesion"] * P["soil.k_c"]
-               + P["soil.gamma"] * P["wheel.width"] * P["soil.k_phi"])
+               + P["soil.gamma"] * P["wheel.width"] * P["soil.k_phi"]) * diameter
     return n, modulus
 
 
@@ -323,7 +367,7 @@ def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tup
     :func:`_reverses` is 0 (there the split rule's second sub-panel has zero weight)."""
     Rc, Rs, Rref = _radii(P)
     b = P["wheel.width"]
-    c, tan_phi = P["soil.cohesion"], ca.tan(P["soil.phi"])
+    c, tan_phi = shear_strength(P)
     n, modulus = _reece(slip, P)
     k_eq = modulus * (Rc / b) ** n
 
@@ -350,8 +394,10 @@ def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tup
     drop = front["cos_drop"]
     sigma0 = k_eq * ca.if_else(drop > 0, ca.exp(n * ca.log(drop)), 0)
 
-    g_front = shear_function(displacement.at(front), P)
-    g_rear = shear_function(displacement.at(rear), P)
+    contact_length = Rc * (ca.sin(theta_f) - ca.sin(theta_r))
+    K = effective_shear_modulus(contact_length, P)
+    g_front = shear_function(displacement.at(front), P, K)
+    g_rear = shear_function(displacement.at(rear), P, K)
 
     def integrals(sigma: ca.SX) -> dict:
         tau_f, tau_r = (c + sigma * tan_phi) * g_front, (c + sigma * tan_phi) * g_rear
@@ -365,7 +411,6 @@ def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tup
 
     static = integrals(sigma0)
     normal_static = b * (Rc * static["sig_cos"] + Rs * static["tau_sin"])
-    contact_length = Rc * (ca.sin(theta_f) - ca.sin(theta_r))
     mean_pressure = normal_static / (b * ca.fmax(contact_length, 1e-300))
     amplitude = (P["ripple.k_g"] * mean_pressure
                  + P["ripple.k_0"] * contact_length * P["soil.gamma_variation"])
@@ -496,7 +541,8 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
     as 0).
     """
     Rc, Rs, Rref = _radii(P)
-    b, c = P["wheel.width"], P["soil.cohesion"]
+    b = P["wheel.width"]
+    c, tan_phi = shear_strength(P)
     n, modulus = _reece(slip, P)
     half = ca.sin(theta_f / 2)
     z = 2 * Rc * half**2  # R_c*(1 - cos(theta_f)) without cancellation
@@ -513,8 +559,8 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
     v, soil_ratio = _speed_ratios(slip, Rs, Rref)
     kinematics = P["model.shear_kinematics"]
     x = (1 - kinematics) * (1 - v / Rs) + kinematics * (soil_ratio - 1)
-    mobilised = patch_shear_mean(x * length / P["soil.shear_modulus"], P)
-    thrust = (c * b * length + normal * ca.tan(P["soil.phi"])) * mobilised
+    mobilised = patch_shear_mean(x * length / effective_shear_modulus(length, P), P)
+    thrust = (c * b * length + normal * tan_phi) * mobilised
     compaction = b * pressure * z / (n + 1)
     return {
         "normal_force": normal,
