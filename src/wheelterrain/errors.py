@@ -55,3 +55,8 @@ class FMUError(WheelTerrainError):
 
 class CalibrationError(WheelTerrainError):
     """A calibration request that cannot be carried out (unknown case or parameter, ...)."""
+
+
+class DataError(WheelTerrainError):
+    """A test-data file that cannot be read as documented in :mod:`wheelterrain.fit.datasets`;
+    the message names the line and what is wrong."""

@@ -6,7 +6,11 @@
   (J. Terramechanics 48:27-45), smooth and lugged wheel at 80 N, with that soil's parameters in
   the header: a transfer check, never a fit target.
 
-validation/ links to both files, so the scripts there and the installed package read the same
+- ``wheel_tests.csv``: the cross-wheel data set, six data sets of four wheels on four soils
+  with each soil's own values, in the format of ``wheelterrain validate --data``
+  (:mod:`wheelterrain.fit.datasets`; validation/DATA.md documents every data set).
+
+validation/ links to the first two files, so the scripts there and the installed package read the same
 bytes.
 """
 
