@@ -20,6 +20,7 @@ from wheelterrain import __version__, model, presets
 from wheelterrain.errors import (
     CalibrationError,
     CosimulationError,
+    DataError,
     FMUError,
     InputError,
     LoadTooLargeError,
@@ -42,7 +43,7 @@ def _fail(err: WheelTerrainError) -> None:
     code = EXIT_USAGE
     if isinstance(err, LoadTooLargeError):
         code = EXIT_INFEASIBLE
-    elif not isinstance(err, ParameterError | InputError | CalibrationError):
+    elif not isinstance(err, ParameterError | InputError | CalibrationError | DataError):
         code = EXIT_NUMERICAL
     click.echo(f"error: {err}", err=True)
     sys.exit(code)
@@ -243,9 +244,13 @@ def params(preset: str, assignments: tuple[str, ...], json_target: str | None) -
               help="Slip, in the definition chosen by --slip-definition.")
 @slip_definition_option("--slip")
 @click.option("--load", required=True, type=float, help="Vertical load on the wheel [N], >= 0.")
+@click.option("--interval", is_flag=True,
+              help="Also a 90 % interval for drawbar pull and sinkage: the soil values' spread "
+                   "through the exact Jacobian, and the preset's model-form error on the "
+                   "shipped data sets of other wheels (validation/DATA.md).")
 @json_option("One object (the contract's keys, with `preset`)")
 def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definition: str,
-           load: float, json_target: str | None) -> None:
+           load: float, interval: bool, json_target: str | None) -> None:
     """Quasi-static operating point: solve the sinkage that carries LOAD at SLIP.
 
     Prints sinkage [m], drawbar_pull [N], normal_force [N], torque [N.m], both slips, the entry,
@@ -256,6 +261,11 @@ def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definiti
     ps = _load(preset, assignments)
     try:
         result = model.steady_state(ps, load, slip, slip_definition)
+        if interval:
+            from wheelterrain.fit import crosswheel, datasets
+
+            result["interval"] = crosswheel.preset_interval(ps, load, result["slip"],
+                                                            datasets.shipped())
     except WheelTerrainError as err:
         _fail(err)
     result = {"preset": preset, **result}
@@ -274,6 +284,8 @@ def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definiti
         extra = f"   ({value / DEG:.3f} deg)" if unit == "rad" else ""
         extra = f"   ({value * 1e3:.3f} mm)" if key == "sinkage" else extra
         click.echo(f"{key:22} {value:14.6g} {unit}{extra}")
+    for key, (lo, hi) in result.get("interval", {}).items():
+        click.echo(f"{key + ' 90 %':22} [{lo:.6g}, {hi:.6g}] {table[key]}")
 
 
 
@@ -741,8 +753,12 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool,
 @json_option('One object {"rows": [...]} (the README\'s contract)')
 @click.option("--starts", default=4, show_default=True, type=click.IntRange(1, 64),
               help="Starting points of each fit (the unfitted preset, then random).")
-def validate(json_target: str | None, starts: int) -> None:
-    """Prediction protocols: every shipped preset held out, beside a straight line.
+@click.option("--data", "data_file", type=click.Path(dir_okay=False), default=None,
+              help="Your own single-wheel tests (CSV, format below): every shipped model form "
+                   "predicts them, fitted on the shipped data sets only.")
+def validate(json_target: str | None, starts: int, data_file: str | None) -> None:
+    """Prediction protocols: every shipped preset held out, beside a straight line, and every
+    model form held out data set by data set.
 
     \b
     Rows (drawbar-pull MAE [N], sinkage MAE [m]; held-out unless marked in-sample):
@@ -752,15 +768,51 @@ def validate(json_target: str | None, starts: int) -> None:
       PRESET leave-one-out  the preset's own free parameters refitted without each case
       PRESET transfer   Ding et al. 2011's wheels and soil (80 N), the preset's model form,
                         that soil's own values, nothing refitted
+      FORM leave-data-out  a model form's global constants fitted on every other data set
+                        of validation/DATA.md, judged on the one left out with its own soil
+                        values; with the share of its points inside their 90 % interval
     Folds start from the preset as it was before its own fit, so no held-out case reaches a
     fit. Takes about a minute.
+
+    \b
+    --data FILE.csv: '#' comment lines, a header, one row per test point. Columns (SI; a
+    header may carry its unit in brackets, e.g. 'load [N]'):
+      wheel.radius, wheel.width, grouser.height, grouser.count, load, slip (traction),
+      drawbar_pull, sinkage, optional torque, optional dataset (groups rows), optional case;
+      soil.n0, soil.cohesion, soil.phi [rad], soil.gamma, soil.shear_modulus, and
+      soil.k_c + soil.k_phi (Reece) or bekker.k_c [N/m^(n+1)] + bekker.k_phi [N/m^(n+2)];
+      optional sd.<soil column>: its standard deviation.
+    The shipped data set is in this format: wheelterrain/data/wheel_tests.csv.
     """
     from wheelterrain.fit import prediction
 
     _check_file_target(json_target)
+    if data_file is not None:
+        _validate_user_data(data_file, json_target, starts)
+        return
     with click.progressbar(length=prediction.step_count(), label="prediction protocols",
                            file=sys.stderr) as bar:
         result = prediction.run(progress=lambda _: bar.update(1), starts=starts)
+    if _emit_json(json_target, result):
+        return
+    click.echo(prediction.format_table(result))
+
+
+def _validate_user_data(data_file: str, json_target: str | None, starts: int) -> None:
+    """`validate --data`: every shipped form on the user's data sets."""
+    from wheelterrain.fit import crosswheel, datasets, prediction
+
+    try:
+        user = datasets.read(data_file)
+    except WheelTerrainError as err:
+        _fail(err)
+    shipped = datasets.shipped()
+    with click.progressbar(length=len(crosswheel.FORMS), label="model forms",
+                           file=sys.stderr) as bar:
+        rows = crosswheel.user_rows(user, shipped, starts=min(starts, 3),
+                                    progress=lambda _: bar.update(1))
+    result = {"rows": rows, "data": data_file,
+              "units": {"drawbar_pull_mae": "N", "sinkage_mae": "m"}}
     if _emit_json(json_target, result):
         return
     click.echo(prediction.format_table(result))

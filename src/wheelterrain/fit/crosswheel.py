@@ -1,0 +1,334 @@
+"""Model forms judged across wheels and soils: leave-one-dataset-out, with prediction intervals.
+
+A *model form* is the contact form and its extensions (the ``model.*`` rows of the parameter
+table, and the slip-sinkage coefficient ``soil.n1``, which no soil test measures): a few global
+constants, the same for every wheel and soil. A *data set* brings its wheel and its soil's own
+measured values (:mod:`wheelterrain.fit.datasets`); those are never fitted.
+
+Leave-one-dataset-out: for each data set, the form's free constants are fitted (least squares on
+drawbar pull [N] and sinkage [mm], each data set weighted equally) on all the *other* data sets,
+then the form predicts the held-out one with its own soil values. Only the other data sets'
+points reach the fit (tests/test_crosswheel.py corrupts the held-out set and checks that the
+constants do not move).
+
+Prediction intervals (90 %), per point, from two sources added in quadrature:
+
+1. the soil values' uncertainty: each value's standard deviation (the data set's ``sd.``
+   columns, else :data:`wheelterrain.fit.datasets.DEFAULT_SPREAD`) propagated through the exact
+   CasADi Jacobian of the steady state (linear, independent values): 1.645 sigma;
+2. the model-form discrepancy learned from the other data sets (:class:`Discrepancy`): what
+   the soil spread does not explain of the fold's residuals on its training points, at their
+   90 % quantile; for the pull as a share of the load (pull scales with load), for the
+   sinkage in metres.
+
+Coverage is the share of held-out points inside their interval; its nominal value is 90 %.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from wheelterrain import model
+from wheelterrain.errors import WheelTerrainError
+from wheelterrain.fit.datasets import DEFAULT_SPREAD, Dataset, Point
+from wheelterrain.parameters import BY_NAME, INDEX, ParameterSet
+
+Z90 = 1.6448536269514722  # two-sided 90 % of a normal distribution
+COVERAGE = 0.9
+SCALES = {"drawbar_pull": 1.0, "sinkage": 1e-3}  # residual units: N and mm
+NO_RIPPLE = {"ripple.k_g": 0.0, "ripple.k_0": 0.0}  # the data are means over grouser periods
+
+
+@dataclass(frozen=True)
+class Form:
+    """A model form: ``values`` fixed (the form's switches), ``free`` fitted across data sets
+    inside their plausible ranges."""
+
+    name: str
+    description: str
+    values: dict[str, float]
+    free: tuple[str, ...] = ()
+
+
+_PATCH = {"model.contact_form": 1, "model.exit_ratio": 1.0, "model.shear_kinematics": 1,
+          "model.shear_radius_factor": 1.0}
+_TIPS = {"model.contact_radius_factor": 1.0, "model.shear_radius_factor": 1.0,
+         "model.grouser_thrust": 1}
+CROSS = ("soil.n1", "model.shear_length_ratio", "model.interface_ratio",
+         "model.diameter_exponent")
+"""The cross-wheel constants: slip-sinkage coefficient, shear modulus growing with contact
+length, rim-soil interface friction, small-wheel diameter law."""
+FORMS: tuple[Form, ...] = (
+    Form("classical", "Wong-Reece arc, every extension off (the physical baseline)", {}),
+    Form("patch", "the paper-faithful patch form of the rashid-patch preset, the paper's eta "
+         "read as n1 = 1.15; nothing fitted", {**_PATCH, "soil.n1": 1.15}),
+    Form("patch-cross", "the patch form with the cross-wheel constants fitted across data sets",
+         _PATCH, CROSS),
+    Form("arc-cross", "the arc at the grouser tips with passive grouser thrust and the "
+         "cross-wheel constants fitted across data sets", _TIPS, CROSS),
+)
+BY_FORM = {f.name: f for f in FORMS}
+
+
+def parameters(form: Form, point: Point, constants: dict[str, float] | None = None
+               ) -> ParameterSet:
+    """The parameter set of ``point`` (its wheel and soil) in ``form`` with ``constants``."""
+    return ParameterSet({**form.values, **NO_RIPPLE, **(constants or {}), **point.values})
+
+
+def predict(form: Form, point: Point, constants: dict[str, float] | None = None) -> dict:
+    """Steady-state drawbar pull, sinkage and torque of ``point`` in ``form``."""
+    out = model.steady_state(parameters(form, point, constants), point.load, point.slip)
+    return {k: out[k] for k in ("drawbar_pull", "sinkage", "torque")}
+
+
+def _residuals(form: Form, names: Sequence[str], x, sets: Sequence[Dataset]) -> np.ndarray:
+    constants = dict(zip(names, map(float, x), strict=True))
+    r = []
+    for ds in sets:
+        weight = 1 / math.sqrt(len(ds.points))
+        for pt in ds.points:
+            try:
+                out = predict(form, pt, constants)
+                r += [weight * (out[k] - getattr(pt, k)) / SCALES[k] for k in SCALES]
+            except WheelTerrainError:  # not carried at this trial point: a large residual
+                r += [weight * 1e3] * len(SCALES)
+    return np.array(r)
+
+
+def fit_constants(form: Form, sets: Sequence[Dataset], starts: int = 3, seed: int = 0
+                  ) -> dict[str, float]:
+    """``form``'s free constants fitted on ``sets`` (least squares, several starts inside the
+    plausible ranges); {} for a form with nothing free."""
+    names = form.free
+    if not names:
+        return {}
+    lo = np.array([BY_NAME[n].plausible[0] for n in names])
+    hi = np.array([BY_NAME[n].plausible[1] for n in names])
+    rng = np.random.default_rng(seed)
+    first = np.clip([ParameterSet(form.values)[n] for n in names], lo, hi)
+    candidates = [first] + [lo + rng.uniform(0.1, 0.9, len(names)) * (hi - lo)
+                            for _ in range(max(starts, 1) - 1)]
+    best = None
+    for x0 in candidates:
+        sol = least_squares(lambda x: _residuals(form, names, x, sets), x0, bounds=(lo, hi),
+                            diff_step=1e-4, max_nfev=60 * len(names))
+        if best is None or sol.cost < best.cost:
+            best = sol
+    return dict(zip(names, map(float, best.x), strict=True))
+
+
+def soil_sigma(form: Form, point: Point, constants: dict[str, float]) -> dict[str, float]:
+    """One standard deviation of the pull [N] and sinkage [m] of ``point`` from its soil
+    values' spreads, through the exact Jacobian of the steady state."""
+    ps = parameters(form, point, constants)
+    jac = model.steady_jacobian(ps, point.load, point.slip)["d_params"]
+    rows = {"sinkage": 0, "drawbar_pull": 2}  # steady_jacobian rows: sinkage, Fz, DP, T
+    var = dict.fromkeys(rows, 0.0)
+    for name, (rel, absolute) in DEFAULT_SPREAD.items():
+        sd = point.spread.get(name, math.hypot(rel * ps[name], absolute))
+        for key, row in rows.items():
+            var[key] += (jac[row, INDEX[name]] * sd) ** 2
+    return {k: math.sqrt(v) for k, v in var.items()}
+
+
+@dataclass
+class Discrepancy:
+    """The model-form discrepancy of a fold, learned from its training points: per output the
+    smallest D such that 90 % of them lie within sqrt((D*scale)**2 + (1.645*sigma_soil)**2)
+    of the prediction, i.e. what the soil values' spread does not explain. ``scale`` is the
+    load for the pull (D a share of the load) and 1 for the sinkage (D in metres)."""
+
+    pull_share: float
+    sinkage: float
+
+    @classmethod
+    def learn(cls, form: Form, constants: dict[str, float], sets: Sequence[Dataset]
+              ) -> Discrepancy:
+        pull, sink = [], []
+        for ds in sets:
+            for pt in ds.points:
+                try:
+                    out = predict(form, pt, constants)
+                    sigma = soil_sigma(form, pt, constants)
+                except WheelTerrainError:
+                    continue
+                for key, scale, needed in (("drawbar_pull", pt.load, pull),
+                                           ("sinkage", 1.0, sink)):
+                    excess = (out[key] - getattr(pt, key)) ** 2 - (Z90 * sigma[key]) ** 2
+                    needed.append(math.sqrt(max(excess, 0.0)) / scale)
+        if not pull:
+            return cls(math.inf, math.inf)
+        return cls(float(np.quantile(pull, COVERAGE)), float(np.quantile(sink, COVERAGE)))
+
+    def half_widths(self, sigma: dict[str, float], load: float) -> dict[str, float]:
+        return {"drawbar_pull": math.hypot(self.pull_share * load, Z90 * sigma["drawbar_pull"]),
+                "sinkage": math.hypot(self.sinkage, Z90 * sigma["sinkage"])}
+
+
+@dataclass
+class Fold:
+    """One held-out data set: the constants fitted without it, its predictions and intervals."""
+
+    form: str
+    dataset: str
+    constants: dict[str, float]
+    discrepancy: Discrepancy
+    points: list[dict] = field(default_factory=list)
+    error: str | None = None
+
+    def mae(self, key: str) -> float | None:
+        errs = [abs(p[key] - p["measured"][key]) for p in self.points if p.get(key) is not None]
+        return float(np.mean(errs)) if errs and len(errs) == len(self.points) else None
+
+    def coverage(self) -> float | None:
+        inside = [p["inside"][k] for p in self.points for k in ("drawbar_pull", "sinkage")
+                  if p.get("inside")]
+        return float(np.mean(inside)) if inside else None
+
+    def as_row(self) -> dict:
+        row = {"model": self.form, "protocol": "leave-one-dataset-out", "dataset": self.dataset,
+               "points": len(self.points), "free": sorted(self.constants),
+               "drawbar_pull_mae": self.mae("drawbar_pull"), "sinkage_mae": self.mae("sinkage"),
+               "interval_coverage": self.coverage(), "in_sample": False,
+               "fitted": self.constants,
+               "judged_on": [p["case"] for p in self.points], "data": self.dataset}
+        if self.error:
+            row["error"] = self.error
+        return row
+
+
+def judge(form: Form, constants: dict[str, float], discrepancy: Discrepancy, held: Dataset,
+          intervals: bool = True) -> Fold:
+    """``form`` with ``constants`` predicting every point of ``held``, with intervals."""
+    fold = Fold(form.name, held.name, constants, discrepancy)
+    for pt in held.points:
+        entry = {"case": pt.case, "load": pt.load, "slip": pt.slip,
+                 "measured": {"drawbar_pull": pt.drawbar_pull, "sinkage": pt.sinkage}}
+        try:
+            out = predict(form, pt, constants)
+        except WheelTerrainError as err:
+            fold.error = f"{pt.case}: {err}"
+            entry.update(drawbar_pull=None, sinkage=None)
+            fold.points.append(entry)
+            continue
+        entry.update(out)
+        if intervals:
+            half = discrepancy.half_widths(soil_sigma(form, pt, constants), pt.load)
+            entry["interval"] = {k: [out[k] - h, out[k] + h] for k, h in half.items()}
+            entry["inside"] = {k: bool(abs(out[k] - entry["measured"][k]) <= h)
+                               for k, h in half.items()}
+        fold.points.append(entry)
+    return fold
+
+
+def leave_one_dataset_out(form: Form, sets: Sequence[Dataset], starts: int = 3,
+                          progress: Callable[[str], None] | None = None) -> list[Fold]:
+    """One :class:`Fold` per data set: ``form``'s constants fitted on the others only."""
+    folds = []
+    for held in sets:
+        train = [ds for ds in sets if ds.name != held.name]
+        constants = fit_constants(form, train, starts)
+        folds.append(judge(form, constants, Discrepancy.learn(form, constants, train), held))
+        if progress:
+            progress(f"{form.name} without {held.name}")
+    return folds
+
+
+DEFAULT_FORM = "arc-cross"
+"""The form with the lowest mean leave-one-dataset-out drawbar-pull error over the shipped data
+sets (`wheelterrain validate`; tests/test_crosswheel.py reruns the ranking): the form
+`validate --data` lists first and `steady --interval` learns its discrepancy beside."""
+
+
+def best_form(rows: Sequence[dict]) -> str:
+    """The form whose leave-one-dataset-out rows have the lowest mean pull MAE (a form with a
+    failed fold cannot win)."""
+    by_form: dict[str, list] = {}
+    for r in rows:
+        if r["protocol"] == "leave-one-dataset-out":
+            by_form.setdefault(r["model"], []).append(r["drawbar_pull_mae"])
+    scores = {f: (np.mean(v) if all(x is not None for x in v) else math.inf)
+              for f, v in by_form.items() if f in BY_FORM}
+    return min(scores, key=scores.get)
+
+
+def line_rows(sets: Sequence[Dataset]) -> list[dict]:
+    """The simple baseline held out data set by data set: pull/load = a + b*i and
+    sinkage/R = a + b*i (dimensionless, so that one line spans wheels and loads), least squares
+    on the other data sets' points; no physics, no soil values, no interval."""
+    rows = []
+    for held in sets:
+        train = [p for ds in sets if ds.name != held.name for p in ds.points]
+        slips = np.array([p.slip for p in train])
+        fits = {"drawbar_pull": np.polyfit(slips, [p.drawbar_pull / p.load for p in train], 1),
+                "sinkage": np.polyfit(slips, [p.sinkage / p.values["wheel.radius"]
+                                              for p in train], 1)}
+        scale = {"drawbar_pull": lambda p: p.load, "sinkage": lambda p: p.values["wheel.radius"]}
+        mae = {k: float(np.mean([abs(np.polyval(c, p.slip) * scale[k](p) - getattr(p, k))
+                                 for p in held.points])) for k, c in fits.items()}
+        rows.append({"model": "line", "protocol": "leave-one-dataset-out",
+                     "dataset": held.name, "points": len(held.points), "free": ["a", "b"],
+                     "drawbar_pull_mae": mae["drawbar_pull"], "sinkage_mae": mae["sinkage"],
+                     "interval_coverage": None, "in_sample": False,
+                     "fitted": {k: [float(x) for x in c] for k, c in fits.items()},
+                     "judged_on": [p.case for p in held.points], "data": held.name})
+    return rows
+
+
+def lodo_rows(sets: Sequence[Dataset], starts: int = 3,
+              progress: Callable[[str], None] | None = None) -> list[dict]:
+    """The line and every shipped form held out data set by data set: the rows of
+    `wheelterrain validate`."""
+    return [*line_rows(sets), *(fold.as_row() for form in FORMS
+                                for fold in leave_one_dataset_out(form, sets, starts, progress))]
+
+
+def user_rows(user: Sequence[Dataset], shipped: Sequence[Dataset], starts: int = 3,
+              progress: Callable[[str], None] | None = None) -> list[dict]:
+    """Every shipped form predicting each of the user's data sets, with intervals:
+    `validate --data`'s rows. The constants are fitted on the shipped data sets, leaving out
+    any that bears the user's data set's name (a shipped data set given back is judged held
+    out, so its row reproduces the leave-one-dataset-out row); never on the user's data."""
+    rows = []
+    for form in sorted(FORMS, key=lambda f: f.name != DEFAULT_FORM):
+        fits: dict[tuple[str, ...], tuple] = {}
+        for ds in user:
+            train = [s for s in shipped if s.name != ds.name]
+            key = tuple(s.name for s in train)
+            if key not in fits:
+                constants = fit_constants(form, train, starts)
+                fits[key] = constants, Discrepancy.learn(form, constants, train)
+            row = judge(form, *fits[key], ds).as_row()
+            row.update(protocol="user-data", trained_on=list(key))
+            rows.append(row)
+        if progress:
+            progress(form.name)
+    return rows
+
+
+def preset_form(ps: ParameterSet) -> Form:
+    """A preset's own model form (its model.* switches and constants and its n1), for judging
+    it across the shipped data sets with each soil's own values."""
+    keep = {k: ps[k] for k in ps if k.startswith("model.") or k == "soil.n1"}
+    return Form("preset", "the preset's model form", keep)
+
+
+def preset_interval(ps: ParameterSet, load: float, slip: float,
+                    shipped: Sequence[Dataset]) -> dict[str, list[float]]:
+    """A 90 % interval for ``ps``'s steady pull and sinkage at (load, traction slip): its soil
+    values' default spreads through the exact Jacobian, and the discrepancy of its model form
+    on the shipped data sets (each with its own soil values; nothing fitted)."""
+    form = preset_form(ps)
+    discrepancy = Discrepancy.learn(form, {}, shipped)
+    point = Point("steady", "steady", {k: ps[k] for k in ps}, {}, load, slip, math.nan,
+                  math.nan)
+    out = model.steady_state(ParameterSet({k: ps[k] for k in ps}), load, slip)
+    sigma = soil_sigma(Form("preset", "", {}), point, {})
+    half = discrepancy.half_widths(sigma, load)
+    return {k: [out[k] - h, out[k] + h] for k, h in half.items()}

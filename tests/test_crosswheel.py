@@ -1,0 +1,212 @@
+"""The cross-wheel data set, leave-one-dataset-out, prediction intervals and `validate --data`."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from wheelterrain import model
+from wheelterrain.errors import DataError
+from wheelterrain.fit import crosswheel as cw
+from wheelterrain.fit import datasets
+from wheelterrain.parameters import ParameterSet
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def shipped():
+    return datasets.shipped()
+
+
+def test_shipped_data_sets_are_documented(shipped):
+    """Rashid and Ding's two wheels plus at least three more, each described in DATA.md."""
+    names = [ds.name for ds in shipped]
+    assert {"rashid-rig", "ding2011-smooth", "ding2011-lugged"} <= set(names)
+    assert len(names) >= 6
+    text = (ROOT / "validation" / "DATA.md").read_text(encoding="utf-8")
+    for name in names:
+        assert f"`{name}`" in text, name
+    for ds in shipped:
+        assert len(ds.points) >= 4
+        for pt in ds.points:
+            assert math.isfinite(pt.drawbar_pull)
+            assert pt.sinkage > 0
+            assert pt.load > 0
+
+
+def test_bekker_conversion_gives_the_same_pressure_at_the_wheel_width():
+    k_c, k_phi, n, b, gamma = 15.6e3, 2407.4e3, 1.1, 0.165, 15745.0
+    kc_r, kphi_r = datasets.reece_from_bekker(k_c, k_phi, n, b, gamma)
+    for z in (0.002, 0.01, 0.03):
+        bekker = (k_c / b + k_phi) * z**n
+        reece = (1000.0 * kc_r + gamma * b * kphi_r) * (z / b) ** n  # any cohesion
+        assert reece == pytest.approx(bekker, rel=1e-12)
+
+
+def _corrupted(ds):
+    return replace(ds, points=[replace(p, drawbar_pull=p.drawbar_pull * 7 + 40,
+                                       sinkage=p.sinkage * 3) for p in ds.points])
+
+
+def test_a_held_out_data_set_never_reaches_its_fold(shipped):
+    """Corrupting the held-out data set's measurements moves nothing its fold fitted."""
+    form = cw.BY_FORM["patch-cross"]
+    held = 2
+    clean = cw.leave_one_dataset_out(form, shipped, starts=1)
+    dirty_sets = [(_corrupted(ds) if k == held else ds) for k, ds in enumerate(shipped)]
+    dirty = cw.leave_one_dataset_out(form, dirty_sets, starts=1)
+    assert dirty[held].constants == clean[held].constants
+    assert dirty[held].discrepancy == clean[held].discrepancy
+    # ... while the folds that train on it do move: the check can fail
+    assert any(dirty[k].constants != clean[k].constants for k in range(len(shipped))
+               if k != held)
+
+
+def test_intervals_have_their_nominal_coverage_on_synthetic_data(shipped):
+    """Data drawn from the model (classical form, nothing fitted) with known soil spreads and
+    known measurement noise: held-out 90 % intervals cover close to 90 % of the points."""
+    form = cw.BY_FORM["classical"]
+    rng = np.random.default_rng(7)
+    sets = []
+    spread = {"soil.phi": 0.02, "soil.k_phi": 0.0, "soil.n0": 0.0, "soil.cohesion": 0.0,
+              "soil.k_c": 0.0, "soil.gamma": 0.0, "soil.shear_modulus": 0.0}
+    for ds in shipped[1:]:  # the other wheels: the classical form carries their loads
+        points = []
+        base = ds.points[0]
+        for k in range(40):
+            slip = rng.uniform(0.05, 0.6)
+            truth = dict(base.values)
+            truth["soil.phi"] += spread["soil.phi"] * rng.standard_normal()
+            out = model.steady_state(ParameterSet({**cw.NO_RIPPLE, **truth}), base.load, slip)
+            points.append(replace(base, case=f"{ds.name}-{k}", slip=slip, spread=spread,
+                                  drawbar_pull=out["drawbar_pull"] + rng.normal(0, 1.0),
+                                  sinkage=out["sinkage"] + rng.normal(0, 5e-4)))
+        sets.append(datasets.Dataset(ds.name, points))
+    folds = cw.leave_one_dataset_out(form, sets)
+    inside = [p["inside"][k] for f in folds for p in f.points for k in p["inside"]]
+    assert 0.83 <= np.mean(inside) <= 0.96, np.mean(inside)
+
+
+def test_default_form_has_the_best_leave_one_dataset_out_pull(shipped):
+    rows = cw.lodo_rows(shipped)
+    assert cw.best_form(rows) == cw.DEFAULT_FORM
+    for r in rows:
+        assert r["protocol"] == "leave-one-dataset-out"
+        assert r["points"] == len(r["judged_on"]) > 0
+        assert r["interval_coverage"] is None or 0 <= r["interval_coverage"] <= 1
+
+
+def test_user_data_reproduces_the_shipped_rows(shipped, tmp_path):
+    """A shipped data set given back through --data is judged held out: the same figures."""
+    form = cw.BY_FORM["patch-cross"]
+    lodo = {f.dataset: f.as_row() for f in cw.leave_one_dataset_out(form, shipped)}
+    user = datasets.read(datasets.data.path(datasets.SHIPPED))
+    rows = [r for r in cw.user_rows(user, shipped) if r["model"] == form.name]
+    assert len(rows) == len(shipped)
+    for r in rows:
+        want = lodo[r["dataset"]]
+        assert r["protocol"] == "user-data"
+        for key in ("drawbar_pull_mae", "sinkage_mae", "interval_coverage", "points"):
+            assert r[key] == want[key], (r["dataset"], key)
+
+
+BAD = {
+    "missing": ("wheel.radius,load\n0.1,10\n", "missing column"),
+    "unit": ("load [kN]\n1\n", "not [kN]"),
+    "unknown": ("wheel.radiuss\n1\n", "unknown column"),
+}
+
+
+@pytest.mark.parametrize("name", BAD)
+def test_malformed_headers_are_one_clear_error(name):
+    text, words = BAD[name]
+    with pytest.raises(DataError, match=words.replace("[", r"\[").replace("]", r"\]")):
+        datasets.parse(text)
+
+
+def _shipped_text() -> str:
+    return datasets.data.path(datasets.SHIPPED).read_text(encoding="utf-8")
+
+
+def test_a_bad_cell_names_its_line():
+    lines = _shipped_text().splitlines()
+    header = next(k for k, line in enumerate(lines) if not line.startswith("#"))
+    cells = lines[header + 2].split(",")
+    cells[7] = "ten"  # slip
+    lines[header + 2] = ",".join(cells)
+    with pytest.raises(DataError, match=f"line {header + 3}: slip = 'ten' is not a number"):
+        datasets.parse("\n".join(lines))
+
+
+def test_cli_validate_data_malformed_file_exits_2_with_one_line(tmp_path):
+    bad = tmp_path / "tests.csv"
+    bad.write_text("# my tests\nwheel.radius [m],load [N]\n0.1,10\n", encoding="utf-8")
+    run = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "validate", "--data",
+                          str(bad)], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 2
+    assert run.stderr.strip().count("\n") == 0
+    assert run.stderr.startswith("error: line 2:")
+
+
+def test_cli_validate_data_json_rows(tmp_path):
+    """A user's own file (one data set, Bekker soil, units in the header): one row per form."""
+    text = _shipped_text()
+    lines = [line for line in text.splitlines() if not line.startswith("#")]
+    mine = [lines[0]] + [line.replace("ding2011-lugged", "my-wheel")
+                         for line in lines if line.startswith("ding2011-lugged")]
+    path = tmp_path / "mine.csv"
+    path.write_text("\n".join(mine) + "\n", encoding="utf-8")
+    run = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "validate", "--data",
+                          str(path), "--json"], capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    rows = json.loads(run.stdout)["rows"]
+    assert rows[0]["model"] == cw.DEFAULT_FORM
+    assert sorted(r["model"] for r in rows) == sorted(f.name for f in cw.FORMS)
+    for r in rows:
+        assert r["protocol"] == "user-data"
+        assert r["dataset"] == "my-wheel"
+        assert r["points"] == 6
+        assert r["drawbar_pull_mae"] >= 0
+        assert r["sinkage_mae"] >= 0
+        assert "my-wheel" not in r["trained_on"]
+
+
+def test_mechanisms_act_as_documented(shipped):
+    """Interface friction lowers a smooth wheel's pull, not a grousered one's when any grouser
+    engages; a shear modulus growing with contact length lowers the mobilised thrust; the
+    diameter law stiffens a small wheel's soil for a negative exponent."""
+    smooth = next(ds for ds in shipped if ds.name == "ding2011-smooth").points[3]
+    lugged = next(ds for ds in shipped if ds.name == "ding2011-lugged").points[3]
+    form = cw.BY_FORM["patch-cross"]
+
+    def pull(pt, **c):
+        return cw.predict(form, pt, {k.replace("__", "."): v for k, v in c.items()})
+
+    base = {"soil__n1": 0.0}
+    assert pull(smooth, **base, model__interface_ratio=0.6)["drawbar_pull"] < \
+        pull(smooth, **base)["drawbar_pull"]
+    assert pull(lugged, **base, model__interface_ratio=0.6)["drawbar_pull"] == \
+        pull(lugged, **base)["drawbar_pull"]
+    assert pull(lugged, **base, model__shear_length_ratio=0.5)["drawbar_pull"] < \
+        pull(lugged, **base)["drawbar_pull"]
+    assert pull(lugged, **base, model__diameter_exponent=-0.5)["sinkage"] < \
+        pull(lugged, **base)["sinkage"]
+
+
+def test_steady_interval_brackets_the_prediction():
+    run = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "steady", "--slip", "0.2",
+                          "--load", "40", "--interval", "--json"], capture_output=True,
+                         text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    out = json.loads(run.stdout)
+    for key in ("drawbar_pull", "sinkage"):
+        lo, hi = out["interval"][key]
+        assert lo < out[key] < hi
