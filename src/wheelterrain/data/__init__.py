@@ -10,8 +10,8 @@
   with each soil's own values, in the format of ``wheelterrain validate --data``
   (:mod:`wheelterrain.fit.datasets`; validation/DATA.md documents every data set).
 
-validation/ links to the first two files, so the scripts there and the installed package read the same
-bytes.
+validation/ links to the first two files, so the scripts there and the installed package read
+the same bytes.
 """
 
 from __future__ import annotations
