@@ -69,8 +69,10 @@ FORMS: tuple[Form, ...] = (
          "read as n1 = 1.15; nothing fitted", {**_PATCH, "soil.n1": 1.15}),
     Form("patch-cross", "the patch form with the cross-wheel constants fitted across data sets",
          _PATCH, CROSS),
-    Form("arc-cross", "the arc at the grouser tips with passive grouser thrust and the "
-         "cross-wheel constants fitted across data sets", _TIPS, CROSS),
+    Form("arc-cross", "the arc at the grouser tips with passive grouser thrust, n1, "
+         "interface friction and the diameter law fitted across data sets (the arc does not "
+         "need the shear-length growth: fitted, it goes to 0 and changes no figure)", _TIPS,
+         ("soil.n1", "model.interface_ratio", "model.diameter_exponent")),
 )
 BY_FORM = {f.name: f for f in FORMS}
 

@@ -263,14 +263,16 @@ def _radii(P: _P) -> tuple[ca.SX, ca.SX, ca.SX]:
             reference_radius(P))
 
 
-def shear_function(j: ca.SX, P: _P, K: ca.SX) -> ca.SX:
+def shear_function(j: ca.SX, P: _P, K: ca.SX | None = None) -> ca.SX:
     """Mobilised fraction g(j) of the shear strength (odd in j), for the shear deformation
-    modulus ``K`` (:func:`effective_shear_modulus`).
+    modulus ``K`` (the contact forms pass :func:`effective_shear_modulus`; by default the
+    soil's Janosi K).
 
     Janosi: 1 - exp(-j/K). Wong's hump form (paper eq. 3, with its last factor restored):
     K_r*(1 + (1/(K_r*(1 - 1/e)) - 1)*exp(1 - j/K))*(1 - exp(-j/K)), peak 1 at j = K, tending to K_r.
     """
     Kr, hump = P["soil.residual_ratio"], P["model.shear_model"]
+    K = P["soil.shear_modulus"] if K is None else K
     E = ca.exp(-ca.fabs(j) / K)
     janosi = 1 - E
     wong = Kr * (1 + (1 / (Kr * (1 - math.exp(-1))) - 1) * math.e * E) * (1 - E)
