@@ -22,6 +22,7 @@ POINT = {
     # the cross-wheel mechanisms on, away from their exact-reduction values
     "model.shear_length_ratio": 0.4, "model.interface_ratio": 0.7,
     "model.grouser_shear_height": 0.005, "model.diameter_exponent": -0.3,
+    "model.bulldozing": 0.5,
 }
 
 

@@ -93,6 +93,7 @@ def _random_terrain_values(rng):
             "model.interface_ratio": rng.uniform(0.5, 1),
             "model.grouser_shear_height": rng.uniform(0, 0.02),
             "model.diameter_exponent": rng.uniform(-1, 1),
+            "model.bulldozing": rng.uniform(0, 1),
             "sinkage": rng.uniform(0.0, 0.04), "sinkage_rate": rng.uniform(-0.05, 0.05),
             "wheel_speed": rng.uniform(0.2, 1.0), "carriage_speed": rng.uniform(0.0, 0.03),
             "load": rng.uniform(5, 60)}

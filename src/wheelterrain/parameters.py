@@ -270,6 +270,14 @@ TABLE: tuple[Parameter, ...] = (
        "Higa, Nagaoka & Yoshida 2019 (nearly all traction of a grousered wheel acts at the "
        "grousers); the saturating form is this project's", quantity="Length",
        plausible=(0.0, 0.02, "0 (any grouser engages) to 20 mm")),
+    _P("model.bulldozing", "1", 0.0, 0.0, 1.0,
+       "Bulldozing resistance as a share of the Rankine passive force on the wheel's front "
+       "over its sinkage: R_b = share*b*(gamma*z**2*K_p/2 + 2*c*z*sqrt(K_p)), "
+       "K_p = tan(pi/4 + phi/2)**2, subtracted from the drawbar pull. It grows with the "
+       "sinkage, so with slip where the sinkage does. 0 = off (the classical model).",
+       "Bekker 1956/1960 (bulldozing resistance of the soil wedge ahead of a sinking wheel); "
+       "Wong, Theory of Ground Vehicles, ch. 4 (its passive-pressure form); the share is this "
+       "project's", plausible=(0.0, 1.0, "0 (no wedge) to the full passive force")),
     _P("model.diameter_exponent", "1", 0.0, -1.0, 1.0,
        "Diameter dependence of the pressure-sinkage modulus: multiplied by "
        "(2R/0.5 m)**exponent. 0 = the flat-plate (Bekker/Reece) law.",

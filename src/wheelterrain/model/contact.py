@@ -32,6 +32,7 @@ Equations (Wong & Reece 1967; Wong, *Theory of Ground Vehicles*; Ishigami et al.
     c' = c - (1 - chi)*(1 - rho)*c,  tan(phi') = tan(phi) - (1 - chi)*(tan(phi) - tan(rho*phi))
         chi = h_g/(h_g + h_e) (0 smooth)           (Potyondy 1961; Higa et al. 2019)
     k_eq also carries (2R/0.5 m)**m                       (Meirion-Griffith & Spenko 2011)
+    DP -= R_b = beta*b*(gamma*z**2*K_p/2 + 2*c*z*sqrt(K_p))       (Bekker 1960, bulldozing)
     Fz = b*int(R_c*sigma*cos + R_s*tau*sin),  DP = b*int(R_s*tau*cos - R_c*sigma*sin),
     T  = b*R_s**2*int(tau)                                               over [theta_r, theta_f]
 
@@ -43,9 +44,10 @@ switch from the parameter vector, so the FMUs, the MPC, the calibration and the 
 
 The cross-wheel mechanisms (kappa = ``model.shear_length_ratio``, rho =
 ``model.interface_ratio``, h_e = ``model.grouser_shear_height``, m =
-``model.diameter_exponent``; :func:`effective_shear_modulus`, :func:`shear_strength`,
-:func:`_reece`) act in both forms and are off at their defaults (kappa = 0, rho = 1, m = 0),
-where the expressions reduce to the classical ones exactly.
+``model.diameter_exponent``, beta = ``model.bulldozing``; :func:`effective_shear_modulus`,
+:func:`shear_strength`, :func:`_reece`, :func:`bulldozing`) act in both forms and are off at
+their defaults (kappa = 0, rho = 1, m = 0, beta = 0), where the expressions reduce to the
+classical ones exactly.
 
 The shear-displacement kinematics (``model.shear_kinematics``) is documented at
 :class:`_Displacement`. With every extension off (n1 = 0, f_c = f_s = f_ref = 0, Janosi,
@@ -113,7 +115,7 @@ CONTACT_INPUTS = ("sinkage", "sinkage_rate", "slip", "wheel_angle", "p")
 CONTACT_OUTPUTS = (
     "normal_force", "drawbar_pull", "torque", "gross_thrust", "compaction_resistance",
     "entry_angle", "exit_angle", "max_stress_angle", "contact_length", "mean_pressure",
-    "sinkage_exponent", "ripple_amplitude", "normal_force_static",
+    "sinkage_exponent", "ripple_amplitude", "normal_force_static", "bulldozing_resistance",
 )
 STEADY_INPUTS = ("load", "slip", "p")
 STEADY_OUTPUTS = ("sinkage", *CONTACT_OUTPUTS, "residual", "last_step", "capacity")
@@ -308,6 +310,19 @@ def shear_strength(P: _P) -> tuple[ca.SX, ca.SX]:
 DIAMETER_REFERENCE = 0.5  # m: below it the flat-plate law fails (Meirion-Griffith & Spenko)
 
 
+def bulldozing(z: ca.SX, P: _P) -> ca.SX:
+    """Bulldozing resistance [N] of the soil wedge ahead of a wheel sunk by ``z``: the share
+    ``model.bulldozing`` of the Rankine passive force over the depth z on the width b,
+    b*(gamma*z**2*K_p/2 + 2*c*z*sqrt(K_p)), K_p = tan(pi/4 + phi/2)**2 (Bekker 1960; Wong,
+    *Theory of Ground Vehicles*, ch. 4). It grows as z**2: where slip digs the wheel in, the
+    resistance follows. 0 at the default share."""
+    c, gamma = P["soil.cohesion"], P["soil.gamma"]
+    k_p = ca.tan(math.pi / 4 + P["soil.phi"] / 2) ** 2
+    depth = ca.fmax(z, 0)
+    return P["model.bulldozing"] * P["wheel.width"] * (
+        0.5 * gamma * depth**2 * k_p + 2 * c * depth * ca.sqrt(k_p))
+
+
 def shear_peak(P: _P) -> ca.SX:
     """The largest |g(j)| of :func:`shear_function` over all j: 1 for Janosi; for Wong's hump
     K_r*max over E in [0, 1] of (1 + C*e*E)*(1 - E), K_r*(C*e + 1)**2/(4*C*e) at
@@ -426,9 +441,10 @@ def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tup
     normal_static = normal_static + g_z
     thrust = b * Rs * total["tau_cos"] + g_x
     compaction = b * Rc * total["sig_sin"]
+    dozing = bulldozing(2 * Rc * ca.sin(theta_f / 2) ** 2, P)  # z = R_c*(1 - cos(theta_f))
     return {
         "normal_force": b * (Rc * total["sig_cos"] + Rs * total["tau_sin"]) + g_z,
-        "drawbar_pull": thrust - compaction,
+        "drawbar_pull": thrust - compaction - dozing,
         "torque": b * Rs**2 * total["tau"] + g_t,
         "gross_thrust": thrust,
         "compaction_resistance": compaction,
@@ -440,6 +456,7 @@ def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tup
         "sinkage_exponent": n,
         "ripple_amplitude": amplitude if ripple else ca.SX(0),
         "normal_force_static": normal_static,
+        "bulldozing_resistance": dozing,
     }
 
 
@@ -564,9 +581,10 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
     mobilised = patch_shear_mean(x * length / effective_shear_modulus(length, P), P)
     thrust = (c * b * length + normal * tan_phi) * mobilised
     compaction = b * pressure * z / (n + 1)
+    dozing = bulldozing(z, P)
     return {
         "normal_force": normal,
-        "drawbar_pull": thrust - compaction,
+        "drawbar_pull": thrust - compaction - dozing,
         "torque": Rs * thrust,
         "gross_thrust": thrust,
         "compaction_resistance": compaction,
@@ -578,6 +596,7 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
         "sinkage_exponent": n,
         "ripple_amplitude": amplitude if ripple else ca.SX(0),
         "normal_force_static": normal_static,
+        "bulldozing_resistance": dozing,
     }
 
 
