@@ -93,11 +93,12 @@ def test_rig_parameters_are_rows_of_the_one_table_and_each_fmu_takes_its_own():
     vector (TABLE) holds no rig row."""
     from wheelterrain.fmu import variables
     from wheelterrain.model import rig
-    from wheelterrain.parameters import RIG_FMU, ROWS, TABLE, TERRAIN_FMU
+    from wheelterrain.parameters import RIG_FMU, ROVER_FMU, ROVER_TABLE, ROWS, TABLE, TERRAIN_FMU
 
     assert tuple(p for p in ROWS if p.fmu == RIG_FMU) == rig.RIG_TABLE
     assert tuple(p for p in ROWS if p.fmu == TERRAIN_FMU) == TABLE
-    assert {p.fmu for p in ROWS} == {RIG_FMU, TERRAIN_FMU}
+    assert tuple(p for p in ROWS if p.fmu == ROVER_FMU) == ROVER_TABLE
+    assert {p.fmu for p in ROWS} == {RIG_FMU, TERRAIN_FMU, ROVER_FMU}
     for fmu, build in ((TERRAIN_FMU, variables.terrain_variables),
                        (RIG_FMU, variables.rig_variables)):
         params = [v.name for v in build() if v.causality == "parameter"]
@@ -105,3 +106,5 @@ def test_rig_parameters_are_rows_of_the_one_table_and_each_fmu_takes_its_own():
             p.name for p in ROWS if p.fmu == fmu]
     with pytest.raises(ParameterError, match="belongs to the rig"):
         lookup("rig.load")
+    with pytest.raises(ParameterError, match="belongs to the rover"):
+        lookup("rover.mass")

@@ -24,7 +24,7 @@ import numpy as np
 from wheelterrain.errors import ParameterError
 
 DEG = math.pi / 180.0
-TERRAIN_FMU, RIG_FMU = "WheelTerrain", "SingleWheelRig"
+TERRAIN_FMU, RIG_FMU, ROVER_FMU = "WheelTerrain", "SingleWheelRig", "RoverChassis"
 
 
 @dataclass(frozen=True)
@@ -350,13 +350,71 @@ _RIG_ROWS: tuple[Parameter, ...] = (
               quantity="Angle", display_unit="deg"),
 )
 RIG_TABLE = _RIG_ROWS
-ROWS: tuple[Parameter, ...] = (*TABLE, *RIG_TABLE)
-"""Every parameter of the project, terrain rows then rig rows: the one table."""
+
+# --- the rover's chassis (RoverChassis.fmu) ---------------------------------------------------
+
+
+def _V(*args, **kwargs) -> Parameter:
+    return Parameter(*args, fmu=ROVER_FMU, **kwargs)
+
+
+_ROVER = "Rashid rover (MBRSC): ~10 kg with payload, ~50 cm x 50 cm footprint, four wheels"
+_ASSUMED = "Assumption (the rover's published figures do not give it); documented in README"
+ROVER_TABLE: tuple[Parameter, ...] = (
+    _V("rover.mass", "kg", 10.0, 0.1, 1.0e4,
+       "Mass of the whole rover (chassis, payload and wheels), carried by four wheels.",
+       f"{_ROVER}: about 10 kg", quantity="Mass"),
+    _V("rover.pitch_inertia", "kg.m2", 0.24, 1.0e-4, 1.0e4,
+       "Moment of inertia of the rover about the pitch axis through its centre of mass.",
+       f"{_ASSUMED}: a 10 kg box 0.5 m long and 0.2 m high, m*(L**2 + H**2)/12",
+       quantity="MomentOfInertia"),
+    _V("rover.wheelbase", "m", 0.40, 0.05, 10.0,
+       "Distance between the front and the rear axle.",
+       f"{_ASSUMED}: the axles 5 cm inside the 50 cm footprint", quantity="Length"),
+    _V("rover.cg_forward", "m", 0.0, -1.0, 1.0,
+       "Centre of mass ahead of the middle of the wheelbase (negative: behind it). Must stay "
+       "within half the wheelbase.",
+       f"{_ASSUMED}: centred", quantity="Length"),
+    _V("rover.cg_height", "m", 0.10, 0.0, 2.0,
+       "Height of the centre of mass above the axles: with the slope it moves load from the "
+       "front to the rear axle (load transfer).", f"{_ASSUMED}: 10 cm", quantity="Length"),
+    _V("rover.gravity", "m/s2", 9.81, 0.1, 30.0,
+       "Gravitational acceleration: Earth test bed 9.81 (standard 9.80665), Moon 1.62.",
+       "Earth: standard gravity; Moon: 1.62 m/s2", quantity="Acceleration"),
+    _V("rover.rim_speed", "m/s", 0.03, 1.0e-4, 10.0,
+       "Commanded wheel rim speed omega_ref*R_ref of all four speed loops (rover.drive = 0).",
+       "The rig's 3 cm/s (the Rashid rover's top speed is about 10 cm/s)",
+       quantity="Velocity"),
+    _V("rover.slip_radius", "m", 0.05, 0.01, 1.0,
+       "Radius R_ref the wheels' slip is referenced to; must equal the terrain model's "
+       "wheel.radius + model.slip_radius_factor*grouser.height.",
+       f"{_PAPER}: rim radius 0.05 m", quantity="Length"),
+    _V("rover.wheel_inertia", "kg.m2", 0.01, 1.0e-6, 100.0,
+       "Rotational inertia of one wheel and its motor about the axle.",
+       "As the rig (rig.wheel_inertia)", quantity="MomentOfInertia"),
+    _V("rover.speed_bandwidth", "rad/s", 200.0, 0.1, 1.0e4,
+       "Closed-loop bandwidth of each wheel's speed loop (both poles at -bandwidth).",
+       "As the rig (rig.speed_bandwidth)", quantity="AngularVelocity"),
+    _V("rover.drive", "1", 0, 0, 2,
+       "Wheel drives: 0 = four speed loops to rover.rim_speed/rover.slip_radius; 1 = speed "
+       "loops to each wheel's input wheel_speed_command; 2 = each wheel's input "
+       "motor_torque_command applied directly.",
+       "Design: as the rig's rig.drive", kind="enum",
+       choices=MappingProxyType({0: "common-speed", 1: "speed-command",
+                                 2: "torque-command"})),
+    _V("rover.motor_torque_limit", "N.m", 5.0, 1.0e-3, 1.0e4,
+       "Largest torque a wheel motor delivers, either sign (the speed loops saturate there; "
+       "the integrator stops while saturated).",
+       f"{_ASSUMED}: a small geared DC motor", quantity="Torque"),
+)
+ROWS: tuple[Parameter, ...] = (*TABLE, *RIG_TABLE, *ROVER_TABLE)
+"""Every parameter of the project, terrain rows, rig rows, rover rows: the one table."""
 
 INDEX: Mapping[str, int] = MappingProxyType({p.name: k for k, p in enumerate(TABLE)})
 BY_NAME: Mapping[str, Parameter] = MappingProxyType({p.name: p for p in TABLE})
 NAMES: tuple[str, ...] = tuple(p.name for p in TABLE)
 RIG_NAMES: tuple[str, ...] = tuple(p.name for p in RIG_TABLE)
+ROVER_NAMES: tuple[str, ...] = tuple(p.name for p in ROVER_TABLE)
 
 
 def lookup(name: str) -> Parameter:
@@ -369,6 +427,10 @@ def lookup(name: str) -> Parameter:
         if name in RIG_NAMES:
             raise ParameterError(name, None, "belongs to the rig (SingleWheelRig.fmu), "
                                  "not to the terrain model; the rig cases set it") from None
+        if name in ROVER_NAMES:
+            raise ParameterError(name, None, "belongs to the rover's chassis "
+                                 "(RoverChassis.fmu), not to the terrain model; `wheelterrain "
+                                 "rover` sets it") from None
 
         close = difflib.get_close_matches(name, NAMES, n=3)
         hint = f"; did you mean {', '.join(close)}?" if close else ""

@@ -1,0 +1,520 @@
+"""The rover: four wheel-terrain contacts on the chassis of :mod:`wheelterrain.model.rover`.
+
+Two ways to run the same equations:
+
+- in process (:func:`simulate`): one CasADi Function steps the whole system (the chassis'
+  ``rover_step`` and the four contacts of :func:`wheelterrain.model.contact.build`, coupled as
+  the co-simulation master couples the FMUs: the chassis' wheel states at t give the forces at
+  t, held over the step), mapped over a block of steps and compiled to C where a compiler is
+  available: the fastest master;
+- as FMUs (RoverChassis.fmu and four WheelTerrain.fmu in Rover.ssp): see
+  :mod:`wheelterrain.cosim.rover_fmus`.
+
+Soil along the path: each wheel's terrain parameters are a function of the wheel's position
+(:class:`Soil`), evaluated once per block of steps (the blocks are short against the time a
+wheel takes to cross a soil boundary).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from wheelterrain import compiled
+from wheelterrain.errors import WheelTerrainError
+from wheelterrain.fmu import functions
+from wheelterrain.model import contact, rover
+from wheelterrain.parameters import NAMES, ParameterSet
+
+STEP = 2e-3  # s: communication step (soil contact frequency ~6 Hz, damping time ~3 ms)
+BLOCK = 50  # steps per call of the mapped system step
+RECORD = ("slip", "sinkage", "normal_force", "drawbar_pull", "torque", "motor_torque",
+          "wheel_speed")
+"""Per-wheel quantities recorded at every step."""
+CHASSIS_RECORD = ("position", "speed", "heave", "pitch")
+N_X = len(rover.STATES) + len(rover.WHEELS)  # chassis states, then the four wheel angles
+
+
+def _system_step() -> ca.Function:
+    """``system(x, pt, pr, slope, tow, h) -> (x_next, rec)``: one communication step of the
+    whole rover. ``x``: rover.STATES then four wheel angles; ``pt``: the four terrain parameter
+    vectors side by side (len(NAMES) x 4); ``pr``: rover parameters; ``rec``: RECORD per wheel
+    (wheel-major), then CHASSIS_RECORD, at the start of the step (the forces held over it)."""
+    fns = contact.build()
+    x = ca.MX.sym("x", N_X)
+    pt = ca.MX.sym("pt", len(NAMES), len(rover.WHEELS))
+    pr = ca.MX.sym("pr", len(rover.ROVER_NAMES))
+    slope, tow, h = ca.MX.sym("slope"), ca.MX.sym("tow"), ca.MX.sym("h")
+    xs = [x[k] for k in range(len(rover.STATES))]
+    angles = [x[len(rover.STATES) + k] for k in range(len(rover.WHEELS))]
+    p = rover.named([pr[k] for k in range(len(rover.ROVER_NAMES))])
+    s = dict(zip(rover.STATES, xs, strict=True))
+    u: dict = {"slope": slope, "towing_force": tow}
+    rec = []
+    for k, w in enumerate(rover.WHEELS):
+        z, rate = rover.wheel_kinematics(xs, p, w)
+        omega = s[f"{w}.wheel_speed"]
+        traction, _, _ = functions.slips(omega, s["speed"], p["rover.slip_radius"])
+        # evaluated inside the model's domain; a step that leaves it ends the run (simulate)
+        slip = ca.fmin(ca.fmax(traction, -1), 1)
+        out = dict(zip(contact.CONTACT_OUTPUTS,
+                       fns.contact(z, rate, slip, angles[k], pt[:, k]), strict=True))
+        for name in rover.WHEEL_FORCES:
+            u[f"{w}.{name}"] = out[name]
+        u[f"{w}.wheel_speed_command"] = 0.0
+        u[f"{w}.motor_torque_command"] = 0.0
+        rec.append((traction, z, out["normal_force"], out["drawbar_pull"], out["torque"],
+                    rover.motor_torque(xs, u, p, w), omega))
+    nxt, _ = rover.step(tuple(xs), u, p, h)
+    new_angles = [angles[k] + h * s[f"{w}.wheel_speed"] for k, w in enumerate(rover.WHEELS)]
+    record = [v for wheel in rec for v in wheel] + [s[n] for n in CHASSIS_RECORD]
+    return ca.Function("rover_system", [x, pt, pr, slope, tow, h],
+                       [ca.vertcat(*nxt, *new_angles), ca.vertcat(*record)],
+                       ["x", "pt", "pr", "slope", "tow", "h"], ["x_next", "rec"])
+
+
+N_REC = len(RECORD) * len(rover.WHEELS) + len(CHASSIS_RECORD)
+
+
+@lru_cache(maxsize=2)
+def block_function(block: int = BLOCK) -> ca.Function:
+    """``block`` system steps in one call (the inputs held): x -> x after the block, and the
+    record of every step (N_REC x block)."""
+    one = _system_step()
+    acc = one.mapaccum("rover_block", block)
+    x0 = ca.MX.sym("x", N_X)
+    pt = ca.MX.sym("pt", len(NAMES), len(rover.WHEELS))
+    pr = ca.MX.sym("pr", len(rover.ROVER_NAMES))
+    slope, tow, h = ca.MX.sym("slope"), ca.MX.sym("tow"), ca.MX.sym("h")
+    xs, recs = acc(x0, pt, pr, slope, tow, h)
+    return ca.Function(f"rover_block{block}", [x0, pt, pr, slope, tow, h],
+                       [xs[:, -1], recs], ["x", "pt", "pr", "slope", "tow", "h"],
+                       ["x_end", "rec"])
+
+
+@lru_cache(maxsize=2)
+def _evaluator(block: int) -> tuple[Callable, str]:
+    """The block Function compiled to C (cached between runs), else CasADi's VM; and which."""
+    fn = block_function(block)
+    try:
+        directory = compiled.cache_directory() / "rover" / compiled.fingerprint(fn)[:16]
+        library = directory / f"{fn.name()}.so"
+        if not library.is_file():
+            compiled.compile_function(fn, directory, optimisation="-O1")
+        c = compiled.CompiledFunction(library, fn)
+        return (lambda *a: c(*a)), "compiled C"
+    except compiled.CompileError:
+        return (lambda *a: [np.array(v).ravel().tolist() for v in fn(*a)]), "CasADi VM"
+
+
+@dataclass
+class Soil:
+    """Terrain parameters under each wheel as a function of the wheel's position along the path
+    [m]: ``base`` everywhere, ``patch`` (values overriding base) on [start, end)."""
+
+    base: ParameterSet
+    patch: Mapping[str, float] | None = None
+    start: float = math.inf
+    end: float = math.inf
+
+    def at(self, position: float) -> ParameterSet:
+        if self.patch and self.start <= position < self.end:
+            return self.base.with_values(dict(self.patch))
+        return self.base
+
+
+@dataclass
+class RoverResult:
+    time: np.ndarray
+    wheels: dict[str, dict[str, np.ndarray]]
+    chassis: dict[str, np.ndarray]
+    wall_time: float
+    engine: str
+    inputs: dict[str, np.ndarray] = field(default_factory=dict)
+    left_domain: str | None = None
+    """Why the run ended before its stop time where it left the model's domain (a wheel's
+    slip beyond [-1, 1], a non-finite value): the records end at the last step inside it."""
+
+    def means(self, start: float) -> dict[str, dict[str, float]]:
+        keep = self.time >= start
+        return {w: {k: float(np.mean(v[keep])) for k, v in series.items()}
+                for w, series in self.wheels.items()}
+
+
+def wheel_positions(p: Mapping[str, float], position: float) -> dict[str, float]:
+    """Each wheel's position along the path for the chassis' reference point at ``position``."""
+    return {w: position + rover.lever(p, w) + p["rover.cg_forward"] for w in rover.WHEELS}
+
+
+def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float,
+             slope: Callable[[float], float] = lambda t: 0.0,
+             towing: Callable[[float], float] = lambda t: 0.0,
+             step: float = STEP, block: int = BLOCK,
+             stop_when: Callable[[dict], bool] | None = None) -> RoverResult:
+    """Run the rover in process from rest on the surface for ``stop`` s. ``slope(t)`` [rad] and
+    ``towing(t)`` [N] are held over each block of steps; ``stop_when(last)`` (the last step's
+    record by name) ends the run early."""
+    p = {**rover.defaults(), **rover_values}
+    evaluate, engine = _evaluator(block)
+    pr = [p[n] for n in rover.ROVER_NAMES]
+    x = list(rover.initial_state(p)) + [0.0] * len(rover.WHEELS)
+    blocks = max(1, round(stop / (step * block)))
+    records, inputs = [], {"slope": [], "towing_force": []}
+    left = None
+    t0 = time.perf_counter()
+    for b in range(blocks):
+        t = b * block * step
+        where = wheel_positions(p, x[0])
+        pt = np.column_stack([soil.at(where[w]).vector() for w in rover.WHEELS])
+        a, f = slope(t), towing(t)
+        x, rec = evaluate(x, pt.ravel(order="F"), pr, a, f, step)
+        rec = np.asarray(rec, dtype=float).reshape(N_REC, block, order="F")
+        problem = _outside(rec)
+        if problem is not None:
+            k, why = problem
+            records.append(rec[:, :k])
+            inputs["slope"].append(np.full(k, a))
+            inputs["towing_force"].append(np.full(k, f))
+            left = f"at t = {t + k * step:.3f} s {why}"
+            break
+        records.append(rec)
+        inputs["slope"].append(np.full(block, a))
+        inputs["towing_force"].append(np.full(block, f))
+        if stop_when is not None and stop_when(_last(rec)):
+            break
+    wall = time.perf_counter() - t0
+    allrec = np.concatenate(records, axis=1)
+    n = allrec.shape[1]
+    wheels = {w: {name: allrec[k * len(RECORD) + j] for j, name in enumerate(RECORD)}
+              for k, w in enumerate(rover.WHEELS)}
+    base = len(RECORD) * len(rover.WHEELS)
+    chassis = {name: allrec[base + j] for j, name in enumerate(CHASSIS_RECORD)}
+    return RoverResult(np.arange(n) * step, wheels, chassis, wall, engine,
+                       {k: np.concatenate(v) for k, v in inputs.items()}, left)
+
+
+def _outside(rec: np.ndarray) -> tuple[int, str] | None:
+    """(first step, why) where a block's record leaves the model's domain, else None."""
+    slips = rec[[k * len(RECORD) + RECORD.index("slip") for k in range(len(rover.WHEELS))]]
+    bad = ~np.isfinite(rec).all(axis=0) | (np.abs(slips) > 1).any(axis=0)
+    if not bad.any():
+        return None
+    k = int(np.argmax(bad))
+    worst = slips[:, k]
+    if np.all(np.isfinite(worst)) and np.any(np.abs(worst) > 1):
+        w = rover.WHEELS[int(np.argmax(np.abs(worst)))]
+        return k, (f"{w}'s slip reached {worst.flat[np.argmax(np.abs(worst))]:.3f}, outside "
+                   "the contact model's domain [-1, 1]" + (" (the wheels cannot brake the "
+                                                          "rover: it slides)"
+                                                          if worst.min() < -1 else ""))
+    return k, "a value became non-finite"
+
+
+def _last(rec: np.ndarray) -> dict:
+    last = rec[:, -1]
+    out = {f"{w}.{name}": last[k * len(RECORD) + j] for k, w in enumerate(rover.WHEELS)
+           for j, name in enumerate(RECORD)}
+    base = len(RECORD) * len(rover.WHEELS)
+    out.update({name: last[base + j] for j, name in enumerate(CHASSIS_RECORD)})
+    return out
+
+
+# --- the steady-state prediction: traction limit and linear stability ------------------------
+
+MOVING = tuple(n for n in rover.STATES if n != "position")
+"""The states of steady motion (the position only advances): what the linearisation keeps."""
+
+
+@lru_cache(maxsize=1)
+def _closed_loop() -> tuple[ca.Function, ca.Function]:
+    """``rates(x, pt, pr, slope, tow) -> dx`` of the whole rover in continuous time (the
+    contacts' forces at the state, ripple as the terrain parameters say) over MOVING, and its
+    exact Jacobian ``jac(x, pt, pr, slope, tow)`` by MOVING."""
+    fns = contact.build()
+    x = ca.MX.sym("x", len(rover.STATES))
+    pt = ca.MX.sym("pt", len(NAMES), len(rover.WHEELS))
+    pr = ca.MX.sym("pr", len(rover.ROVER_NAMES))
+    slope, tow = ca.MX.sym("slope"), ca.MX.sym("tow")
+    xs = [x[k] for k in range(len(rover.STATES))]
+    p = rover.named([pr[k] for k in range(len(rover.ROVER_NAMES))])
+    s = dict(zip(rover.STATES, xs, strict=True))
+    u: dict = {"slope": slope, "towing_force": tow}
+    for k, w in enumerate(rover.WHEELS):
+        z, rate = rover.wheel_kinematics(xs, p, w)
+        traction, _, _ = functions.slips(s[f"{w}.wheel_speed"], s["speed"],
+                                         p["rover.slip_radius"])
+        out = dict(zip(contact.CONTACT_OUTPUTS, fns.contact(z, rate, traction, 0.0, pt[:, k]),
+                       strict=True))
+        u.update({f"{w}.{n}": out[n] for n in rover.WHEEL_FORCES})
+        u.update({f"{w}.{n}": 0.0 for n in rover.WHEEL_COMMANDS})
+    dx = ca.vertcat(*rover.rates(tuple(xs), u, p))
+    keep = [rover.STATES.index(n) for n in MOVING]
+    f = ca.Function("rover_rates_closed", [x, pt, pr, slope, tow], [dx[keep]])
+    jac = ca.Function("rover_jac_closed", [x, pt, pr, slope, tow],
+                      [ca.jacobian(dx[keep], x)[:, keep]])
+    return f, jac
+
+
+def steady_state_vector(balance: dict, p: Mapping[str, float]) -> np.ndarray:
+    """The rover's state (STATES) in the steady motion of :func:`rover.steady_balance`."""
+    omega = p["rover.rim_speed"] / p["rover.slip_radius"]
+    _, ki = rover.gains(p)
+    zf = balance["wheels"]["front_left"]["sinkage"]
+    zr = balance["wheels"]["rear_left"]["sinkage"]
+    lf, lr = rover.lever(p, "front_left"), rover.lever(p, "rear_left")
+    sin_t = (zf - zr) / (lf - lr)
+    s = dict.fromkeys(rover.STATES, 0.0)
+    s.update(speed=(1 - balance["slip"]) * p["rover.rim_speed"], heave=zf - lf * sin_t,
+             pitch=math.asin(sin_t))
+    for w in rover.WHEELS:
+        s[f"{w}.wheel_speed"] = omega
+        s[f"{w}.speed_error_integral"] = balance["wheels"][w]["torque"] / ki
+    return np.array([s[n] for n in rover.STATES])
+
+
+def growth_rate(terrain: Mapping, p: Mapping[str, float], slope: float, slip: float,
+                balance_tow: bool = False) -> dict:
+    """The largest real part [1/s] of the eigenvalues of the rover's linearisation (exact
+    Jacobian of the same Functions) about its steady motion at ``slip`` on ``slope``: > 0, the
+    steady motion is unstable. The state is polished by Newton on the continuous rates.
+    ``balance_tow``: the towing force is whatever holds the rover at that slip (the pull
+    test), else 0 (``slip`` must then be the slope's steady slip)."""
+    f, jac = _closed_loop()
+    pt = np.column_stack([terrain[w].vector() for w in rover.WHEELS])
+    pr = [p[n] for n in rover.ROVER_NAMES]
+    balance = rover.steady_balance(terrain, p, slope, slip)
+    tow = balance["surplus"] if balance_tow else 0.0
+    x = steady_state_vector(balance, p)
+    keep = [rover.STATES.index(n) for n in MOVING]
+    for _ in range(20):
+        r = np.array(f(x, pt, pr, slope, tow)).ravel()
+        J = np.array(jac(x, pt, pr, slope, tow))
+        step = np.linalg.solve(J, -r)
+        x[keep] += step
+        if np.max(np.abs(step)) < 1e-14 * max(1.0, np.max(np.abs(x))):
+            break
+    eig = np.linalg.eigvals(np.array(jac(x, pt, pr, slope, tow)))
+    top = eig[np.argmax(eig.real)]
+    return {"rate": float(top.real), "frequency_hz": float(abs(top.imag) / (2 * math.pi)),
+            "state": x}
+
+
+def _steady_slip(terrain: Mapping, p: Mapping[str, float], slope: float) -> float | None:
+    """The slip of steady motion on ``slope`` in [-0.999, STALL_SLIP], or None (none there:
+    the wheels cannot hold the rover)."""
+    from scipy.optimize import brentq
+
+    def surplus(i: float) -> float:
+        return rover.steady_balance(terrain, p, slope, i)["surplus"]
+
+    lo, hi = -0.999, STALL_SLIP
+    try:
+        if surplus(lo) > 0 or surplus(hi) < 0:
+            return None
+        return brentq(surplus, lo, hi, xtol=1e-12)
+    except WheelTerrainError:
+        return None
+
+
+def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
+                tolerance: float = 1e-4) -> dict:
+    """The steepest slope [rad] (uphill for ``direction`` 1, downhill for -1) on which the rover
+    has a steady motion that is also stable: a steady slip exists in [-0.999, STALL_SLIP] (the
+    traction, or braking, limit) and the linearisation about it has no eigenvalue with a
+    positive real part (the stability limit). Bisection on the slope from level ground, both
+    conditions checked at every trial; ``limit`` says which one ended it."""
+    top = direction * math.radians(60)
+
+    def verdict(slope: float) -> str | None:
+        i = _steady_slip(terrain, p, slope)
+        if i is None:
+            return "traction" if direction > 0 else "braking"
+        return "stability" if growth_rate(terrain, p, slope, i)["rate"] > 0 else None
+
+    if verdict(0.0) is not None:
+        return {"slope": 0.0, "limit": verdict(0.0), "slip": None}
+    if verdict(top) is None:
+        return {"slope": top, "limit": None, "slip": _steady_slip(terrain, p, top)}
+    lo, hi, why = 0.0, top, verdict(top)
+    while abs(hi - lo) > tolerance:
+        mid = (lo + hi) / 2
+        v = verdict(mid)
+        if v is None:
+            lo = mid
+        else:
+            hi, why = mid, v
+    return {"slope": lo, "limit": why, "slip": _steady_slip(terrain, p, lo)}
+
+
+STALL_SLIP = 0.95
+"""Slip at which the rover counts as stalled: it moves at 5 % of its wheels' rim speed."""
+
+
+# --- scenarios ----------------------------------------------------------------------------------
+
+GRAVITY = {"earth": 9.81, "moon": 1.62}
+SOFT = {"soil.k_phi": 0.5, "soil.phi": 0.85}
+"""The soft patch: k_phi' and phi scaled by these factors (a looser soil)."""
+PATCH_START, PATCH_LENGTH = 0.50, 0.30  # m along the path (the front axle starts at 0.2 m)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    name: str
+    description: str
+    stop: float
+    slope: Callable[[float], float]
+    towing: Callable[[float], float]
+    settle: float  # s: averaging starts here
+
+
+def _ramp(t: float, fast: float, slow: float, knee: float) -> float:
+    """Slope [rad] rising at ``fast`` rad/s up to ``knee`` rad, then at ``slow``."""
+    t_knee = knee / fast
+    return fast * t if t < t_knee else knee + slow * (t - t_knee)
+
+
+SLOW_RAMP = 0.002  # deg/s: the slope's rate near the predicted limit
+FAST_RAMP = 0.1  # deg/s: up to 1 deg below it
+
+
+def scenarios(gravity: str = "earth", knee_deg: float = 15.0,
+              weight: float = 10.0 * GRAVITY["earth"]) -> dict[str, Scenario]:
+    """The scenarios; ``knee_deg``: where the slope scenario's ramp slows down (run_scenario
+    puts it 1 deg below the predicted stall slope, so that an instability's growth does not
+    lag the slope)."""
+    deg = math.pi / 180
+    return {
+        "level": Scenario("level", "steady traverse on level ground at the commanded rim speed",
+                          40.0, lambda t: 0.0, lambda t: 0.0, 20.0),
+        "slope": Scenario("slope", f"the slope rises ({FAST_RAMP} deg/s to {knee_deg:.1f} deg, "
+                          f"then {SLOW_RAMP} deg/s) until the rover stalls (slip {STALL_SLIP})",
+                          knee_deg / FAST_RAMP + 6.0 / SLOW_RAMP,
+                          lambda t: _ramp(t, FAST_RAMP * deg, SLOW_RAMP * deg, knee_deg * deg),
+                          lambda t: 0.0, 0.0),
+        "soft-patch": Scenario("soft-patch", f"level; a looser soil (k_phi' x{SOFT['soil.k_phi']}, "
+                               f"phi x{SOFT['soil.phi']}) from {PATCH_START} m to "
+                               f"{PATCH_START + PATCH_LENGTH} m under the front, then the rear "
+                               "axle", 40.0, lambda t: 0.0, lambda t: 0.0, 0.0),
+        "descent": Scenario("descent", "20 deg downhill (settled on level ground for 10 s, "
+                            "then 1 deg/s), the speed loops braking", 60.0,
+                            lambda t: -deg * min(max(t - 10.0, 0.0), 20.0), lambda t: 0.0,
+                            40.0),
+        "pull-test": Scenario("pull-test", "level, wheels at the commanded speed, a resisting "
+                              "force rising slowly (0.05 % of the weight per second) until the "
+                              "rover stalls: its pull-slip curve", 3600.0, lambda t: 0.0,
+                              lambda t: 5e-4 * weight * t, 0.0),
+    }
+
+
+STALL_SCENARIOS = ("slope", "pull-test")
+
+
+def terrain_of(preset_values: ParameterSet) -> dict[str, ParameterSet]:
+    return {w: preset_values for w in rover.WHEELS}
+
+
+def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
+                 rover_values: Mapping[str, float] | None = None, step: float = STEP) -> dict:
+    """One scenario in process: the contract's figures (``wheelterrain rover --json``) and the
+    series. ``terrain``: the wheels' terrain parameters (the soft patch scales its soil)."""
+    if name not in scenarios():
+        raise ValueError(f"unknown scenario {name!r}; valid: {', '.join(scenarios())}")
+    if gravity not in GRAVITY:
+        raise ValueError(f"unknown gravity {gravity!r}; valid: {', '.join(GRAVITY)}")
+    values = {**(rover_values or {}), "rover.gravity": GRAVITY[gravity]}
+    p = {**rover.defaults(), **values}
+    quiet = terrain_of(terrain.with_values(NO_RIPPLE))
+    pred = None
+    if name in ("slope", "descent"):
+        pred = limit_slope(quiet, p, 1 if name == "slope" else -1)
+    knee = max(math.degrees(pred["slope"]) - 1.0, 0.0) if name == "slope" else 15.0
+    sc = scenarios(gravity, knee, p["rover.mass"] * p["rover.gravity"])[name]
+    patch = None
+    if name == "soft-patch":
+        patch = {k: terrain[k] * f for k, f in SOFT.items()}
+    soil = Soil(terrain, patch, PATCH_START, PATCH_START + PATCH_LENGTH)
+    stalled = (lambda last: last["front_left.slip"] >= STALL_SLIP) \
+        if name in STALL_SCENARIOS else None
+    res = simulate(soil, values, sc.stop, sc.slope, sc.towing, step=step, stop_when=stalled)
+    keep = res.time >= sc.settle
+    out = {"scenario": name, "gravity": gravity, "engine": f"in-process ({res.engine})",
+           "left_domain": res.left_domain,
+           "simulated_time_s": float(res.time[-1] + step), "wall_time_s": res.wall_time,
+           "real_time_factor": float((res.time[-1] + step) / max(res.wall_time, 1e-12)),
+           "averaged_from_s": sc.settle,
+           "wheels": [{"name": w, "mean_slip": _mean(v["slip"], keep),
+                       "mean_sinkage": _mean(v["sinkage"], keep),
+                       "mean_normal_force": _mean(v["normal_force"], keep),
+                       "mean_drawbar_pull": _mean(v["drawbar_pull"], keep),
+                       "mean_motor_power": _mean(v["motor_torque"] * v["wheel_speed"], keep)}
+                      for w, v in res.wheels.items()]}
+    if name in STALL_SCENARIOS:
+        slip = res.wheels["front_left"]["slip"]
+        hit = np.flatnonzero(slip >= STALL_SLIP)
+        if not hit.size and res.left_domain and slip.size:  # slip went past 1 in one step
+            hit = np.array([slip.size - 1])
+        k = int(hit[0]) if hit.size else len(slip) - 1
+        if name == "slope":
+            out["stall_slope_deg"] = math.degrees(res.inputs["slope"][k]) if hit.size else None
+            out["predicted_stall_slope_deg"] = math.degrees(pred["slope"])
+            out["predicted_stall_limit"] = pred["limit"]
+        else:
+            out["stall_towing_force"] = float(res.inputs["towing_force"][k]) \
+                if hit.size else None
+            out.update(pull_curve(res, quiet, p, k))
+    if name == "descent":
+        out["predicted_descent_limit_deg"] = math.degrees(pred["slope"])
+        out["predicted_descent_limit"] = pred["limit"]
+        out["slide_slope_deg"] = (math.degrees(res.inputs["slope"][-1])
+                                  if res.left_domain else None)
+    return {"figures": out, "result": res}
+
+
+NO_RIPPLE = {"ripple.k_g": 0.0, "ripple.k_0": 0.0}
+
+
+def _mean(values: np.ndarray, keep: np.ndarray) -> float | None:
+    """Mean over the averaging window; None where the run ended before it (left_domain says
+    why)."""
+    return float(np.mean(values[keep])) if keep.any() else None
+
+
+def pull_curve(res: RoverResult, terrain: Mapping, p: Mapping[str, float], end: int,
+               points: int = 12) -> dict:
+    """The pull-test's curve: the towing force the rover holds against its slip (both averaged
+    over one grouser period), sampled at ``points`` slips from 0.02 up to the slip where the
+    steady motion loses its stability (:func:`growth_rate`, towing balanced) or 0.9, beside the
+    sum of the four single-wheel steady pulls at those slips with the loads of
+    :func:`rover.steady_balance`."""
+    from scipy.optimize import brentq
+
+    def rate(i: float) -> float:
+        return growth_rate(terrain, p, 0.0, i, balance_tow=True)["rate"]
+
+    top = 0.9
+    if rate(top) > 0:
+        top = brentq(rate, 0.02, top, xtol=1e-5) if rate(0.02) < 0 else 0.02
+    omega = p["rover.rim_speed"] / p["rover.slip_radius"]
+    n_g = max(terrain["front_left"]["grouser.count"], 1)
+    window = max(round(2 * math.pi / (n_g * omega) / (res.time[1] - res.time[0])), 1)
+    kernel = np.ones(window) / window
+    slip = np.convolve(res.wheels["front_left"]["slip"][:end + 1], kernel, "valid")
+    tow = np.convolve(res.inputs["towing_force"][:end + 1], kernel, "valid")
+    curve, predicted = [], []
+    for target in np.linspace(0.02, top * 0.98, points):
+        if not (slip >= target).any():
+            break
+        k = int(np.argmax(slip >= target))
+        curve.append([float(slip[k]), float(tow[k])])
+        b = rover.steady_balance(terrain, p, 0.0, float(slip[k]))
+        predicted.append(float(sum(b["wheels"][w]["drawbar_pull"] for w in rover.WHEELS)))
+    errors = [abs(c[1] - q) for c, q in zip(curve, predicted, strict=True)]
+    return {"pull_curve": curve, "predicted_pull": predicted, "stable_up_to_slip": top,
+            "pull_curve_max_error_n": max(errors) if errors else None}

@@ -1,0 +1,319 @@
+"""The rover's chassis: a rigid body in the vertical plane of travel on four driven wheels.
+
+Written once as plain arithmetic on numbers or CasADi symbols (:func:`step`, :func:`rates`), as
+the rig is (:mod:`wheelterrain.model.rig`): the pythonfmu slave, the generated C of the native
+RoverChassis.fmu and the in-process rover all run these expressions.
+
+Frame: the terrain's. x runs along the slope (forward, uphill for a positive slope), z is
+normal to it, positive *into* the soil (as sinkage). The slope angle is an input; gravity is
+``rover.gravity``. The chassis has three degrees of freedom and their rates:
+
+- x, u: position and speed along the terrain;
+- z, w: the sinkage of the chassis' reference point (the point of the axle line below the centre
+  of mass) and its rate;
+- theta, q: pitch, positive nose down, and its rate.
+
+Wheels: four, on two axles (front_left, front_right at l_f = wheelbase/2 - cg_forward ahead of
+the centre of mass; rear_left, rear_right at l_r = -wheelbase/2 - cg_forward), rigidly mounted
+(no suspension: the soil is the spring and its damper C_f the damper; documented choice). In
+the vertical plane the left and right wheel of an axle sink alike; their soils, and so their
+forces, may differ. Wheel k's sinkage z_k = z + l_k*sin(theta) and its rate
+w + l_k*cos(theta)*q; its axle moves along the terrain at u (the pitch rate's share of it,
+d*q with d the axle's depth below the centre of mass, is neglected: |q| stays below 1e-3 rad/s
+in the scenarios).
+
+Forces of the soil on wheel k (from its WheelTerrain): N_k up (normal_force), P_k forward
+(drawbar_pull), T_k the resistive torque about its axle. The axle passes N_k and P_k to the
+chassis; the motor applies M_k to the wheel and -M_k to the chassis. With d = ``rover.cg_height``
+(the centre of mass above the axle line), r_k = (l_k*cos(theta) - d*sin(theta), l_k*sin(theta) +
+d*cos(theta)) the axle's offset from the centre of mass (forward, down)::
+
+    m*du/dt  = sum P_k - m*g*sin(slope) - F_tow
+    m*dw/dt  = m*g*cos(slope) - sum N_k
+    I*dq/dt  = sum_k [-r_k,x*N_k - r_k,z*P_k - M_k]          (nose down positive)
+    J*domega_k/dt = M_k - T_k
+
+(an upward force ahead of the centre of mass lifts the nose; a forward force below it, and the
+reaction of a driving motor, lift it too). Each motor is the rig's speed loop (PI, both poles at
+-``rover.speed_bandwidth``), or the input speed or torque command (``rover.drive``), its torque
+limited to +-``rover.motor_torque_limit`` (the loop's integrator stops while saturated).
+
+Integration over a communication step h with the soil's forces held: semi-implicit Euler for
+the chassis (rates first, then positions), implicit Euler for the unsaturated speed loops (the
+rig's closed form), explicit Euler for a torque-driven or saturated wheel: first order, so
+halving h is how the co-simulation's convergence is checked.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import casadi as ca
+
+from wheelterrain.model.rig import pick
+from wheelterrain.parameters import ROVER_TABLE
+
+WHEELS = ("front_left", "front_right", "rear_left", "rear_right")
+FRONT = ("front_left", "front_right")
+ROVER_NAMES = tuple(p.name for p in ROVER_TABLE)
+CHASSIS_STATES = ("position", "speed", "heave", "heave_rate", "pitch", "pitch_rate")
+WHEEL_STATES = ("wheel_speed", "speed_error_integral")
+STATES = (*CHASSIS_STATES, *(f"{w}.{s}" for w in WHEELS for s in WHEEL_STATES))
+WHEEL_FORCES = ("normal_force", "drawbar_pull", "torque")
+WHEEL_COMMANDS = ("wheel_speed_command", "motor_torque_command")
+VEHICLE_INPUTS = ("slope", "towing_force")
+INPUTS = (*VEHICLE_INPUTS, *(f"{w}.{n}" for w in WHEELS for n in (*WHEEL_FORCES,
+                                                                    *WHEEL_COMMANDS)))
+DRIVE_COMMON, DRIVE_SPEED, DRIVE_TORQUE = 0, 1, 2
+
+
+def _trig(angle):
+    if isinstance(angle, (int, float)):
+        return math.sin(angle), math.cos(angle)
+    return ca.sin(angle), ca.cos(angle)
+
+
+def named(p) -> dict:
+    """The rover parameter vector ``p`` (ROVER_NAMES order) by name."""
+    return {name: p[k] for k, name in enumerate(ROVER_NAMES)}
+
+
+def lever(p, wheel: str):
+    """l_k: the wheel's axle ahead of the centre of mass [m] (negative behind)."""
+    half = p["rover.wheelbase"] / 2
+    return (half if wheel in FRONT else -half) - p["rover.cg_forward"]
+
+
+def wheel_kinematics(x, p, wheel: str) -> tuple:
+    """(sinkage, sinkage_rate) of ``wheel`` from the chassis state ``x``."""
+    s = dict(zip(STATES, x, strict=True))
+    sin_t, cos_t = _trig(s["pitch"])
+    lk = lever(p, wheel)
+    return s["heave"] + lk * sin_t, s["heave_rate"] + lk * cos_t * s["pitch_rate"]
+
+
+def gains(p) -> tuple:
+    """(Kp, Ki) of each speed loop: both closed-loop poles at -rover.speed_bandwidth."""
+    w, J = p["rover.speed_bandwidth"], p["rover.wheel_inertia"]
+    return 2 * w * J, w * w * J
+
+
+def _speed_reference(u, p, wheel: str):
+    common = p["rover.rim_speed"] / p["rover.slip_radius"]
+    return pick(p["rover.drive"] == DRIVE_SPEED, u[f"{wheel}.wheel_speed_command"], common)
+
+
+def _limit(torque, p):
+    lim = p["rover.motor_torque_limit"]
+    if isinstance(torque, (int, float)):
+        return min(max(torque, -lim), lim)
+    return ca.fmin(ca.fmax(torque, -lim), lim)
+
+
+def motor_torque(x, u, p, wheel: str):
+    """Torque of ``wheel``'s motor in state ``x`` with inputs ``u`` (by name)."""
+    s = dict(zip(STATES, x, strict=True))
+    kp, ki = gains(p)
+    loop = kp * (_speed_reference(u, p, wheel) - s[f"{wheel}.wheel_speed"]) \
+        + ki * s[f"{wheel}.speed_error_integral"]
+    return _limit(pick(p["rover.drive"] == DRIVE_TORQUE, u[f"{wheel}.motor_torque_command"],
+                       loop), p)
+
+
+def chassis_accelerations(x, u, p, motor: dict) -> tuple:
+    """(du/dt, dw/dt, dq/dt) of the chassis with the motors' torques ``motor`` (by wheel)."""
+    s = dict(zip(STATES, x, strict=True))
+    m, g, d = p["rover.mass"], p["rover.gravity"], p["rover.cg_height"]
+    sin_s, cos_s = _trig(u["slope"])
+    sin_t, cos_t = _trig(s["pitch"])
+    pull = sum(u[f"{w}.drawbar_pull"] for w in WHEELS)
+    normal = sum(u[f"{w}.normal_force"] for w in WHEELS)
+    moment = 0.0
+    for w in WHEELS:
+        lk = lever(p, w)
+        rx, rz = lk * cos_t - d * sin_t, lk * sin_t + d * cos_t
+        moment = moment - rx * u[f"{w}.normal_force"] - rz * u[f"{w}.drawbar_pull"] - motor[w]
+    return ((pull - m * g * sin_s - u["towing_force"]) / m,
+            (m * g * cos_s - normal) / m,
+            moment / p["rover.pitch_inertia"])
+
+
+def rates(x, u, p) -> tuple:
+    """dx/dt (STATES order) in state ``x`` with inputs ``u`` (by name): the continuous
+    equations :func:`step` integrates (model exchange, controllers' prediction models)."""
+    s = dict(zip(STATES, x, strict=True))
+    motor = {w: motor_torque(x, u, p, w) for w in WHEELS}
+    du, dw, dq = chassis_accelerations(x, u, p, motor)
+    out = [s["speed"], du, s["heave_rate"], dw, s["pitch_rate"], dq]
+    loop = p["rover.drive"] != DRIVE_TORQUE
+    for w in WHEELS:
+        kp, ki = gains(p)
+        error = _speed_reference(u, p, w) - s[f"{w}.wheel_speed"]
+        unsaturated = kp * error + ki * s[f"{w}.speed_error_integral"]
+        integrating = pick(loop, pick(_saturated(unsaturated, p), 0.0, 1.0), 0.0)
+        out += [(motor[w] - u[f"{w}.torque"]) / p["rover.wheel_inertia"], integrating * error]
+    return tuple(out)
+
+
+def _saturated(torque, p):
+    lim = p["rover.motor_torque_limit"]
+    if isinstance(torque, (int, float)):
+        return abs(torque) > lim
+    return ca.fabs(torque) > lim
+
+
+def step(x, u, p, h) -> tuple:
+    """Advance the rover state ``x`` (STATES) over ``h`` with inputs ``u`` (a mapping by INPUTS
+    name: soil forces held, commands, slope, towing force); ``p`` by rover parameter name.
+    Floats or CasADi symbols. Returns (next state tuple, the four motor torques over the
+    step)."""
+    s = dict(zip(STATES, x, strict=True))
+    kp, ki = gains(p)
+    J = p["rover.wheel_inertia"]
+    motor_next, nxt = {}, {}
+    direct = p["rover.drive"] == DRIVE_TORQUE
+    for w in WHEELS:
+        omega, e_int = s[f"{w}.wheel_speed"], s[f"{w}.speed_error_integral"]
+        ref, soil = _speed_reference(u, p, w), u[f"{w}.torque"]
+        # implicit Euler of J*omega' = kp*(ref - omega) + ki*e - T, e' = ref - omega
+        omega_loop = ((J / h) * omega + kp * ref + ki * (e_int + h * ref) - soil) \
+            / (J / h + kp + ki * h)
+        e_loop = e_int + h * (ref - omega_loop)
+        torque_loop = kp * (ref - omega_loop) + ki * e_loop
+        # saturated loop or torque command: the applied torque held, explicit Euler
+        applied = _limit(pick(direct, u[f"{w}.motor_torque_command"], torque_loop), p)
+        held = pick(direct, True, _saturated(torque_loop, p))
+        nxt[f"{w}.wheel_speed"] = pick(held, omega + h * (applied - soil) / J, omega_loop)
+        nxt[f"{w}.speed_error_integral"] = pick(held, e_int, e_loop)
+        motor_next[w] = applied
+    du, dw, dq = chassis_accelerations(x, u, p, motor_next)
+    nxt["speed"] = s["speed"] + h * du
+    nxt["position"] = s["position"] + h * nxt["speed"]
+    nxt["heave_rate"] = s["heave_rate"] + h * dw
+    nxt["heave"] = s["heave"] + h * nxt["heave_rate"]
+    nxt["pitch_rate"] = s["pitch_rate"] + h * dq
+    nxt["pitch"] = s["pitch"] + h * nxt["pitch_rate"]
+    return tuple(nxt[k] for k in STATES), tuple(motor_next[w] for w in WHEELS)
+
+
+def initial_state(p, speed: float | None = None) -> tuple:
+    """At rest on the surface (no sinkage, level), wheels turning at the common reference and
+    the chassis moving at ``speed`` (default: the rim speed, no slip)."""
+    omega = p["rover.rim_speed"] / p["rover.slip_radius"]
+    v = p["rover.rim_speed"] if speed is None else speed
+    s = dict.fromkeys(STATES, 0.0)
+    s["speed"] = v
+    for w in WHEELS:
+        s[f"{w}.wheel_speed"] = omega
+    return tuple(s[k] for k in STATES)
+
+
+def static_axle_loads(p, slope: float = 0.0) -> dict[str, float]:
+    """Normal load per wheel [N] of the rover at rest on a rigid slope: the moment balance of
+    the centre of mass about the contact line with the weight's along-slope part acting at the
+    height of the centre of mass above the wheels' contacts (cg_height + contact radius is
+    what the chassis feels; here the axle height is taken, as the chassis model does for the
+    pulls). Two wheels per axle share alike."""
+    m, g, d = p["rover.mass"], p["rover.gravity"], p["rover.cg_height"]
+    lf, lr = lever(p, "front_left"), lever(p, "rear_left")
+    weight_n, weight_t = m * g * math.cos(slope), m * g * math.sin(slope)
+    base = lf - lr
+    front = (weight_n * (-lr) - weight_t * d) / base
+    rear = (weight_n * lf + weight_t * d) / base
+    return {w: (front if w in FRONT else rear) / 2 for w in WHEELS}
+
+
+def build() -> tuple[ca.Function, ca.Function]:
+    """``rover_step(x, u, p, h) -> (x_next, motor_torques)`` and ``rover_rates(x, u, p) ->
+    (dx, motor_torques)`` as CasADi Functions, traced from :func:`step` and :func:`rates`."""
+    x, uu = ca.SX.sym("x", len(STATES)), ca.SX.sym("u", len(INPUTS))
+    p, h = ca.SX.sym("p", len(ROVER_NAMES)), ca.SX.sym("h")
+    xs = tuple(x[k] for k in range(len(STATES)))
+    u = {n: uu[k] for k, n in enumerate(INPUTS)}
+    pp = named(p)
+    nxt, torques = step(xs, u, pp, h)
+    fstep = ca.Function("rover_step", [x, uu, p, h], [ca.vertcat(*nxt), ca.vertcat(*torques)],
+                        ["x", "u", "p", "h"], ["x_next", "motor_torques"])
+    dx = rates(xs, u, pp)
+    motors = [motor_torque(xs, u, pp, w) for w in WHEELS]
+    frates = ca.Function("rover_rates", [x, uu, p], [ca.vertcat(*dx), ca.vertcat(*motors)],
+                         ["x", "u", "p"], ["dx", "motor_torques"])
+    return fstep, frates
+
+
+def defaults() -> dict[str, float]:
+    return {prm.name: prm.default for prm in ROVER_TABLE}
+
+
+def steady_balance(terrain: Mapping, p: Mapping, slope: float, slip: float,
+                   towing: float = 0.0) -> dict:
+    """The rover in steady motion at traction ``slip`` (all four wheels alike, as one speed
+    loop reference gives them) on ``slope``: the wheel loads that satisfy the chassis' moment
+    balance (load transfer by the centre of mass' height, the pulls below it and the motors'
+    reactions, the pitch from the axles' sinkages), from the single-wheel steady states of
+    each wheel's ``terrain`` parameters (a mapping wheel -> ParameterSet).
+
+    Returns the loads, each wheel's steady state, and ``surplus`` = sum of the pulls minus the
+    weight's part along the slope and the towing force [N] (0 in steady motion; > 0 the rover
+    accelerates). Raises WheelTerrainError where a wheel cannot carry its load."""
+    from scipy.optimize import brentq
+
+    from wheelterrain.model import api
+
+    m, g, d = p["rover.mass"], p["rover.gravity"], p["rover.cg_height"]
+    weight_n = m * g * math.cos(slope)
+    levers = {w: lever(p, w) for w in WHEELS}
+    base = levers["front_left"] - levers["rear_left"]
+
+    def state(front_load: float) -> tuple[float, dict]:
+        loads = {w: (front_load if w in FRONT else weight_n / 2 - front_load) for w in WHEELS}
+        out = {w: api.steady_state(terrain[w], loads[w], slip) for w in WHEELS}
+        zf = (out["front_left"]["sinkage"] + out["front_right"]["sinkage"]) / 2
+        zr = (out["rear_left"]["sinkage"] + out["rear_right"]["sinkage"]) / 2
+        sin_t = (zf - zr) / base
+        cos_t = math.sqrt(max(1 - sin_t**2, 0.0))
+        moment = 0.0
+        for w in WHEELS:
+            rx = levers[w] * cos_t - d * sin_t
+            rz = levers[w] * sin_t + d * cos_t
+            moment -= rx * loads[w] + rz * out[w]["drawbar_pull"] + out[w]["torque"]
+        return moment, out
+
+    lo, hi = 1e-6 * weight_n, weight_n / 2 * (1 - 1e-6)
+    front = brentq(lambda f: state(f)[0], lo, hi, xtol=1e-12, rtol=1e-13)
+    _, out = state(front)
+    surplus = sum(out[w]["drawbar_pull"] for w in WHEELS) - m * g * math.sin(slope) - towing
+    return {"loads": {w: out[w]["load"] for w in WHEELS}, "wheels": out, "surplus": surplus,
+            "slip": slip, "slope": slope}
+
+
+def stall_slope(terrain: Mapping, p: Mapping, slips=None) -> dict:
+    """The steepest slope [rad] on which the rover still climbs in steady motion: where the
+    largest pull surplus over the wheels' slip (a grid refined around its best point) falls
+    to 0, with the load transfer of :func:`steady_balance`. Returns the slope and the slip of
+    the largest pull there."""
+    import numpy as np
+    from scipy.optimize import brentq, minimize_scalar
+
+    grid = np.linspace(0.02, 0.95, 32) if slips is None else np.asarray(slips)
+
+    def best(slope: float) -> tuple[float, float]:
+        values = [steady_balance(terrain, p, slope, i)["surplus"] for i in grid]
+        k = int(np.argmax(values))
+        lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
+        if hi > lo:
+            r = minimize_scalar(lambda i: -steady_balance(terrain, p, slope, i)["surplus"],
+                                bounds=(lo, hi), method="bounded",
+                                options={"xatol": 1e-6})
+            if -r.fun > values[k]:
+                return float(-r.fun), float(r.x)
+        return float(values[k]), float(grid[k])
+
+    if best(0.0)[0] <= 0:
+        return {"slope": 0.0, "slip": best(0.0)[1]}
+    top = math.radians(60)
+    if best(top)[0] > 0:
+        return {"slope": top, "slip": best(top)[1]}
+    slope = brentq(lambda a: best(a)[0], 0.0, top, xtol=1e-7)
+    return {"slope": slope, "slip": best(slope)[1]}

@@ -1,0 +1,121 @@
+"""The rover: chassis equations, the in-process system, the steady-state predictions."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from wheelterrain import model, presets
+from wheelterrain.cosim import rover as rover_system
+from wheelterrain.model import rover
+
+
+@pytest.fixture(scope="module")
+def quiet():
+    """The default wheel and soil, grouser ripple off: the steady state is an equilibrium."""
+    return presets.load("rashid-patch").with_values(rover_system.NO_RIPPLE)
+
+
+@pytest.fixture(scope="module")
+def level(quiet):
+    return rover_system.simulate(rover_system.Soil(quiet), {}, stop=20.0)
+
+
+def test_level_traverse_is_four_single_wheel_steady_states(level, quiet):
+    """Each wheel ends where the single-wheel model puts it at that wheel's load and slip."""
+    for w in rover.WHEELS:
+        s = {k: v[-1] for k, v in level.wheels[w].items()}
+        ref = model.steady_state(quiet, s["normal_force"], s["slip"])
+        assert s["sinkage"] == pytest.approx(ref["sinkage"], rel=1e-3)
+        assert s["drawbar_pull"] == pytest.approx(ref["drawbar_pull"], rel=1e-3, abs=1e-6)
+        assert s["torque"] == pytest.approx(ref["torque"], rel=1e-3)
+
+
+def test_level_loads_are_the_moment_balance(level, quiet):
+    """The axle loads of the run are those of rover.steady_balance at its slip (the motors'
+    reactions and the pulls below the centre of mass shift load off the front)."""
+    p = rover.defaults()
+    slip = level.wheels["front_left"]["slip"][-1]
+    b = rover.steady_balance({w: quiet for w in rover.WHEELS}, p, 0.0, slip)
+    for w in rover.WHEELS:
+        assert level.wheels[w]["normal_force"][-1] == pytest.approx(b["loads"][w], rel=1e-3)
+    total = sum(b["loads"].values())
+    assert total == pytest.approx(p["rover.mass"] * p["rover.gravity"], rel=1e-12)
+
+
+def test_motor_power_is_traction_power_plus_losses(level, quiet):
+    """Steady, patch form (T = R_s*H): motor power = pull*V + compaction and bulldozing
+    loss (R*V) + slip loss H*(omega*R_s - V), per wheel, to 1e-6."""
+    radius_s = quiet["wheel.radius"] + quiet["model.shear_radius_factor"] * quiet[
+        "grouser.height"]
+    speed = level.chassis["speed"][-1]
+    for w in rover.WHEELS:
+        s = {k: v[-1] for k, v in level.wheels[w].items()}
+        out = model.contact_forces(quiet, s["sinkage"], s["slip"])
+        thrust = out["gross_thrust"]
+        motor = s["motor_torque"] * s["wheel_speed"]
+        parts = (out["drawbar_pull"] * speed
+                 + (out["compaction_resistance"] + out["bulldozing_resistance"]) * speed
+                 + thrust * (s["wheel_speed"] * radius_s - speed))
+        assert motor == pytest.approx(parts, rel=1e-6)
+
+
+@pytest.mark.parametrize("gravity", ["earth", "moon"])
+def test_simulated_stall_slope_is_the_predicted_one(quiet, gravity):
+    """The slope rises until the rover stalls; the steady-state prediction (traction limit
+    and linear stability of the steady motion) is within 0.5 deg."""
+    r = rover_system.run_scenario("slope", quiet, gravity)["figures"]
+    assert r["stall_slope_deg"] is not None
+    assert abs(r["stall_slope_deg"] - r["predicted_stall_slope_deg"]) < 0.5
+    assert r["stall_slope_deg"] > 1.0
+
+
+def test_pull_test_curve_is_four_single_wheel_curves(quiet):
+    r = rover_system.run_scenario("pull-test", quiet, "earth")["figures"]
+    assert len(r["pull_curve"]) >= 8
+    assert r["pull_curve_max_error_n"] < 0.05  # N, of a 30 N curve: the quasi-static lag
+
+
+def test_descent_that_the_wheels_cannot_brake_ends_cleanly(quiet):
+    """Beyond what the wheels can brake the run stops with a reason at the last step inside
+    the model's domain (no clamped slip, no NaN means), and never on a slope the prediction
+    calls stable (the 1 deg/s ramp lets it go a little further before the slide grows)."""
+    r = rover_system.run_scenario("descent", quiet, "earth")["figures"]
+    if r["left_domain"] is None:
+        assert r["predicted_descent_limit_deg"] <= -20
+        return
+    assert "outside the contact model's domain" in r["left_domain"]
+    assert r["slide_slope_deg"] <= r["predicted_descent_limit_deg"] + 0.05
+    assert all(w["mean_slip"] is None for w in r["wheels"])  # ended before the window
+
+
+def test_halving_the_step_changes_the_level_means_little(quiet):
+    a = rover_system.simulate(rover_system.Soil(quiet), {}, stop=10.0, step=2e-3)
+    b = rover_system.simulate(rover_system.Soil(quiet), {}, stop=10.0, step=1e-3, block=100)
+    for w in rover.WHEELS:
+        for key in ("sinkage", "slip", "normal_force"):
+            assert a.wheels[w][key][-1] == pytest.approx(b.wheels[w][key][-1], rel=1e-3)
+
+
+def test_soft_patch_passes_under_the_front_then_the_rear(quiet):
+    r = rover_system.run_scenario("soft-patch", quiet, "earth")["result"]
+    front, rear = r.wheels["front_left"]["sinkage"], r.wheels["rear_left"]["sinkage"]
+    t_front = r.time[np.argmax(front)]
+    t_rear = r.time[np.argmax(rear)]
+    base = rover.defaults()["rover.wheelbase"]
+    speed = float(np.median(r.chassis["speed"]))
+    assert t_rear - t_front == pytest.approx(base / speed, rel=0.15)
+    settled = front[(r.time > 3) & (r.time < 6)].mean()  # before the patch (~10 s)
+    assert front.max() > settled * 1.2  # it sinks deeper in the looser soil
+
+
+def test_chassis_static_loads_split_by_the_centre_of_mass():
+    p = {**rover.defaults(), "rover.cg_forward": 0.05}
+    loads = rover.static_axle_loads(p)
+    weight = p["rover.mass"] * p["rover.gravity"]
+    assert sum(loads.values()) == pytest.approx(weight)
+    assert loads["front_left"] > loads["rear_left"]
+    uphill = rover.static_axle_loads(rover.defaults(), math.radians(10))
+    assert uphill["rear_left"] > uphill["front_left"]  # load moves to the rear uphill
