@@ -119,3 +119,29 @@ def test_chassis_static_loads_split_by_the_centre_of_mass():
     assert loads["front_left"] > loads["rear_left"]
     uphill = rover.static_axle_loads(rover.defaults(), math.radians(10))
     assert uphill["rear_left"] > uphill["front_left"]  # load moves to the rear uphill
+
+
+def test_cli_rover_json_contract(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    run = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "rover", "--scenario",
+                          "level", "--out", str(tmp_path), "--json"], capture_output=True,
+                         text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    out = json.loads(run.stdout)
+    for key in ("scenario", "gravity", "engine", "simulated_time_s", "wall_time_s",
+                "real_time_factor", "wheels"):
+        assert key in out
+    assert [w["name"] for w in out["wheels"]] == list(rover.WHEELS)
+    for w in out["wheels"]:
+        assert {"mean_slip", "mean_sinkage", "mean_normal_force", "mean_drawbar_pull"} <= set(w)
+    assert (tmp_path / "level-earth.png").is_file()
+    header = (tmp_path / "level-earth.csv").read_text().splitlines()[0]
+    assert "front_left.sinkage [m]" in header
+    bad = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "rover", "--scenario",
+                          "level", "--set", "rover.mass=-3", "--out", str(tmp_path)],
+                         capture_output=True, text=True, timeout=600)
+    assert bad.returncode == 2
+    assert bad.stderr.startswith("error: parameter rover.mass")

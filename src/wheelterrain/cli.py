@@ -750,6 +750,101 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool,
 
 
 @main.command(epilog=EPILOG)
+@click.option("--scenario", required=True,
+              type=click.Choice(["level", "slope", "soft-patch", "descent", "pull-test"]),
+              help="What the rover does (see above).")
+@click.option("--gravity", type=click.Choice(["earth", "moon"]), default="earth",
+              show_default=True, help="Earth test bed (9.81 m/s2) or the Moon (1.62 m/s2).")
+@click.option("--preset", default=presets.DEFAULT_PRESET, show_default=True,
+              metavar="NAME|FILE.json", help="The wheels' and the soil's terrain parameters.")
+@set_option
+@click.option("--step", default=2e-3, show_default=True, type=click.FloatRange(1e-4, 1e-2),
+              help="Communication step [s] (halve it to check convergence).")
+@click.option("--out", default="validation/output/rover", show_default=True,
+              type=click.Path(file_okay=False), help="Directory for the plot and the CSV.")
+@json_option("One object (the contract: scenario, gravity, engine, simulated_time_s, "
+             "wall_time_s, real_time_factor, wheels, and per scenario its predictions)")
+def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...], step: float,
+          out: str, json_target: str | None) -> None:
+    """The Rashid rover on four wheels: one scenario, its figures, a plot and a CSV.
+
+    \b
+    The chassis (rigid, in the vertical plane: position, heave, pitch; four rigidly mounted
+    wheels, a speed loop each) and the four wheel-soil contacts of the one CasADi core, stepped
+    together in process (compiled C where a compiler is available). Scenarios:
+      level       steady traverse at the commanded rim speed: per-wheel slip, sinkage, load
+      slope       the slope rises until the rover stalls (slip 0.95), beside the predicted
+                  stall slope (traction limit, or loss of stability of the steady motion)
+      soft-patch  a looser soil under the front, then the rear axle: the transients
+      descent     20 deg downhill, the speed loops braking, beside the predicted limit
+      pull-test   a resisting force rising slowly: the rover's pull-slip curve, beside the
+                  sum of four single-wheel curves at the axle loads
+    --set changes the terrain (soil, wheel, model) and the chassis (rover.*) parameters.
+    Writes OUT/<scenario>-<gravity>.png and .csv.
+    """
+    from pathlib import Path
+
+    from wheelterrain import plots
+    from wheelterrain.cosim import master as cosim
+    from wheelterrain.cosim import rover as rover_system
+    from wheelterrain.model import rover as chassis
+
+    _check_file_target(json_target)
+    _check_out_dir(out)
+    chassis_values = {}
+    terrain_items = []
+    for item in assignments:
+        name = item.partition("=")[0].strip()
+        if name in chassis.ROVER_NAMES:
+            try:
+                row = next(p for p in chassis.ROVER_TABLE if p.name == name)
+                chassis_values[name] = row.check(item.partition("=")[2].strip())
+            except WheelTerrainError as err:
+                _fail(err)
+        else:
+            terrain_items.append(item)
+    ps = _load(preset, tuple(terrain_items))
+    try:
+        run = rover_system.run_scenario(scenario, ps, gravity, chassis_values, step=step)
+    except WheelTerrainError as err:
+        _fail(err)
+    figures = {**run["figures"], "preset": preset}
+    result = run["result"]
+    out_dir = Path(out)
+    stem = f"{scenario}-{gravity}"
+    plots.rover(result, figures, out_dir / f"{stem}.png")
+    series = {"time": result.time, **{f"{w}.{k}": v for w, d in result.wheels.items()
+                                      for k, v in d.items()},
+              **result.chassis, **result.inputs}
+    cosim.write_series(out_dir / f"{stem}.csv", series, every=max(len(result.time) // 20000, 1),
+                       units=rover_system.record_units())
+    if _emit_json(json_target, figures):
+        return
+    click.echo(f"rover '{scenario}' ({gravity}), preset {preset}, {figures['engine']}: "
+               f"{figures['simulated_time_s']:.1f} s simulated in {figures['wall_time_s']:.2f} s "
+               f"({figures['real_time_factor']:.0f}x real time)")
+    if figures.get("left_domain"):
+        click.echo(f"  stopped {figures['left_domain']}")
+    click.echo(f"  {'wheel':12} {'slip':>8} {'sinkage [mm]':>13} {'load [N]':>9} "
+               f"{'pull [N]':>9} {'power [W]':>10}   (means from {figures['averaged_from_s']:g} s)")
+    for w in figures["wheels"]:
+        if w["mean_slip"] is None:
+            click.echo(f"  {w['name']:12} (the run ended before the averaging window)")
+            continue
+        click.echo(f"  {w['name']:12} {w['mean_slip']:8.4f} {1e3 * w['mean_sinkage']:13.3f} "
+                   f"{w['mean_normal_force']:9.3f} {w['mean_drawbar_pull']:9.3f} "
+                   f"{w['mean_motor_power']:10.4f}")
+    for key in ("stall_slope_deg", "predicted_stall_slope_deg", "predicted_stall_limit",
+                "slide_slope_deg", "predicted_descent_limit_deg", "predicted_descent_limit",
+                "stall_towing_force", "pull_curve_max_error_n"):
+        if key in figures:
+            value = figures[key]
+            click.echo(f"  {key:30} {value:.4g}" if isinstance(value, float)
+                       else f"  {key:30} {value}")
+    click.echo(f"wrote {out_dir}/{stem}.png, {out_dir}/{stem}.csv")
+
+
+@main.command(epilog=EPILOG)
 @json_option('One object {"rows": [...]} (the README\'s contract)')
 @click.option("--starts", default=4, show_default=True, type=click.IntRange(1, 64),
               help="Starting points of each fit (the unfitted preset, then random).")

@@ -171,3 +171,48 @@ def closed_loop(result, scenario, path: Path) -> None:
                       f"{settings.horizon} x {settings.interval:g} s")
     fig.tight_layout()
     _save(fig, path)
+
+
+def rover(result, figures: dict, path: Path) -> None:
+    """One rover scenario: per wheel over time (slip, sinkage, normal force, drawbar pull), the
+    chassis' speed, the slope and towing force; for the slope scenario slip against slope."""
+    t = result.time
+    stride = max(len(t) // 4000, 1)  # at most ~4000 points a line
+    rows = 6 if figures["scenario"] == "slope" else 5
+    fig, axes = plt.subplots(rows, 1, figsize=(8, 2.0 * rows + 1), sharex=False)
+    quantities = (("slip", 1.0, "traction slip [1]"), ("sinkage", 1e3, "sinkage [mm]"),
+                  ("normal_force", 1.0, "normal force [N]"),
+                  ("drawbar_pull", 1.0, "drawbar pull [N]"))
+    for ax, (key, scale, label) in zip(axes, quantities, strict=False):
+        for wheel, series in result.wheels.items():
+            ax.plot(t[::stride], scale * series[key][::stride], lw=0.8,
+                    ls="-" if wheel.startswith("front") else "--", label=wheel)
+        ax.set_ylabel(label)
+    axes[0].legend(loc="best", fontsize=8, ncol=2)
+    ax = axes[4]
+    ax.plot(t[::stride], 1e3 * result.chassis["speed"][::stride], lw=0.8, label="speed [mm/s]")
+    ax.plot(t[::stride], np.degrees(result.inputs["slope"][::stride]), lw=0.8,
+            label="slope [deg]")
+    ax.plot(t[::stride], result.inputs["towing_force"][::stride], lw=0.8,
+            label="towing force [N]")
+    ax.set_ylabel("chassis, inputs")
+    ax.legend(loc="best", fontsize=8)
+    for a in axes[:5]:
+        a.set_xlabel("time [s]")
+        a.grid(True, alpha=0.3)
+    if rows == 6:
+        ax = axes[5]
+        ax.plot(np.degrees(result.inputs["slope"][::stride]),
+                result.wheels["front_left"]["slip"][::stride], lw=0.8, label="simulated")
+        pred = figures.get("predicted_stall_slope_deg")
+        if pred is not None:
+            ax.axvline(pred, color="k", ls="--", lw=0.8,
+                       label=f"predicted stall {pred:.2f} deg ({figures['predicted_stall_limit']})")
+        ax.set_xlabel("slope [deg]")
+        ax.set_ylabel("traction slip [1]")
+        ax.legend(loc="best", fontsize=8)
+        ax.grid(True, alpha=0.3)
+    axes[0].set_title(f"rover '{figures['scenario']}' ({figures['gravity']}), "
+                      f"{figures['engine']}")
+    fig.tight_layout()
+    _save(fig, path)

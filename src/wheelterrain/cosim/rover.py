@@ -518,3 +518,13 @@ def pull_curve(res: RoverResult, terrain: Mapping, p: Mapping[str, float], end: 
     errors = [abs(c[1] - q) for c, q in zip(curve, predicted, strict=True)]
     return {"pull_curve": curve, "predicted_pull": predicted, "stable_up_to_slip": top,
             "pull_curve_max_error_n": max(errors) if errors else None}
+
+
+def record_units() -> dict[str, str]:
+    """Units of the series a rover run writes (CSV headers)."""
+    per_wheel = {"slip": "1", "sinkage": "m", "normal_force": "N", "drawbar_pull": "N",
+                 "torque": "N.m", "motor_torque": "N.m", "wheel_speed": "rad/s"}
+    units = {"time": "s", "position": "m", "speed": "m/s", "heave": "m", "pitch": "rad",
+             "slope": "rad", "towing_force": "N"}
+    units.update({f"{w}.{k}": u for w in rover.WHEELS for k, u in per_wheel.items()})
+    return units
