@@ -33,7 +33,7 @@ from wheelterrain.fmu.instance import Instance
 from wheelterrain.parameters import TABLE
 
 pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
-NAMES = ("WheelTerrain", "SingleWheelRig")
+NAMES = ("WheelTerrain", "SingleWheelRig", "RoverChassis")
 
 
 @pytest.fixture(scope="module")

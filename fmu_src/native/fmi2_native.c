@@ -5,7 +5,7 @@
  * --flavor native` generates for WheelTerrain or SingleWheelRig (the variable table, the GUID,
  * the sizes and value references the hooks use, and the C that CasADi generates from the very
  * Functions the Python flavour calls, wheelterrain.fmu.functions), and model_hooks.inc, the
- * model's hooks (terrain_hooks.c or rig_hooks.c beside this file: model_work, model_reset,
+ * model's hooks (terrain_hooks.c or state_hooks.c beside this file: model_work, model_reset,
  * model_initialize, model_refresh, model_step, copying values in and out of those Functions,
  * and MODEL_CHECKS_AT_STEP_END, see fmi2DoStep).
  * No arithmetic of the model is written by hand.

@@ -758,14 +758,22 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool,
 @click.option("--preset", default=presets.DEFAULT_PRESET, show_default=True,
               metavar="NAME|FILE.json", help="The wheels' and the soil's terrain parameters.")
 @set_option
-@click.option("--step", default=2e-3, show_default=True, type=click.FloatRange(1e-4, 1e-2),
+@click.option("--step", default=1e-3, show_default=True, type=click.FloatRange(1e-4, 1e-2),
               help="Communication step [s] (halve it to check convergence).")
+@click.option("--engine", type=click.Choice(["in-process", "fmus", "libcosim", "ecos"]),
+              default="in-process", show_default=True,
+              help="in-process: the chassis and contact Functions stepped together, compiled; "
+              "fmus: RoverChassis.fmu + four WheelTerrain.fmu through fmpy, our master; "
+              "libcosim, ecos: Rover.ssp in those engines (constant inputs: level only).")
+@click.option("--fmu-dir", default=None, type=click.Path(file_okay=False),
+              help="Where the FMUs are (default: build/native if built, else build).")
 @click.option("--out", default="validation/output/rover", show_default=True,
-              type=click.Path(file_okay=False), help="Directory for the plot and the CSV.")
+              type=click.Path(file_okay=False),
+              help="Directory for the plot, the CSV and Rover-<scenario>.ssp.")
 @json_option("One object (the contract: scenario, gravity, engine, simulated_time_s, "
              "wall_time_s, real_time_factor, wheels, and per scenario its predictions)")
 def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...], step: float,
-          out: str, json_target: str | None) -> None:
+          engine: str, fmu_dir: str | None, out: str, json_target: str | None) -> None:
     """The Rashid rover on four wheels: one scenario, its figures, a plot and a CSV.
 
     \b
@@ -780,7 +788,8 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
       pull-test   a resisting force rising slowly: the rover's pull-slip curve, beside the
                   sum of four single-wheel curves at the axle loads
     --set changes the terrain (soil, wheel, model) and the chassis (rover.*) parameters.
-    Writes OUT/<scenario>-<gravity>.png and .csv.
+    Writes OUT/<scenario>-<gravity>.png and .csv, and OUT/Rover-<scenario>.ssp (the five FMUs,
+    their connections, the scenario's parameters and initial inputs) where the FMUs are built.
     """
     from pathlib import Path
 
@@ -804,10 +813,34 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
         else:
             terrain_items.append(item)
     ps = _load(preset, tuple(terrain_items))
+    folder = Path(fmu_dir) if fmu_dir else next(
+        (d for d in (Path("build/native"), Path("build"))
+         if (d / "RoverChassis.fmu").is_file() and (d / "WheelTerrain.fmu").is_file()),
+        Path("build/native"))
+    built = (folder / "RoverChassis.fmu").is_file() and (folder / "WheelTerrain.fmu").is_file()
+    if engine != "in-process" and not built:
+        _usage_error(f"--engine {engine} needs RoverChassis.fmu and WheelTerrain.fmu in "
+                     f"{folder}: build them (`wheelterrain build --flavor all`) or give "
+                     "--fmu-dir")
+    from wheelterrain.cosim import rover_fmus
+
+    runner = None
+    if engine == "fmus":
+        def runner(soil, values, stop, slope, towing, step, stop_when):
+            return rover_fmus.simulate(folder, soil, values, stop, slope, towing, step,
+                                       stop_when)
+    elif engine in ("libcosim", "ecos"):
+        def runner(soil, values, stop, slope, towing, step, stop_when):
+            return rover_fmus.simulate_ssp(engine, folder, scenario, soil, values, stop, slope,
+                                           towing, step)
     try:
-        run = rover_system.run_scenario(scenario, ps, gravity, chassis_values, step=step)
+        run = rover_system.run_scenario(scenario, ps, gravity, chassis_values, step=step,
+                                        engine=runner)
     except WheelTerrainError as err:
         _fail(err)
+    except (CosimulationError, FMUError) as err:
+        click.echo(f"error: {err}", err=True)
+        sys.exit(EXIT_USAGE)
     figures = {**run["figures"], "preset": preset}
     result = run["result"]
     out_dir = Path(out)
@@ -818,6 +851,14 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
               **result.chassis, **result.inputs}
     cosim.write_series(out_dir / f"{stem}.csv", series, every=max(len(result.time) // 20000, 1),
                        units=rover_system.record_units())
+    ssp_path = None
+    if built:
+        sc = rover_system.scenarios(gravity)[scenario]
+        ssp_path = rover_fmus.write_ssp(
+            out_dir / f"Rover-{scenario}.ssp", folder, scenario, ps,
+            {**chassis_values, "rover.gravity": rover_system.GRAVITY[gravity]},
+            sc.slope(0.0), sc.towing(0.0), sc.stop)
+    figures["ssp"] = str(ssp_path) if ssp_path else None
     if _emit_json(json_target, figures):
         return
     click.echo(f"rover '{scenario}' ({gravity}), preset {preset}, {figures['engine']}: "
@@ -841,7 +882,9 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
             value = figures[key]
             click.echo(f"  {key:30} {value:.4g}" if isinstance(value, float)
                        else f"  {key:30} {value}")
-    click.echo(f"wrote {out_dir}/{stem}.png, {out_dir}/{stem}.csv")
+    click.echo(f"wrote {out_dir}/{stem}.png, {out_dir}/{stem}.csv"
+               + (f", {ssp_path}" if ssp_path else
+                  f" (no Rover-{scenario}.ssp: the FMUs are not built in {folder})"))
 
 
 @main.command(epilog=EPILOG)

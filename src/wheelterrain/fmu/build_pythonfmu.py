@@ -38,9 +38,9 @@ from wheelterrain.fmu import variables
 PACKAGE_DIR = Path(__file__).resolve().parents[1]  # the wheelterrain package, bundled whole
 REPO_DIR = PACKAGE_DIR.parents[1]
 SOURCES = {"WheelTerrain": "wheelterrain_slave_terrain.py",
-           "SingleWheelRig": "wheelterrain_slave_rig.py"}
-VARIABLES = {"WheelTerrain": variables.terrain_variables,
-             "SingleWheelRig": variables.rig_variables}
+           "SingleWheelRig": "wheelterrain_slave_rig.py",
+           "RoverChassis": "wheelterrain_slave_rover.py"}
+VARIABLES = variables.VARIABLES
 
 # unit -> SI base-unit exponents (FMI 2 BaseUnit attributes)
 BASE_UNITS: dict[str, dict[str, int]] = {

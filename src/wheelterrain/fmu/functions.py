@@ -18,14 +18,17 @@ WheelTerrain
     sinkage beyond full burial, R_c; ``info`` is R_c), STATUS_NONFINITE (an output is NaN or
     infinite: a last guard, so that no non-finite value is served). On a status other than OK the
     wrappers keep their previous outputs and refuse the next step with the reason.
-SingleWheelRig
-    ``rig_step`` (:func:`wheelterrain.model.rig.build`) and
-    ``rig_outputs(x, u, p, motor_torque) -> y`` with y = RIG_OUTPUTS.
+SingleWheelRig, RoverChassis (state models, :class:`StateModel`)
+    ``<prefix>_step(x, u, p, h) -> (x_next, memory)``, ``<prefix>_outputs(x, u, p, memory) ->
+    y``, ``<prefix>_initial(p) -> x0`` and ``<prefix>_rates(x, u, p) -> (xdot, memory)``; the
+    memory is what a step leaves besides the state (the motors' torques over the step).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from dataclasses import dataclass
 from functools import lru_cache
 
 import casadi as ca
@@ -33,17 +36,22 @@ import casadi as ca
 from wheelterrain.fmu.variables import (
     RIG_INPUTS,
     RIG_OUTPUTS,
+    ROVER_INPUTS,
+    ROVER_OUTPUTS,
     SINKAGE_RANGE,
     TERRAIN_INPUTS,
     TERRAIN_OUTPUTS,
 )
-from wheelterrain.model import contact, rig, solve
+from wheelterrain.model import contact, rig, rover, solve
 from wheelterrain.model.slip import reference_radius
 from wheelterrain.parameters import NAMES
 
 if RIG_INPUTS != rig.INPUTS:  # the FMU's inputs are the rig model's, in the same order
     raise ImportError(f"SingleWheelRig's inputs {RIG_INPUTS} differ from the rig model's "
                       f"{rig.INPUTS}")
+if ROVER_INPUTS != rover.INPUTS:
+    raise ImportError(f"RoverChassis' inputs {ROVER_INPUTS} differ from the rover model's "
+                      f"{rover.INPUTS}")
 
 SPEED_FLOOR = 1e-9  # m/s: below this the wheel and the carriage are both at rest (slip 0)
 STATUS_OK, STATUS_SLIP, STATUS_LOAD, STATUS_UNCONVERGED, STATUS_BURIED, STATUS_NONFINITE = (
@@ -198,7 +206,7 @@ RIG_MESSAGES = {
 
 def rig_state_problem(x) -> str | None:
     """Why the rig state ``x`` (rig.RIG_STATES, floats) is outside the rig's domain, or None.
-    The native wrapper makes the same two checks with the same messages (rig_hooks.c)."""
+    The native wrapper makes the same two checks with the same messages (state_hooks.c)."""
     state = dict(zip(rig.RIG_STATES, x, strict=True))
     if not all(abs(v) < FINITE_LIMIT for v in x):
         return RIG_MESSAGES["nonfinite"] % (state["sinkage"], state["wheel_speed"],
@@ -251,3 +259,117 @@ def rig_rates_function() -> ca.Function:
     return ca.Function("rig_rates", [x, u, p],
                        [ca.vertcat(*rig.rates(xs, us, named)), rig.motor_torque(xs, us, named)],
                        ["x", "u", "p"], ["xdot", "motor_torque"])
+
+
+# --- RoverChassis ------------------------------------------------------------------------------
+
+ROVER_HEAVE_LIMIT = SINKAGE_RANGE[1]
+ROVER_MESSAGES = {
+    "depth": ("the rover's heave %g m left its range [-%g, %g] m: the soils no longer carry "
+              "it (are the four WheelTerrain connected, and can they carry the rover?)"),
+    "nonfinite": ("the rover's state is not finite (heave %g m, speed %g m/s, pitch %g rad)"),
+}
+
+
+def rover_state_problem(x) -> str | None:
+    """Why the rover state ``x`` (rover.STATES, floats) is outside its domain, or None; the
+    native wrapper makes the same checks with the same messages."""
+    state = dict(zip(rover.STATES, x, strict=True))
+    if not all(abs(v) < FINITE_LIMIT for v in x):
+        return ROVER_MESSAGES["nonfinite"] % (state["heave"], state["speed"], state["pitch"])
+    if abs(state["heave"]) > ROVER_HEAVE_LIMIT:
+        return ROVER_MESSAGES["depth"] % (state["heave"], ROVER_HEAVE_LIMIT, ROVER_HEAVE_LIMIT)
+    return None
+
+
+def rover_outputs(x, u, p, motor_torques):
+    """ROVER_OUTPUTS, in that order, from the rover state (rover.STATES), the inputs u
+    (ROVER_INPUTS), the rover parameters ``p[name]`` and the four motor torques."""
+    state = dict(zip(rover.STATES, x, strict=True))
+    out = {name: state[name] for name in rover.CHASSIS_STATES}
+    for k, w in enumerate(rover.WHEELS):
+        z, rate = rover.wheel_kinematics(x, p, w)
+        out.update({f"{w}.sinkage": z, f"{w}.sinkage_rate": rate,
+                    f"{w}.wheel_speed": state[f"{w}.wheel_speed"],
+                    f"{w}.carriage_speed": state["speed"], f"{w}.motor_torque": motor_torques[k],
+                    f"{w}.speed_error_integral": state[f"{w}.speed_error_integral"],
+                    f"{w}.position": state["position"] + rover.lever(p, w)
+                    + p["rover.cg_forward"]})
+    return tuple(out[name] for name in ROVER_OUTPUTS)
+
+
+@lru_cache(maxsize=1)
+def rover_functions() -> tuple[ca.Function, ca.Function, ca.Function, ca.Function]:
+    """(rover_step, rover_outputs, rover_initial, rover_rates)."""
+    x, u = ca.SX.sym("x", len(rover.STATES)), ca.SX.sym("u", len(rover.INPUTS))
+    p, torques = ca.SX.sym("p", len(rover.ROVER_NAMES)), ca.SX.sym("memory", len(rover.WHEELS))
+    named = rover.named([p[k] for k in range(p.numel())])
+    xs = tuple(x[k] for k in range(x.numel()))
+    us = {n: u[k] for k, n in enumerate(rover.INPUTS)}
+    y = rover_outputs(xs, us, named, [torques[k] for k in range(torques.numel())])
+    outputs = ca.Function("rover_outputs", [x, u, p, torques], [ca.vertcat(*y)],
+                          ["x", "u", "p", "memory"], ["y"])
+    initial = ca.Function("rover_initial", [p], [ca.vertcat(*rover.initial_state(named))],
+                          ["p"], ["x0"])
+    step, rates = rover.build()
+    return step, outputs, initial, rates
+
+
+@dataclass(frozen=True)
+class StateModel:
+    """A state-space FMU (SingleWheelRig, RoverChassis): what both flavours need to run it.
+    ``step(x, u, p, h)`` -> (x_next, memory) on floats (u a tuple in ``inputs`` order, p by
+    name); ``outputs(x, u, p, memory)`` -> y in ``outputs`` order; ``problem(x)`` -> why the
+    state is outside the model's domain, or None. The native wrapper runs the generated C of
+    ``functions()`` (prefix_step, prefix_outputs, prefix_initial, prefix_rates) and makes the
+    ``problem`` checks from ``depth_state``, ``depth_limit``, ``nonfinite_states`` and
+    ``messages``."""
+
+    name: str
+    prefix: str
+    states: tuple[str, ...]
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+    parameters: tuple[str, ...]
+    memory: int
+    depth_state: str
+    depth_limit: float
+    nonfinite_states: tuple[str, str, str]
+    messages: dict
+    step: Callable
+    output_values: Callable
+    initial: Callable
+    problem: Callable
+    functions: Callable
+
+
+def _rig_step(x, u, p, h):
+    nxt, torque = rig.step(x, u, p, h)
+    return nxt, (torque,)
+
+
+def _rig_outputs(x, u, p, memory):
+    return rig_outputs(x, u, p, memory[0])
+
+
+def _rover_step(x, u, p, h):
+    return rover.step(x, dict(zip(rover.INPUTS, u, strict=True)), p, h)
+
+
+def _rover_outputs(x, u, p, memory):
+    return rover_outputs(x, dict(zip(rover.INPUTS, u, strict=True)), p, memory)
+
+
+STATE_MODELS = {
+    "SingleWheelRig": StateModel(
+        "SingleWheelRig", "rig", rig.RIG_STATES, rig.INPUTS, RIG_OUTPUTS, rig.RIG_NAMES, 1,
+        "sinkage", RIG_SINKAGE_LIMIT, ("sinkage", "wheel_speed", "carriage_speed"),
+        RIG_MESSAGES, _rig_step, _rig_outputs, rig.initial_state, rig_state_problem,
+        lambda: (*rig_functions(), rig_rates_function())),
+    "RoverChassis": StateModel(
+        "RoverChassis", "rover", rover.STATES, rover.INPUTS, ROVER_OUTPUTS, rover.ROVER_NAMES,
+        len(rover.WHEELS), "heave", ROVER_HEAVE_LIMIT, ("heave", "speed", "pitch"),
+        ROVER_MESSAGES, _rover_step, _rover_outputs, rover.initial_state, rover_state_problem,
+        rover_functions),
+}
+"""The state-space FMUs by model name."""

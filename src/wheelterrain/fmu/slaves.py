@@ -32,9 +32,9 @@ import numpy as np
 from wheelterrain import compiled as native
 from wheelterrain.errors import ParameterError
 from wheelterrain.fmu import functions as fmu_model
-from wheelterrain.fmu.variables import Var, rig_variables, terrain_variables
+from wheelterrain.fmu.variables import VARIABLES, Var, terrain_variables
 from wheelterrain.model import rig
-from wheelterrain.parameters import BY_NAME, TABLE
+from wheelterrain.parameters import BY_NAME, ROVER_TABLE, TABLE
 
 
 def compiled_or_vm(fn, resources: str | None = None):
@@ -392,34 +392,36 @@ class TerrainCore(_Core):
         return True
 
 
-_PARAMETERS = {**BY_NAME, **{p.name: p for p in rig.RIG_TABLE}}
+_PARAMETERS = {**BY_NAME, **{p.name: p for p in (*rig.RIG_TABLE, *ROVER_TABLE)}}
 OPERATING_POINT = "operating point"  # the key of the error the model's status reports
 
 
-class RigCore(_Core):
-    """SingleWheelRig: carriage, wheel drive, vertical motion (rig.step)."""
+class StateCore(_Core):
+    """A state-space FMU (:class:`wheelterrain.fmu.functions.StateModel`): its state advanced by
+    the model's step with the inputs held, its outputs from the state."""
 
-    model_name = "SingleWheelRig"
+    model_name = ""
 
     def __init__(self, slave) -> None:
-        super().__init__(slave, rig_variables())
-        self.state = rig.initial_state(self.params())
-        self.motor_torque = 0.0
+        self.model = fmu_model.STATE_MODELS[self.model_name]
+        super().__init__(slave, VARIABLES[self.model_name]())
+        self.state = tuple(self.model.initial(self.params()))
+        self.memory = (0.0,) * self.model.memory
 
     def params(self) -> dict[str, float]:
-        return {name: float(self.values[name]) for name in rig.RIG_NAMES}
+        return {name: float(self.values[name]) for name in self.model.parameters}
 
     def internal_state(self) -> dict:
-        return {"state": list(self.state), "motor_torque": self.motor_torque}
+        return {"state": list(self.state), "memory": list(self.memory)}
 
     def set_internal_state(self, state: dict) -> None:
         self.state = tuple(float(x) for x in state["state"])
-        self.motor_torque = float(state["motor_torque"])
+        self.memory = tuple(float(x) for x in state["memory"])
 
     def initialize(self) -> None:
         self.initialized = True
         if not self.errors:
-            self.state = rig.initial_state(self.params())
+            self.state = tuple(self.model.initial(self.params()))
         self.dirty = True
         self.refresh()
 
@@ -427,22 +429,33 @@ class RigCore(_Core):
         if not self.dirty:
             return
         self.dirty = False
-        if self._settings_invalid() or self._operating_point(
-                fmu_model.rig_state_problem(self.state)):
+        if self._settings_invalid() or self._operating_point(self.model.problem(self.state)):
             return
-        y = fmu_model.rig_outputs(self.state, self.forces(), self.params(), self.motor_torque)
-        self.values.update(zip(fmu_model.RIG_OUTPUTS, y, strict=True))
+        y = self.model.output_values(self.state, self.inputs(), self.params(), self.memory)
+        self.values.update(zip(self.model.outputs, y, strict=True))
 
-    def forces(self) -> tuple[float, ...]:
-        return tuple(float(self.values[name]) for name in rig.INPUTS)
+    def inputs(self) -> tuple[float, ...]:
+        return tuple(float(self.values[name]) for name in self.model.inputs)
 
     def do_step(self, t: float, h: float) -> bool:
         if not self.step_allowed(t, h):
             return False
         if not self.refuse_if_invalid():
             return False
-        self.state, self.motor_torque = rig.step(self.state, self.forces(), self.params(), h)
+        state, memory = self.model.step(self.state, self.inputs(), self.params(), h)
+        self.state, self.memory = tuple(state), tuple(memory)
         self.dirty = True
         self.refresh()
         return True
 
+
+class RigCore(StateCore):
+    """SingleWheelRig: carriage, wheel drive, vertical motion (rig.step)."""
+
+    model_name = "SingleWheelRig"
+
+
+class RoverCore(StateCore):
+    """RoverChassis: the rover's chassis on four driven wheels (rover.step)."""
+
+    model_name = "RoverChassis"

@@ -20,7 +20,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
-from wheelterrain.parameters import RIG_FMU, ROWS, TERRAIN_FMU, Parameter
+from wheelterrain.parameters import RIG_FMU, ROVER_FMU, ROWS, TERRAIN_FMU, Parameter
 
 
 @dataclass(frozen=True)
@@ -170,6 +170,68 @@ RIG_IO: tuple[Var, ...] = (
 )
 
 
+# --- RoverChassis: per wheel the rig's wheel variables with the wheel's prefix -----------------
+ROVER_WHEELS = ("front_left", "front_right", "rear_left", "rear_right")
+"""The rover's wheels, front axle first (the order of wheelterrain.model.rover.WHEELS)."""
+_RIG_ROWS = {v.name: v for v in RIG_IO}
+_WHEEL_INPUTS = ("normal_force", "drawbar_pull", "torque", "wheel_speed_command",
+                 "motor_torque_command")
+_WHEEL_OUTPUTS = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "motor_torque",
+                  "speed_error_integral")
+_WHEEL_WORDS = {"from WheelTerrain": "from this wheel's WheelTerrain",
+                "rig.drive = 1 (speed-command)": "rover.drive = 1 (speed-command)",
+                "rig.drive = 2 (torque-command)": "rover.drive = 2 (torque-command)"}
+
+
+def _wheel_var(wheel: str, v: Var) -> Var:
+    """The rig's variable ``v`` as ``wheel``'s (prefixed name, the rover's words)."""
+    text = v.description
+    for old, new in _WHEEL_WORDS.items():
+        text = text.replace(old, new)
+    if v.name == "sinkage":
+        text = ("Sinkage of this wheel's axle below the undisturbed surface, from the chassis' "
+                "heave and pitch, positive down")
+    elif v.name == "carriage_speed":
+        text = "Speed of this wheel's axle along the terrain (the chassis' speed)"
+    elif v.name == "motor_torque":
+        text = ("Torque of this wheel's motor (its speed loop's, or the torque command, within "
+                "+-rover.motor_torque_limit): over the last step in co-simulation, at the "
+                "current state and commands in model exchange")
+    start = 0.0 if v.name == "normal_force" else v.start
+    depends = None if v.depends_on is None else tuple(f"{wheel}.{d}" for d in v.depends_on)
+    return replace(v, name=f"{wheel}.{v.name}", description=f"{wheel}: {text}", start=start,
+                   min=None if v.name == "sinkage" else v.min,
+                   max=None if v.name == "sinkage" else v.max, depends_on=depends)
+
+
+ROVER_IO: tuple[Var, ...] = (
+    Var("slope", "input", "Slope of the terrain along the direction of travel, positive uphill",
+        "rad", "Angle", "deg", start=0.0, min=-1.2, max=1.2),
+    Var("towing_force", "input", "Force resisting the rover's motion along the terrain (a "
+        "towed load); negative pushes", "N", "Force", start=0.0, min=-1.0e5, max=1.0e5),
+    *(_wheel_var(w, _RIG_ROWS[n]) for w in ROVER_WHEELS for n in _WHEEL_INPUTS),
+    Var("position", "output", "Distance travelled along the terrain by the chassis' reference "
+        "point (the axle line below the centre of mass)", "m", "Length", depends_on=(),
+        nominal=1.0),
+    Var("speed", "output", "Speed of the chassis along the terrain", "m/s", "Velocity",
+        depends_on=(), nominal=0.01),
+    Var("heave", "output", "Sinkage of the chassis' reference point, positive down; a step "
+        "that takes it outside [-1, 1] m is the rover's last (the next is refused)", "m",
+        "Length", "mm", min=SINKAGE_RANGE[0], max=SINKAGE_RANGE[1], depends_on=(),
+        nominal=0.01),
+    Var("heave_rate", "output", "Rate of the heave, positive down", "m/s", "Velocity",
+        depends_on=(), nominal=0.01),
+    Var("pitch", "output", "Pitch of the chassis, positive nose down", "rad", "Angle", "deg",
+        depends_on=(), nominal=0.01),
+    Var("pitch_rate", "output", "Pitch rate, positive nose down", "rad/s", "AngularVelocity",
+        depends_on=(), nominal=0.01),
+    *(_wheel_var(w, _RIG_ROWS[n]) for w in ROVER_WHEELS for n in _WHEEL_OUTPUTS),
+    *(Var(f"{w}.position", "output", f"{w}: position of this wheel's axle along the terrain "
+          "(where its soil is: a terrain map's query point)", "m", "Length", depends_on=())
+      for w in ROVER_WHEELS),
+)
+
+
 def _names(rows: tuple[Var, ...], causality: str, computed: bool = False) -> tuple[str, ...]:
     return tuple(v.name for v in rows
                  if v.causality == causality and not (computed and v.integrated))
@@ -187,6 +249,10 @@ COUPLED_STATES = tuple(n for n in TERRAIN_INPUTS if n in RIG_OUTPUTS)
 """What the rig hands the terrain each exchange: the names both FMUs share, rig -> terrain."""
 COUPLED_FORCES = tuple(n for n in RIG_INPUTS if n in TERRAIN_OUTPUTS)
 """What the terrain hands the rig: the names both FMUs share, terrain -> rig."""
+ROVER_INPUTS = _names(ROVER_IO, "input")
+"""The order of the rover Functions' ``u`` (equal to wheelterrain.model.rover.INPUTS)."""
+ROVER_OUTPUTS = _names(ROVER_IO, "output")
+"""The order of rover_outputs' ``y``."""
 
 
 def parameter_var(p: Parameter, start: float) -> Var:
@@ -218,6 +284,17 @@ def rig_variables() -> list[Var]:
     return [*(parameter_var(p, p.default) for p in ROWS if p.fmu == RIG_FMU), *RIG_IO]
 
 
+def rover_variables() -> list[Var]:
+    """RoverChassis.fmu's variables in value-reference order: the parameter table's rover
+    rows, then :data:`ROVER_IO`."""
+    return [*(parameter_var(p, p.default) for p in ROWS if p.fmu == ROVER_FMU), *ROVER_IO]
+
+
+VARIABLES = {TERRAIN_FMU: terrain_variables, RIG_FMU: rig_variables,
+             ROVER_FMU: rover_variables}
+"""Each FMU's variable list, by model name."""
+
+
 _DERIVATIVE_QUANTITY = {"Length": "Velocity", "Velocity": "Acceleration",
                         "Angle": "AngularVelocity", "AngularVelocity": "AngularAcceleration"}
 
@@ -228,6 +305,10 @@ def continuous_states(model: str) -> tuple[str, ...]:
     the very states its co-simulation step advances). Each is an output of the FMU."""
     if model == TERRAIN_FMU:
         return ("wheel_angle",)
+    if model == ROVER_FMU:
+        from wheelterrain.model import rover
+
+        return rover.STATES
     from wheelterrain.model import rig
 
     return rig.RIG_STATES
@@ -236,8 +317,7 @@ def continuous_states(model: str) -> tuple[str, ...]:
 def derivative_variables(model: str) -> list[Var]:
     """``der(<state>)`` for each continuous state: the local variables model exchange adds
     after the co-simulation variables (their value references follow)."""
-    rows = {v.name: v for v in (terrain_variables() if model == TERRAIN_FMU
-                                else rig_variables())}
+    rows = {v.name: v for v in VARIABLES[model]()}
     out = []
     for name in continuous_states(model):
         state = rows[name]
@@ -251,6 +331,6 @@ def units() -> dict[str, str]:
     """The unit (Modelica.Units.SI string) of every variable of both FMUs by name, parameters
     included, plus the master's ``time`` [s]: the units result files carry in their headers."""
     out = {"time": "s"}
-    for v in (*terrain_variables(), *rig_variables()):
+    for v in (*terrain_variables(), *rig_variables(), *rover_variables()):
         out.setdefault(v.name, v.unit)
     return out

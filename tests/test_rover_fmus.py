@@ -1,0 +1,134 @@
+"""RoverChassis.fmu in both flavours, the rover's FMU master, Rover.ssp in libcosim and ecos."""
+
+from __future__ import annotations
+
+import importlib.util
+import shutil
+
+import numpy as np
+import pytest
+from fmpy import simulate_fmu
+from fmpy.validation import validate_fmu
+
+from wheelterrain import compiled as native
+from wheelterrain import presets
+from wheelterrain.cosim import rover as rover_system
+from wheelterrain.cosim import rover_fmus
+from wheelterrain.errors import CosimulationError
+from wheelterrain.fmu import build_native as nativebuild
+from wheelterrain.fmu import build_pythonfmu as fmubuild
+from wheelterrain.model import rover
+
+pytestmark = pytest.mark.skipif(native.compiler() is None, reason="needs a C compiler")
+STOP = 4.0  # s: the drop into the soil and the settling, about 4000 steps
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    root = tmp_path_factory.mktemp("rover_fmus")
+    fmubuild.build(root / "pythonfmu", ("RoverChassis", "WheelTerrain"))
+    nativebuild.build(root / "native", ("RoverChassis", "WheelTerrain"))
+    return root
+
+
+@pytest.fixture(scope="module")
+def terrain():
+    return presets.load(presets.DEFAULT_PRESET)
+
+
+@pytest.fixture(scope="module")
+def in_process(terrain):
+    return rover_system.simulate(rover_system.Soil(terrain), {}, STOP)
+
+
+@pytest.mark.parametrize("path", ["pythonfmu/RoverChassis.fmu", "native/RoverChassis.fmu",
+                                  "native/fmi3/RoverChassis.fmu"])
+def test_rover_fmus_validate(built, path):
+    assert validate_fmu(str(built / path)) == []
+
+
+@pytest.mark.parametrize("flavour", ["pythonfmu", "native"])
+def test_our_master_gives_the_in_process_rover_bit_for_bit(built, terrain, in_process,
+                                                           flavour):
+    """Same Functions, same coupling: the FMU route and the in-process one are the same
+    numbers (the pythonfmu WheelTerrain runs the CasADi VM or the same C: rounding only)."""
+    res = rover_fmus.simulate(built / flavour, rover_system.Soil(terrain), {}, STOP)
+    assert len(res.time) == len(in_process.time)
+    tol = 0.0 if flavour == "native" else 1e-9
+    for w in rover.WHEELS:
+        for key in ("sinkage", "slip", "normal_force", "drawbar_pull", "motor_torque"):
+            a, b = res.wheels[w][key], in_process.wheels[w][key]
+            np.testing.assert_allclose(a, b, rtol=tol, atol=tol * 1e-3, err_msg=f"{w}.{key}")
+
+
+def _means(res, start: float = 2.0) -> dict:
+    keep = res.time >= start
+    return {f"{w}.{k}": float(np.mean(v[keep])) for w, d in res.wheels.items()
+            for k, v in d.items() if k in ("normal_force", "sinkage", "slip", "drawbar_pull")}
+
+
+@pytest.mark.parametrize("engine", ["libcosim", "ecos"])
+def test_rover_ssp_runs_unchanged_in_other_engines_with_the_same_means(built, terrain,
+                                                                        in_process, engine):
+    module = {"libcosim": "libcosimpy", "ecos": "ecospy"}[engine]
+    if importlib.util.find_spec(module) is None:
+        pytest.skip(f"{module} is not installed")
+    if engine == "ecos" and not shutil.which("ldconfig"):
+        pytest.skip("ecos needs its runtime (libtbb)")
+    res = rover_fmus.simulate_ssp(engine, built / "native", "level",
+                                  rover_system.Soil(terrain), {}, STOP, lambda t: 0.0,
+                                  lambda t: 0.0)
+    ours, theirs = _means(in_process), _means(res)
+    for key, value in ours.items():
+        # 1e-3 relative; a pull that averages to ~0 on level ground is judged on the wheel's
+        # force scale, its normal force
+        wheel = key.split(".")[0]
+        scale = abs(ours[f"{wheel}.normal_force"]) if "pull" in key else abs(value)
+        assert abs(theirs[key] - value) <= 1e-3 * scale, (key, theirs[key], value)
+
+
+def test_engines_refuse_a_scenario_an_ssp_cannot_carry(built, terrain):
+    with pytest.raises(CosimulationError, match="constants"):
+        rover_fmus.simulate_ssp("libcosim", built / "native", "slope",
+                                rover_system.Soil(terrain), {}, 10.0, lambda t: 1e-3 * t,
+                                lambda t: 0.0)
+    soft = rover_system.Soil(terrain, {"soil.k_phi": 40.0}, 0.5, 0.8)
+    with pytest.raises(CosimulationError, match="parameter contract"):
+        rover_fmus.simulate(built / "native", soft, {}, 1.0)
+
+
+def test_model_exchange_agrees_with_co_simulation(built):
+    """The native RoverChassis alone under constant forces: the co-simulation steps (first
+    order) converge to what CVode makes of the model-exchange interface, their error halving
+    with the step."""
+    forces = {f"{w}.{n}": v for w in rover.WHEELS
+              for n, v in (("normal_force", 24.0), ("drawbar_pull", 1.0), ("torque", 0.1))}
+    out = ["speed", "heave", "pitch", "front_left.wheel_speed"]
+    path = str(built / "native" / "RoverChassis.fmu")
+    me = simulate_fmu(path, fmi_type="ModelExchange", stop_time=1.0, output_interval=1e-3,
+                      start_values=forces, output=out, relative_tolerance=1e-10)
+    at = 0.9  # s, a time on both grids
+
+    def value(r, n):
+        return float(np.interp(at, r["time"], r[n]))
+
+    errors = []
+    for h in (1e-3, 5e-4):
+        cs = simulate_fmu(path, stop_time=1.0, step_size=h, output_interval=h,
+                          start_values=forces, output=out)
+        errors.append({n: abs(value(cs, n) - value(me, n)) for n in out})
+    for n in out:
+        scale = max(abs(value(me, n)), 1e-9)
+        assert errors[1][n] <= 1e-2 * scale, (n, errors)
+        if errors[0][n] > 1e-9 * scale:  # not exact already: first order, the error halves
+            assert errors[1][n] < 0.6 * errors[0][n], (n, errors)
+
+
+def test_an_unconnected_rover_falls_out_of_its_range_and_is_refused(built):
+    """Without soil the chassis free-falls; once the heave leaves its range the next step is
+    refused with the reason, in both flavours (no crash, no value past the range)."""
+    for flavour in ("pythonfmu", "native"):
+        r = simulate_fmu(str(built / flavour / "RoverChassis.fmu"), stop_time=2.0,
+                         step_size=1e-3, output=["heave"])
+        assert r["time"][-1] < 0.5  # g*t**2/2 = 1 m at 0.45 s: the run ends there
+        assert np.all(np.abs(r["heave"]) <= 1.0)
