@@ -849,7 +849,7 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     series = {"time": result.time, **{f"{w}.{k}": v for w, d in result.wheels.items()
                                       for k, v in d.items()},
               **result.chassis, **result.inputs}
-    cosim.write_series(out_dir / f"{stem}.csv", series, every=max(len(result.time) // 20000, 1),
+    cosim.write_series(out_dir / f"{stem}.csv", series, every=max(len(result.time) // 5000, 1),
                        units=rover_system.record_units())
     ssp_path = None
     if built:
