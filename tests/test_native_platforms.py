@@ -77,6 +77,13 @@ def _scripts(built):
                                                  "entry_angle", "wheel_angle"))
     rig_out = ",".join(str(r[n]) for n in ("sinkage", "sinkage_rate", "wheel_speed",
                                              "carriage_speed", "motor_torque"))
+    v = _vrs(built, "RoverChassis")
+    rover_out = ",".join(str(v[n]) for n in ("heave", "pitch", "speed", "front_left.sinkage",
+                                             "rear_left.wheel_speed", "front_left.motor_torque"))
+    rover_in = ",".join(f"{v[f'{w}.{n}']}={a}+{b}" for w in ("front_left", "front_right",
+                                                               "rear_left", "rear_right")
+                        for n, a, b in (("normal_force", 24.0, 1.0), ("drawbar_pull", 1.0, 0.5),
+                                        ("torque", 0.1, 0.05)))
     return {
         # dynamic contact: the sinkage ramps from 10 to 20 mm while the wheel turns
         "WheelTerrain dynamic": ("WheelTerrain", 500, 2e-3, f"{t['soil.phi']}=0.6",
@@ -91,12 +98,15 @@ def _scripts(built):
         "SingleWheelRig": ("SingleWheelRig", 300, 1e-3, "-",
                            f"{r['normal_force']}=55+10,{r['drawbar_pull']}=5+0,"
                            f"{r['torque']}=0.4+0.2", rig_out),
+        # the rover's chassis under held soil forces on its four wheels
+        "RoverChassis": ("RoverChassis", 300, 1e-3, f"{v['rover.cg_forward']}=0.02", rover_in,
+                         rover_out),
     }
 
 
 @pytest.mark.parametrize("fmi", ["2", "3"])
 @pytest.mark.parametrize("case", ["WheelTerrain dynamic", "WheelTerrain quasi-static",
-                                  "SingleWheelRig"])
+                                  "SingleWheelRig", "RoverChassis"])
 def test_the_win64_binary_under_wine_gives_the_linux64_numbers(built, case, fmi):
     model, *script = _scripts(built)[case]
     linux = _run(built, "linux64", fmi, model, *script)
