@@ -76,8 +76,7 @@ def test_rover_ssp_runs_unchanged_in_other_engines_with_the_same_means(built, te
     if engine == "ecos" and not shutil.which("ldconfig"):
         pytest.skip("ecos needs its runtime (libtbb)")
     res = rover_fmus.simulate_ssp(engine, built / "native", "level",
-                                  rover_system.Soil(terrain), {}, STOP, lambda t: 0.0,
-                                  lambda t: 0.0)
+                                  rover_system.Soil(terrain), {}, STOP)
     ours, theirs = _means(in_process), _means(res)
     for key, value in ours.items():
         # 1e-3 relative; a pull that averages to ~0 on level ground is judged on the wheel's
@@ -87,14 +86,35 @@ def test_rover_ssp_runs_unchanged_in_other_engines_with_the_same_means(built, te
         assert abs(theirs[key] - value) <= 1e-3 * scale, (key, theirs[key], value)
 
 
-def test_engines_refuse_a_scenario_an_ssp_cannot_carry(built, terrain):
-    with pytest.raises(CosimulationError, match="constants"):
-        rover_fmus.simulate_ssp("libcosim", built / "native", "slope",
-                                rover_system.Soil(terrain), {}, 10.0, lambda t: 1e-3 * t,
-                                lambda t: 0.0)
+@pytest.mark.parametrize("engine", ["libcosim", "ecos"])
+def test_a_ramp_in_the_chassis_profile_runs_alike_in_every_engine(built, terrain, engine):
+    """The scenario's ramps are the chassis' input profile, so an SSP carries them: a towing
+    force rising at 0.05 N/s and the slope at 0.1 deg/s after 1 s (the pull test's and the
+    slope scenario's rates) give the in-process means in other engines."""
+    module = {"libcosim": "libcosimpy", "ecos": "ecospy"}[engine]
+    if importlib.util.find_spec(module) is None:
+        pytest.skip(f"{module} is not installed")
+    values = {"rover.towing_rate": 0.05, "rover.ramp_time": 1.0,
+              "rover.slope_rate_after": np.radians(0.1)}
+    soil = rover_system.Soil(terrain)
+    ours = rover_system.simulate(soil, values, STOP)
+    theirs = rover_fmus.simulate_ssp(engine, built / "native", "ramp", soil, values, STOP)
+    assert theirs.inputs["towing_force"][-1] == pytest.approx(0.05 * STOP, rel=1e-3)
+    assert theirs.inputs["slope"][-1] == pytest.approx(np.radians(0.1 * (STOP - 1.0)),
+                                                       rel=1e-3)
+    a, b = _means(ours), _means(theirs)
+    for key, value in a.items():
+        wheel = key.split(".")[0]
+        scale = abs(a[f"{wheel}.normal_force"]) if "pull" in key else abs(value)
+        assert abs(b[key] - value) <= 1e-3 * scale, (key, b[key], value)
+
+
+def test_a_soil_along_the_path_is_refused_by_the_fmu_engines(built, terrain):
     soft = rover_system.Soil(terrain, {"soil.k_phi": 40.0}, 0.5, 0.8)
     with pytest.raises(CosimulationError, match="parameter contract"):
         rover_fmus.simulate(built / "native", soft, {}, 1.0)
+    with pytest.raises(CosimulationError, match="along the path"):
+        rover_fmus.simulate_ssp("libcosim", built / "native", "soft-patch", soft, {}, 1.0)
 
 
 def test_model_exchange_agrees_with_co_simulation(built):

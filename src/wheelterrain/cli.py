@@ -764,7 +764,7 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool,
               default="in-process", show_default=True,
               help="in-process: the chassis and contact Functions stepped together, compiled; "
               "fmus: RoverChassis.fmu + four WheelTerrain.fmu through fmpy, our master; "
-              "libcosim, ecos: Rover.ssp in those engines (constant inputs: level only).")
+              "libcosim, ecos: Rover.ssp in those engines (all but soft-patch).")
 @click.option("--fmu-dir", default=None, type=click.Path(file_okay=False),
               help="Where the FMUs are (default: build/native if built, else build).")
 @click.option("--out", default="validation/output/rover", show_default=True,
@@ -826,13 +826,11 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
 
     runner = None
     if engine == "fmus":
-        def runner(soil, values, stop, slope, towing, step, stop_when):
-            return rover_fmus.simulate(folder, soil, values, stop, slope, towing, step,
-                                       stop_when)
+        def runner(soil, values, stop, step, stop_when):
+            return rover_fmus.simulate(folder, soil, values, stop, step, stop_when)
     elif engine in ("libcosim", "ecos"):
-        def runner(soil, values, stop, slope, towing, step, stop_when):
-            return rover_fmus.simulate_ssp(engine, folder, scenario, soil, values, stop, slope,
-                                           towing, step)
+        def runner(soil, values, stop, step, stop_when):
+            return rover_fmus.simulate_ssp(engine, folder, scenario, soil, values, stop, step)
     try:
         run = rover_system.run_scenario(scenario, ps, gravity, chassis_values, step=step,
                                         engine=runner)
@@ -853,11 +851,8 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
                        units=rover_system.record_units())
     ssp_path = None
     if built:
-        sc = rover_system.scenarios(gravity)[scenario]
-        ssp_path = rover_fmus.write_ssp(
-            out_dir / f"Rover-{scenario}.ssp", folder, scenario, ps,
-            {**chassis_values, "rover.gravity": rover_system.GRAVITY[gravity]},
-            sc.slope(0.0), sc.towing(0.0), sc.stop)
+        ssp_path = rover_fmus.write_ssp(out_dir / f"Rover-{scenario}.ssp", folder, scenario, ps,
+                                        run["values"], run["stop"])
     figures["ssp"] = str(ssp_path) if ssp_path else None
     if _emit_json(json_target, figures):
         return

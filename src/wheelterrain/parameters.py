@@ -402,6 +402,25 @@ ROVER_TABLE: tuple[Parameter, ...] = (
        "Design: as the rig's rig.drive", kind="enum",
        choices=MappingProxyType({0: "common-speed", 1: "speed-command",
                                  2: "torque-command"})),
+    _V("rover.ramp_time", "s", 0.0, 0.0, 1.0e6,
+       "Input profile (so that an SSP carries a scenario whole): the time at which the slope's "
+       "rate changes from rover.slope_rate to rover.slope_rate_after.",
+       "Scenario profile; 0 with both rates 0 = the slope input as it is",
+       quantity="Time"),
+    _V("rover.slope_rate", "rad/s", 0.0, -0.1, 0.1,
+       "Input profile: the slope the rover sees is the input slope plus slope_rate*t up to "
+       "rover.ramp_time, then slope_rate_after per second, that ramp kept within "
+       "+-rover.slope_bound.", "Scenario profile (0: no ramp)", quantity="AngularVelocity"),
+    _V("rover.slope_rate_after", "rad/s", 0.0, -0.1, 0.1,
+       "Input profile: the slope's rate after rover.ramp_time.", "Scenario profile (0: none)",
+       quantity="AngularVelocity"),
+    _V("rover.slope_bound", "rad", 1.2, 0.0, 1.2,
+       "Input profile: the ramp (not the input) is kept within +-this.",
+       "Scenario profile; 1.2 rad: no bound within the slope input's range", quantity="Angle",
+       display_unit="deg"),
+    _V("rover.towing_rate", "N/s", 0.0, -1.0e3, 1.0e3,
+       "Input profile: the towing force the rover pulls is the input towing_force plus "
+       "towing_rate*t (a pull test).", "Scenario profile (0: no ramp)"),
     _V("rover.motor_torque_limit", "N.m", 5.0, 1.0e-3, 1.0e4,
        "Largest torque a wheel motor delivers, either sign (the speed loops saturate there; "
        "the integrator stops while saturated).",

@@ -38,7 +38,8 @@ BLOCK = 100  # steps per call of the mapped system step
 RECORD = ("slip", "sinkage", "normal_force", "drawbar_pull", "torque", "motor_torque",
           "wheel_speed")
 """Per-wheel quantities recorded at every step."""
-CHASSIS_RECORD = ("position", "speed", "heave", "pitch")
+CHASSIS_RECORD = ("position", "speed", "heave", "pitch", "effective_slope",
+                  "effective_towing_force")
 N_X = len(rover.STATES) + len(rover.WHEELS)  # chassis states, then the four wheel angles
 
 
@@ -74,6 +75,7 @@ def _system_step() -> ca.Function:
                     rover.motor_torque(xs, u, p, w), omega))
     nxt, _ = rover.step(tuple(xs), u, p, h)
     new_angles = [angles[k] + h * s[f"{w}.wheel_speed"] for k, w in enumerate(rover.WHEELS)]
+    s["effective_slope"], s["effective_towing_force"] = rover.effective_inputs(xs, u, p)
     record = [v for wheel in rec for v in wheel] + [s[n] for n in CHASSIS_RECORD]
     return ca.Function("rover_system", [x, pt, pr, slope, tow, h],
                        [ca.vertcat(*nxt, *new_angles), ca.vertcat(*record)],
@@ -153,51 +155,52 @@ def wheel_positions(p: Mapping[str, float], position: float) -> dict[str, float]
     return {w: position + rover.lever(p, w) + p["rover.cg_forward"] for w in rover.WHEELS}
 
 
-def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float,
-             slope: Callable[[float], float] = lambda t: 0.0,
-             towing: Callable[[float], float] = lambda t: 0.0,
-             step: float = STEP, block: int = BLOCK,
-             stop_when: Callable[[dict], bool] | None = None) -> RoverResult:
-    """Run the rover in process from rest on the surface for ``stop`` s. ``slope(t)`` [rad] and
-    ``towing(t)`` [N] are held over each block of steps; ``stop_when(last)`` (the last step's
-    record by name) ends the run early."""
+def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: float = STEP,
+             block: int = BLOCK, stop_when: Callable[[dict], bool] | None = None,
+             slope: float = 0.0, towing: float = 0.0) -> RoverResult:
+    """Run the rover in process from rest on the surface for ``stop`` s, its inputs ``slope``
+    [rad] and ``towing`` [N] constant (a scenario's ramps are the chassis' input profile, rows
+    ``rover.ramp_time`` ... ``rover.towing_rate`` of ``rover_values``); ``stop_when(last)``
+    (the last step's record by name) ends the run early."""
     p = {**rover.defaults(), **rover_values}
     evaluate, engine = _evaluator(block)
     pr = [p[n] for n in rover.ROVER_NAMES]
     x = list(rover.initial_state(p)) + [0.0] * len(rover.WHEELS)
     blocks = max(1, round(stop / (step * block)))
-    records, inputs = [], {"slope": [], "towing_force": []}
+    records = []
     left = None
     t0 = time.perf_counter()
     for b in range(blocks):
         t = b * block * step
         where = wheel_positions(p, x[0])
         pt = np.column_stack([soil.at(where[w]).vector() for w in rover.WHEELS])
-        a, f = slope(t), towing(t)
-        x, rec = evaluate(x, pt.ravel(order="F"), pr, a, f, step)
+        x, rec = evaluate(x, pt.ravel(order="F"), pr, slope, towing, step)
         rec = np.asarray(rec, dtype=float).reshape(N_REC, block, order="F")
         problem = _outside(rec)
         if problem is not None:
             k, why = problem
             records.append(rec[:, :k])
-            inputs["slope"].append(np.full(k, a))
-            inputs["towing_force"].append(np.full(k, f))
             left = f"at t = {t + k * step:.3f} s {why}"
             break
         records.append(rec)
-        inputs["slope"].append(np.full(block, a))
-        inputs["towing_force"].append(np.full(block, f))
         if stop_when is not None and stop_when(_last(rec)):
             break
     wall = time.perf_counter() - t0
-    allrec = np.concatenate(records, axis=1)
+    return from_records(np.concatenate(records, axis=1), step, wall, f"in-process ({engine})",
+                        left)
+
+
+def from_records(allrec: np.ndarray, step: float, wall: float, engine: str,
+                 left: str | None = None) -> RoverResult:
+    """A RoverResult from the record rows (RECORD per wheel, then CHASSIS_RECORD) by step."""
     n = allrec.shape[1]
     wheels = {w: {name: allrec[k * len(RECORD) + j] for j, name in enumerate(RECORD)}
               for k, w in enumerate(rover.WHEELS)}
     base = len(RECORD) * len(rover.WHEELS)
     chassis = {name: allrec[base + j] for j, name in enumerate(CHASSIS_RECORD)}
-    return RoverResult(np.arange(n) * step, wheels, chassis, wall, f"in-process ({engine})",
-                       {k: np.concatenate(v) for k, v in inputs.items()}, left)
+    inputs = {"slope": chassis.pop("effective_slope"),
+              "towing_force": chassis.pop("effective_towing_force")}
+    return RoverResult(np.arange(n) * step, wheels, chassis, wall, engine, inputs, left)
 
 
 def _outside(rec: np.ndarray) -> tuple[int, str] | None:
@@ -228,8 +231,9 @@ def _last(rec: np.ndarray) -> dict:
 
 # --- the steady-state prediction: traction limit and linear stability ------------------------
 
-MOVING = tuple(n for n in rover.STATES if n != "position")
-"""The states of steady motion (the position only advances): what the linearisation keeps."""
+MOVING = tuple(n for n in rover.STATES if n not in ("position", "elapsed"))
+"""The states of steady motion (the position and the clock only advance): what the
+linearisation keeps (the input profile is off in a prediction)."""
 
 
 @lru_cache(maxsize=1)
@@ -370,15 +374,8 @@ class Scenario:
     name: str
     description: str
     stop: float
-    slope: Callable[[float], float]
-    towing: Callable[[float], float]
+    profile: dict  # the chassis' input profile (rover.ramp_time ... rover.towing_rate)
     settle: float  # s: averaging starts here
-
-
-def _ramp(t: float, fast: float, slow: float, knee: float) -> float:
-    """Slope [rad] rising at ``fast`` rad/s up to ``knee`` rad, then at ``slow``."""
-    t_knee = knee / fast
-    return fast * t if t < t_knee else knee + slow * (t - t_knee)
 
 
 SLOW_RAMP = 0.002  # deg/s: the slope's rate near the predicted limit
@@ -389,28 +386,30 @@ def scenarios(gravity: str = "earth", knee_deg: float = 15.0,
               weight: float = 10.0 * GRAVITY["earth"]) -> dict[str, Scenario]:
     """The scenarios; ``knee_deg``: where the slope scenario's ramp slows down (run_scenario
     puts it 1 deg below the predicted stall slope, so that an instability's growth does not
-    lag the slope)."""
+    lag the slope). Each scenario's inputs are the chassis' input profile, so its Rover.ssp
+    carries it whole."""
     deg = math.pi / 180
     return {
         "level": Scenario("level", "steady traverse on level ground at the commanded rim speed",
-                          40.0, lambda t: 0.0, lambda t: 0.0, 20.0),
+                          40.0, {}, 20.0),
         "slope": Scenario("slope", f"the slope rises ({FAST_RAMP} deg/s to {knee_deg:.1f} deg, "
                           f"then {SLOW_RAMP} deg/s) until the rover stalls (slip {STALL_SLIP})",
                           knee_deg / FAST_RAMP + 6.0 / SLOW_RAMP,
-                          lambda t: _ramp(t, FAST_RAMP * deg, SLOW_RAMP * deg, knee_deg * deg),
-                          lambda t: 0.0, 0.0),
+                          {"rover.slope_rate": FAST_RAMP * deg,
+                           "rover.ramp_time": knee_deg / FAST_RAMP,
+                           "rover.slope_rate_after": SLOW_RAMP * deg}, 0.0),
         "soft-patch": Scenario("soft-patch", f"level; a looser soil (k_phi' x{SOFT['soil.k_phi']}, "
                                f"phi x{SOFT['soil.phi']}) from {PATCH_START} m to "
                                f"{PATCH_START + PATCH_LENGTH} m under the front, then the rear "
-                               "axle", 40.0, lambda t: 0.0, lambda t: 0.0, 0.0),
+                               "axle", 40.0, {}, 0.0),
         "descent": Scenario("descent", "20 deg downhill (settled on level ground for 10 s, "
                             "then 1 deg/s), the speed loops braking", 60.0,
-                            lambda t: -deg * min(max(t - 10.0, 0.0), 20.0), lambda t: 0.0,
-                            40.0),
+                            {"rover.ramp_time": 10.0, "rover.slope_rate_after": -deg,
+                             "rover.slope_bound": 20 * deg}, 40.0),
         "pull-test": Scenario("pull-test", "level, wheels at the commanded speed, a resisting "
                               "force rising slowly (0.05 % of the weight per second) until the "
-                              "rover stalls: its pull-slip curve", 3600.0, lambda t: 0.0,
-                              lambda t: 5e-4 * weight * t, 0.0),
+                              "rover stalls: its pull-slip curve", 3600.0,
+                              {"rover.towing_rate": 5e-4 * weight}, 0.0),
     }
 
 
@@ -421,17 +420,12 @@ def terrain_of(preset_values: ParameterSet) -> dict[str, ParameterSet]:
     return {w: preset_values for w in rover.WHEELS}
 
 
-CONSTANT_INPUT_SCENARIOS = ("level",)
-"""Scenarios whose inputs (slope, towing force, soil) stay constant: the ones an SSP carries
-whole, so that ecos and libcosim run them as our masters do."""
-
-
 def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
                  rover_values: Mapping[str, float] | None = None, step: float = STEP,
                  engine: Callable | None = None) -> dict:
     """One scenario: the contract's figures (``wheelterrain rover --json``) and the series.
     ``terrain``: the wheels' terrain parameters (the soft patch scales its soil). ``engine``:
-    ``engine(soil, values, stop, slope, towing, step, stop_when) -> RoverResult`` runs it
+    ``engine(soil, values, stop, step, stop_when) -> RoverResult`` runs it
     (default: :func:`simulate`, in process)."""
     if name not in scenarios():
         raise ValueError(f"unknown scenario {name!r}; valid: {', '.join(scenarios())}")
@@ -452,7 +446,7 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
     stalled = (lambda last: last["front_left.slip"] >= STALL_SLIP) \
         if name in STALL_SCENARIOS else None
     run = engine or (lambda *a, **k: simulate(*a, **k))
-    res = run(soil, values, sc.stop, sc.slope, sc.towing, step=step, stop_when=stalled)
+    res = run(soil, {**values, **sc.profile}, sc.stop, step=step, stop_when=stalled)
     keep = res.time >= sc.settle
     out = {"scenario": name, "gravity": gravity, "engine": res.engine,
            "left_domain": res.left_domain,
@@ -484,7 +478,8 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
         out["predicted_descent_limit"] = pred["limit"]
         out["slide_slope_deg"] = (math.degrees(res.inputs["slope"][-1])
                                   if res.left_domain else None)
-    return {"figures": out, "result": res}
+    return {"figures": out, "result": res, "values": {**values, **sc.profile},
+            "stop": sc.stop}
 
 
 NO_RIPPLE = {"ripple.k_g": 0.0, "ripple.k_0": 0.0}

@@ -14,9 +14,10 @@ way, so the two agree to rounding (tests/test_rover_fmus.py).
 
 Rover.ssp (``Rover_<scenario>`` system; components ``chassis`` and one per wheel, named as the
 wheels) holds the five FMUs, the 24 connections and one parameter set named after the
-scenario: the terrain parameters on each wheel, the chassis' parameters, and the start values
-of the chassis' inputs ``slope`` and ``towing_force`` (an SSP carries no time-varying input:
-engines other than ours run a scenario's inputs as constants, its initial ones).
+scenario: the terrain parameters on each wheel and the chassis' parameters, its input profile
+(the slope and towing ramps of the scenario) included, so any engine runs the scenario whole.
+A soil that changes along the path is the one thing it cannot carry (WheelTerrain's soil
+values are fixed parameters).
 """
 
 from __future__ import annotations
@@ -32,8 +33,16 @@ from xml.etree import ElementTree as ET
 
 import numpy as np
 
+from wheelterrain.cosim import rover as rover_system
 from wheelterrain.cosim import ssp
-from wheelterrain.cosim.rover import CHASSIS_RECORD, RECORD, STEP, RoverResult, Soil
+from wheelterrain.cosim.rover import (
+    CHASSIS_RECORD,
+    RECORD,
+    STEP,
+    RoverResult,
+    Soil,
+    from_records,
+)
 from wheelterrain.errors import CosimulationError
 from wheelterrain.fmu.instance import Instance
 from wheelterrain.model import rover
@@ -66,7 +75,7 @@ class RoverFMUs:
     """The five instances, started, and the coupling of the module doc."""
 
     def __init__(self, fmu_dir: Path, terrain: ParameterSet, values: Mapping[str, float],
-                 slope: float = 0.0, towing: float = 0.0, stop: float | None = None) -> None:
+                 stop: float | None = None) -> None:
         from fmpy import extract
 
         fmu_dir = Path(fmu_dir)
@@ -79,11 +88,13 @@ class RoverFMUs:
         self._unzip = extract(str(paths["WheelTerrain"]))
         self.instances: dict[str, Instance] = {}
         try:
-            self.instances[CHASSIS] = Instance(paths["RoverChassis"], name=CHASSIS)
+            # log=True: the FMUs' messages are kept, not printed (standard output may be a
+            # JSON document), and a refusal's reason ends up in the result
+            self.instances[CHASSIS] = Instance(paths["RoverChassis"], name=CHASSIS, log=True)
             for w in rover.WHEELS:
-                self.instances[w] = Instance(paths["WheelTerrain"], self._unzip, name=w)
-            self.instances[CHASSIS].start({**chassis_values(values), "slope": slope,
-                                           "towing_force": towing}, stop)
+                self.instances[w] = Instance(paths["WheelTerrain"], self._unzip, name=w,
+                                             log=True)
+            self.instances[CHASSIS].start(chassis_values(values), stop)
             for w in rover.WHEELS:
                 self.instances[w].start(terrain_values(terrain), stop)
         except BaseException:
@@ -92,17 +103,15 @@ class RoverFMUs:
         ch = self.instances[CHASSIS]
         self._ch_out = ch.refs(f"{w}.{n}" for w in rover.WHEELS for n in TO_TERRAIN)
         self._ch_in = ch.refs(f"{w}.{n}" for w in rover.WHEELS for n in TO_CHASSIS)
-        self._ch_inputs = ch.refs(("slope", "towing_force"))
         self._ch_record = ch.refs([*(f"{w}.{n}" for w in rover.WHEELS for n in
-                                     ("motor_torque", "wheel_speed")),
-                                   "position", "speed", "heave", "pitch"])
+                                     ("motor_torque", "wheel_speed")), *CHASSIS_RECORD])
         self._ter_in = {w: self.instances[w].refs(TO_TERRAIN) for w in rover.WHEELS}
         self._ter_out = {w: self.instances[w].refs((*TO_CHASSIS, "slip", "contact_sinkage"))
                          for w in rover.WHEELS}
 
-    def exchange(self, slope: float, towing: float) -> list[float]:
+    def exchange(self) -> list[float]:
         """One exchange at the current time; returns the record row: per wheel RECORD, then
-        position, speed, heave, pitch."""
+        CHASSIS_RECORD."""
         ch = self.instances[CHASSIS].fmu
         x = ch.getReal(self._ch_out)
         forces, per = [], {}
@@ -114,7 +123,6 @@ class RoverFMUs:
             forces += y[:len(TO_CHASSIS)]
             per[w] = y
         ch.setReal(self._ch_in, forces)
-        ch.setReal(self._ch_inputs, [slope, towing])
         rec = ch.getReal(self._ch_record)
         row = []
         for k, w in enumerate(rover.WHEELS):
@@ -130,6 +138,10 @@ class RoverFMUs:
         for inst in self.instances.values():
             inst.fmu.doStep(t, h)
 
+    def errors(self) -> list[str]:
+        """What the FMUs logged as discard, error or fatal, by instance."""
+        return [f"{name}: {m}" for name, inst in self.instances.items() for m in inst.errors()]
+
     def close(self) -> None:
         import shutil
 
@@ -141,8 +153,6 @@ class RoverFMUs:
 
 
 def simulate(fmu_dir: Path, soil: Soil, values: Mapping[str, float], stop: float,
-             slope: Callable[[float], float] = lambda t: 0.0,
-             towing: Callable[[float], float] = lambda t: 0.0,
              step: float = STEP, stop_when: Callable[[dict], bool] | None = None
              ) -> RoverResult:
     """The rover's five FMUs through fmpy, coupled by our master (module doc); the interface
@@ -154,29 +164,27 @@ def simulate(fmu_dir: Path, soil: Soil, values: Mapping[str, float], stop: float
                                 "parameters): run this scenario in process")
     n = round(stop / step)
     rows = []
-    inputs = {"slope": [], "towing_force": []}
-    system = RoverFMUs(fmu_dir, soil.base, values, slope(0.0), towing(0.0), stop)
+    system = RoverFMUs(fmu_dir, soil.base, values, stop)
     left = None
     t0 = time.perf_counter()
     try:
         for k in range(n):
             t = k * step
-            a, f = slope(t), towing(t)
-            row = system.exchange(a, f)
+            row = system.exchange()
             rows.append(row)
-            inputs["slope"].append(a)
-            inputs["towing_force"].append(f)
             if stop_when is not None and stop_when(_named_row(row)):
                 break
             try:
                 system.step(t, step)
-            except Exception as err:
-                left = f"at t = {t + step:.3f} s an FMU refused the step ({err})"
+            except Exception as err:  # an FMU refused the step: the run ends, with the reason
+                logged = system.errors()
+                left = (f"at t = {t + step:.3f} s an FMU refused the step: "
+                        + (logged[-1] if logged else str(err)))
                 break
     finally:
         wall = time.perf_counter() - t0
         system.close()
-    return _result(np.array(rows).T, step, wall, "wheelterrain master (fmpy)", inputs, left)
+    return from_records(np.array(rows).T, step, wall, "wheelterrain master (fmpy)", left)
 
 
 def _named_row(row: list[float]) -> dict:
@@ -185,16 +193,6 @@ def _named_row(row: list[float]) -> dict:
     base = len(RECORD) * len(rover.WHEELS)
     out.update({n: row[base + j] for j, n in enumerate(CHASSIS_RECORD)})
     return out
-
-
-def _result(data: np.ndarray, step: float, wall: float, engine: str, inputs: dict,
-            left: str | None) -> RoverResult:
-    wheels = {w: {r: data[k * len(RECORD) + j] for j, r in enumerate(RECORD)}
-              for k, w in enumerate(rover.WHEELS)}
-    base = len(RECORD) * len(rover.WHEELS)
-    chassis = {name: data[base + j] for j, name in enumerate(CHASSIS_RECORD)}
-    return RoverResult(np.arange(data.shape[1]) * step, wheels, chassis, wall, engine,
-                       {k: np.array(v) for k, v in inputs.items()}, left)
 
 
 # what an SSP engine records, per wheel (component, variable) for each of RECORD
@@ -214,37 +212,67 @@ def _ssp_variables() -> list[tuple[str, str]]:
 
 
 def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
-                 values: Mapping[str, float], stop: float,
-                 slope: Callable[[float], float], towing: Callable[[float], float],
-                 step: float = STEP, stop_when=None) -> RoverResult:
-    """The scenario's Rover.ssp in ``engine`` ("ecos" or "libcosim"), which run an SSP's
-    inputs as constants: scenarios whose inputs change are refused with the reason."""
-    if soil.patch or slope(stop) != slope(0.0) or towing(stop) != towing(0.0):
+                 values: Mapping[str, float], stop: float, step: float = STEP,
+                 stop_when=None) -> RoverResult:
+    """The scenario's Rover.ssp in ``engine`` ("ecos" or "libcosim"), to ``stop`` (the run is
+    not ended early: ``stop_when`` is not an SSP's). A soil that changes along the path is not
+    in the FMUs' parameter contract: refused with the reason."""
+    if soil.patch:
         raise CosimulationError(
-            f"{engine} runs Rover.ssp, whose inputs (slope, towing force, soil) are constants; "
-            f"scenario {scenario!r} changes them during the run: run it with our masters "
-            "(--engine in-process or fmus)")
+            f"{engine} runs Rover.ssp, which cannot carry a soil that changes along the path "
+            "(WheelTerrain's soil values are fixed parameters): run it in process")
     names = _ssp_variables()
     with tempfile.TemporaryDirectory(prefix="wheelterrain_rover_") as tmp:
-        path = write_ssp(Path(tmp) / "Rover.ssp", fmu_dir, scenario, soil.base, values,
-                         slope(0.0), towing(0.0), stop)
+        path = write_ssp(Path(tmp) / "Rover.ssp", fmu_dir, scenario, soil.base, values, stop)
         t0 = time.perf_counter()
-        if engine == "libcosim":
-            out = ssp.simulate_with_libcosim(path, stop, step,
-                                             tuple(f"{c}.{v}" for c, v in names))
-            wall = time.perf_counter() - t0
-            data = np.array([out[f"{c}.{v}"] for c, v in names])
-        elif engine == "ecos":
-            csv_path = Path(tmp) / "ecos.csv"
-            ids = tuple(f"{c}::{v}" for c, v in names)
-            ssp.simulate_with_ecos(path, scenario, stop, step, csv_path, ids)
-            wall = time.perf_counter() - t0
-            data = _read_ecos(csv_path, ids)
-        else:
-            raise ValueError(f"unknown engine {engine!r}")
-    n = data.shape[1]
-    inputs = {"slope": [slope(0.0)] * n, "towing_force": [towing(0.0)] * n}
-    return _result(data, step, wall, engine, inputs, None)
+        with _stdout_to_stderr():  # the engines' own log lines: not on standard output
+            if engine == "libcosim":
+                out = ssp.simulate_with_libcosim(path, stop, step,
+                                                 tuple(f"{c}.{v}" for c, v in names))
+                wall = time.perf_counter() - t0
+                data = np.array([out[f"{c}.{v}"] for c, v in names])
+            elif engine == "ecos":
+                csv_path = Path(tmp) / "ecos.csv"
+                ids = tuple(f"{c}::{v}" for c, v in names)
+                ssp.simulate_with_ecos(path, scenario, stop, step, csv_path, ids)
+                wall = time.perf_counter() - t0
+                data = _read_ecos(csv_path, ids)
+            else:
+                raise ValueError(f"unknown engine {engine!r}")
+    # the slip from the chassis' own speeds (a terrain that refused a step keeps its last
+    # outputs, its slip among them, in an engine that goes on past a refusal)
+    radius = chassis_values(values)["rover.slip_radius"]
+    speed = data[len(RECORD) * len(rover.WHEELS) + CHASSIS_RECORD.index("speed")]
+    for k in range(len(rover.WHEELS)):
+        omega = data[k * len(RECORD) + RECORD.index("wheel_speed")]
+        rim = omega * radius
+        data[k * len(RECORD) + RECORD.index("slip")] = np.where(
+            np.abs(rim) > 1e-9, (rim - speed) / np.where(np.abs(rim) > 1e-9, rim, 1.0), 0.0)
+    # the records end where the model's domain ends, as in our masters (those engines go on
+    # past a refused step, with the refusing FMU's outputs frozen: not results)
+    problem = rover_system._outside(data)
+    left = None
+    if problem is not None:
+        k, why = problem
+        data, left = data[:, :k], f"at t = {k * step:.3f} s {why}"
+    return from_records(data, step, wall, engine, left)
+
+
+@contextlib.contextmanager
+def _stdout_to_stderr():
+    """File descriptor 1 pointed at standard error for the duration (C++ engines log there;
+    standard output may be a JSON document)."""
+    import sys
+
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        os.dup2(2, 1)
+        yield
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)
 
 
 def _read_ecos(path: Path, ids: tuple[str, ...]) -> np.ndarray:
@@ -264,18 +292,17 @@ def system_name(scenario: str) -> str:
 
 
 def system_description(scenario: str, terrain: ParameterSet, values: Mapping[str, float],
-                       slope: float, towing: float, stop: float) -> bytes:
+                       stop: float) -> bytes:
     q = ssp._q
     for prefix, uri in ssp.NS.items():
         ET.register_namespace(prefix, uri)
     root = ET.Element(q("ssd", "SystemStructureDescription"), version="1.0",
                       name=system_name(scenario))
     system = ET.SubElement(root, q("ssd", "System"), name=system_name(scenario),
-                           description=f"The Rashid rover on four wheels, scenario {scenario}: "
-                           f"slope {slope:g} rad, towing force {towing:g} N")
+                           description=f"The Rashid rover on four wheels, scenario {scenario} "
+                           "(its slope and towing ramps: the chassis' input profile)")
     elements = ET.SubElement(system, q("ssd", "Elements"))
     chassis = {p.name: ssp._binding(p, chassis_values(values)[p.name]) for p in ROVER_TABLE}
-    chassis.update({"slope": ("Real", float(slope)), "towing_force": ("Real", float(towing))})
     ins = [f"{w}.{n}" for w in rover.WHEELS for n in TO_CHASSIS]
     outs = [f"{w}.{n}" for w in rover.WHEELS for n in TO_TERRAIN]
     ssp._component(elements, CHASSIS, "resources/RoverChassis.fmu", ins, outs, chassis,
@@ -294,7 +321,7 @@ def system_description(scenario: str, terrain: ParameterSet, values: Mapping[str
 
 
 def write_ssp(path: Path, fmu_dir: Path, scenario: str, terrain: ParameterSet,
-              values: Mapping[str, float], slope: float, towing: float, stop: float) -> Path:
+              values: Mapping[str, float], stop: float) -> Path:
     """Rover.ssp for ``scenario`` (module doc), written atomically."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -303,8 +330,8 @@ def write_ssp(path: Path, fmu_dir: Path, scenario: str, terrain: ParameterSet,
         partial = Path(tmp.name)
     try:
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
-            z.writestr("SystemStructure.ssd", system_description(
-                scenario, terrain, values, slope, towing, stop))
+            z.writestr("SystemStructure.ssd", system_description(scenario, terrain, values,
+                                                                 stop))
             for name in ("RoverChassis", "WheelTerrain"):
                 z.write(Path(fmu_dir) / f"{name}.fmu", f"resources/{name}.fmu")
         os.replace(partial, path)

@@ -58,13 +58,15 @@ BASE_UNITS: dict[str, dict[str, int]] = {
     "Pa": {"kg": 1, "m": -1, "s": -2},
     "N/m3": {"kg": 1, "m": -2, "s": -2},
     "N.s/m": {"kg": 1, "s": -1},
+    "s": {"s": 1},
+    "N/s": {"kg": 1, "m": 1, "s": -3},
 }
 DISPLAY_UNITS = {"rad": {"deg": 57.29577951308232}, "m": {"mm": 1000.0}}
 MODELICA_SI = {"Length", "Velocity", "Angle", "AngularVelocity", "Acceleration",
                "AngularAcceleration", "Mass", "MomentOfInertia",
                "Force", "Torque", "Pressure", "TranslationalDampingConstant",
-               "DimensionlessRatio"}
-NON_SI_QUANTITY = {"N/m3": "WeightDensity"}
+               "DimensionlessRatio", "Time"}
+NON_SI_QUANTITY = {"N/m3": "WeightDensity", "N/s": "ForceRate"}
 
 
 class BuildError(RuntimeError):

@@ -287,6 +287,7 @@ def rover_outputs(x, u, p, motor_torques):
     (ROVER_INPUTS), the rover parameters ``p[name]`` and the four motor torques."""
     state = dict(zip(rover.STATES, x, strict=True))
     out = {name: state[name] for name in rover.CHASSIS_STATES}
+    out["effective_slope"], out["effective_towing_force"] = rover.effective_inputs(x, u, p)
     for k, w in enumerate(rover.WHEELS):
         z, rate = rover.wheel_kinematics(x, p, w)
         out.update({f"{w}.sinkage": z, f"{w}.sinkage_rate": rate,

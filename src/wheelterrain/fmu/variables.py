@@ -225,6 +225,12 @@ ROVER_IO: tuple[Var, ...] = (
         depends_on=(), nominal=0.01),
     Var("pitch_rate", "output", "Pitch rate, positive nose down", "rad/s", "AngularVelocity",
         depends_on=(), nominal=0.01),
+    Var("elapsed", "output", "Time since the start (a state: the clock of the input profile, "
+        "rover.ramp_time ... rover.towing_rate)", "s", "Time", depends_on=(), nominal=1.0),
+    Var("effective_slope", "output", "Slope the chassis feels: the input plus the profile's "
+        "ramp", "rad", "Angle", "deg", depends_on=("slope",)),
+    Var("effective_towing_force", "output", "Towing force the chassis feels: the input plus "
+        "the profile's ramp", "N", "Force", depends_on=("towing_force",)),
     *(_wheel_var(w, _RIG_ROWS[n]) for w in ROVER_WHEELS for n in _WHEEL_OUTPUTS),
     *(Var(f"{w}.position", "output", f"{w}: position of this wheel's axle along the terrain "
           "(where its soil is: a terrain map's query point)", "m", "Length", depends_on=())
@@ -296,7 +302,8 @@ VARIABLES = {TERRAIN_FMU: terrain_variables, RIG_FMU: rig_variables,
 
 
 _DERIVATIVE_QUANTITY = {"Length": "Velocity", "Velocity": "Acceleration",
-                        "Angle": "AngularVelocity", "AngularVelocity": "AngularAcceleration"}
+                        "Angle": "AngularVelocity", "AngularVelocity": "AngularAcceleration",
+                        "Time": None}
 
 
 def continuous_states(model: str) -> tuple[str, ...]:
@@ -322,6 +329,7 @@ def derivative_variables(model: str) -> list[Var]:
     for name in continuous_states(model):
         state = rows[name]
         unit = state.unit[:-2] + "/s2" if state.unit.endswith("/s") else state.unit + "/s"
+        unit = "1" if state.unit == "s" else unit  # a clock's rate
         out.append(Var(f"der({name})", "local", f"Time derivative of {name} (model exchange)",
                        unit, _DERIVATIVE_QUANTITY[state.quantity], derivative_of=name))
     return out

@@ -11,7 +11,9 @@ normal to it, positive *into* the soil (as sinkage). The slope angle is an input
 - x, u: position and speed along the terrain;
 - z, w: the sinkage of the chassis' reference point (the point of the axle line below the centre
   of mass) and its rate;
-- theta, q: pitch, positive nose down, and its rate.
+- theta, q: pitch, positive nose down, and its rate;
+- the elapsed time, a state (rate 1) so that the chassis' input profile (a slope or towing
+  ramp, :func:`effective_inputs`) runs in any engine, model exchange included.
 
 Wheels: four, on two axles (front_left, front_right at l_f = wheelbase/2 - cg_forward ahead of
 the centre of mass; rear_left, rear_right at l_r = -wheelbase/2 - cg_forward), rigidly mounted
@@ -57,7 +59,8 @@ from wheelterrain.parameters import ROVER_TABLE
 WHEELS = ("front_left", "front_right", "rear_left", "rear_right")
 FRONT = ("front_left", "front_right")
 ROVER_NAMES = tuple(p.name for p in ROVER_TABLE)
-CHASSIS_STATES = ("position", "speed", "heave", "heave_rate", "pitch", "pitch_rate")
+CHASSIS_STATES = ("position", "speed", "heave", "heave_rate", "pitch", "pitch_rate",
+                  "elapsed")
 WHEEL_STATES = ("wheel_speed", "speed_error_integral")
 STATES = (*CHASSIS_STATES, *(f"{w}.{s}" for w in WHEELS for s in WHEEL_STATES))
 WHEEL_FORCES = ("normal_force", "drawbar_pull", "torque")
@@ -121,11 +124,37 @@ def motor_torque(x, u, p, wheel: str):
                        loop), p)
 
 
+def _clip(value, bound):
+    if isinstance(value, (int, float)) and isinstance(bound, (int, float)):
+        return min(max(value, -bound), bound)
+    return ca.fmin(ca.fmax(value, -bound), bound)
+
+
+def _ramp_parts(t, p):
+    """(time before the switch, time after it) of the profile at ``t``."""
+    switch = p["rover.ramp_time"]
+    if isinstance(t, (int, float)) and isinstance(switch, (int, float)):
+        return min(t, switch), max(t - switch, 0.0)
+    return ca.fmin(t, switch), ca.fmax(t - switch, 0)
+
+
+def effective_inputs(x, u, p) -> tuple:
+    """(slope [rad], towing force [N]) the chassis feels in state ``x``: the inputs plus the
+    input profile of the ``rover.ramp_time`` ... ``rover.towing_rate`` rows at the state's
+    elapsed time (what lets an SSP carry a whole scenario, in any engine)."""
+    t = dict(zip(STATES, x, strict=True))["elapsed"]
+    before, after = _ramp_parts(t, p)
+    ramp = p["rover.slope_rate"] * before + p["rover.slope_rate_after"] * after
+    return (u["slope"] + _clip(ramp, p["rover.slope_bound"]),
+            u["towing_force"] + p["rover.towing_rate"] * t)
+
+
 def chassis_accelerations(x, u, p, motor: dict) -> tuple:
     """(du/dt, dw/dt, dq/dt) of the chassis with the motors' torques ``motor`` (by wheel)."""
     s = dict(zip(STATES, x, strict=True))
     m, g, d = p["rover.mass"], p["rover.gravity"], p["rover.cg_height"]
-    sin_s, cos_s = _trig(u["slope"])
+    slope, towing = effective_inputs(x, u, p)
+    sin_s, cos_s = _trig(slope)
     sin_t, cos_t = _trig(s["pitch"])
     pull = sum(u[f"{w}.drawbar_pull"] for w in WHEELS)
     normal = sum(u[f"{w}.normal_force"] for w in WHEELS)
@@ -134,7 +163,7 @@ def chassis_accelerations(x, u, p, motor: dict) -> tuple:
         lk = lever(p, w)
         rx, rz = lk * cos_t - d * sin_t, lk * sin_t + d * cos_t
         moment = moment - rx * u[f"{w}.normal_force"] - rz * u[f"{w}.drawbar_pull"] - motor[w]
-    return ((pull - m * g * sin_s - u["towing_force"]) / m,
+    return ((pull - m * g * sin_s - towing) / m,
             (m * g * cos_s - normal) / m,
             moment / p["rover.pitch_inertia"])
 
@@ -145,7 +174,7 @@ def rates(x, u, p) -> tuple:
     s = dict(zip(STATES, x, strict=True))
     motor = {w: motor_torque(x, u, p, w) for w in WHEELS}
     du, dw, dq = chassis_accelerations(x, u, p, motor)
-    out = [s["speed"], du, s["heave_rate"], dw, s["pitch_rate"], dq]
+    out = [s["speed"], du, s["heave_rate"], dw, s["pitch_rate"], dq, 1.0]
     loop = p["rover.drive"] != DRIVE_TORQUE
     for w in WHEELS:
         kp, ki = gains(p)
@@ -194,6 +223,7 @@ def step(x, u, p, h) -> tuple:
     nxt["heave"] = s["heave"] + h * nxt["heave_rate"]
     nxt["pitch_rate"] = s["pitch_rate"] + h * dq
     nxt["pitch"] = s["pitch"] + h * nxt["pitch_rate"]
+    nxt["elapsed"] = s["elapsed"] + h
     return tuple(nxt[k] for k in STATES), tuple(motor_next[w] for w in WHEELS)
 
 
