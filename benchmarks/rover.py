@@ -80,8 +80,7 @@ def main() -> None:
             if importlib.util.find_spec(module) is not None:
                 masters[f"{engine}, native FMUs"] = (
                     lambda engine=engine: rover_fmus.simulate_ssp(
-                        engine, native, "level", soil, {}, args.seconds, lambda t: 0.0,
-                        lambda t: 0.0))
+                        engine, native, "level", soil, {}, args.seconds))
     if (args.fmu_dir / "RoverChassis.fmu").is_file():
         masters["wheelterrain master (fmpy), pythonfmu FMUs"] = lambda: rover_fmus.simulate(
             args.fmu_dir, soil, {}, min(args.seconds, 2.0))
