@@ -778,8 +778,9 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
 
     \b
     The chassis (rigid, in the vertical plane: position, heave, pitch; four rigidly mounted
-    wheels, a speed loop each) and the four wheel-soil contacts of the one CasADi core, stepped
-    together in process (compiled C where a compiler is available). Scenarios:
+    wheels, a speed loop each) and the four wheel-soil contacts of the one CasADi core: stepped
+    together in process (compiled C where a compiler is available), or as RoverChassis.fmu and
+    four WheelTerrain.fmu in our master, libcosim or ecos (--engine). Scenarios:
       level       steady traverse at the commanded rim speed: per-wheel slip, sinkage, load
       slope       the slope rises until the rover stalls (slip 0.95), beside the predicted
                   stall slope (traction limit, or loss of stability of the steady motion)
@@ -789,7 +790,8 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
                   sum of four single-wheel curves at the axle loads
     --set changes the terrain (soil, wheel, model) and the chassis (rover.*) parameters.
     Writes OUT/<scenario>-<gravity>.png and .csv, and OUT/Rover-<scenario>.ssp (the five FMUs,
-    their connections, the scenario's parameters and initial inputs) where the FMUs are built.
+    their connections, the scenario's parameters, its slope and towing ramps included as the
+    chassis' input profile) where the FMUs are built.
     """
     from pathlib import Path
 
