@@ -63,6 +63,17 @@ def compile_function(fn: ca.Function, out_dir: Path, jacobian: bool = False,
     return library
 
 
+def cached_library(fn: ca.Function, kind: str, jacobian: bool = False,
+                   optimisation: str = "-O2") -> Path:
+    """``fn`` compiled once per version into the cache (:func:`cache_directory`/``kind``/, the
+    entry named by the SHA-256 of its C): the library's path, compiled now if missing."""
+    place = cache_directory() / kind / fingerprint(fn)[:16]
+    library = place / f"{fn.name()}.so"
+    if not library.is_file():
+        compile_function(fn, place, jacobian=jacobian, optimisation=optimisation)
+    return library
+
+
 def run_compiler(command: list[str]) -> subprocess.CompletedProcess:
     """Run a compiler command line, its output captured; a compiler that cannot be started is
     a CompileError."""

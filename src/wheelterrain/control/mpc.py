@@ -198,11 +198,7 @@ def compiled_interval() -> ca.Function:
     args = [ca.MX.sym(name, f.sparsity_in(k)) for k, name in enumerate(f.name_in())]
     fn = ca.Function(f.name(), args, f(*args), f.name_in(), f.name_out(),
                      {"is_diff_in": [name in ("x0", "x1", "command") for name in f.name_in()]})
-    digest = native.fingerprint(fn)[:16]
-    place = native.cache_directory() / "mpc" / digest
-    library = place / f"{fn.name()}.so"
-    if not library.is_file():
-        native.compile_function(fn, place, jacobian=True, optimisation="-O1")
+    library = native.cached_library(fn, "mpc", jacobian=True, optimisation="-O1")
     return ca.external(fn.name(), str(library))
 
 

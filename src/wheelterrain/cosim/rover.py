@@ -106,10 +106,7 @@ def _evaluator(block: int) -> tuple[Callable, str]:
     """The block Function compiled to C (cached between runs), else CasADi's VM; and which."""
     fn = block_function(block)
     try:
-        directory = compiled.cache_directory() / "rover" / compiled.fingerprint(fn)[:16]
-        library = directory / f"{fn.name()}.so"
-        if not library.is_file():
-            compiled.compile_function(fn, directory, optimisation="-O1")
+        library = compiled.cached_library(fn, "rover", optimisation="-O1")
         c = compiled.CompiledFunction(library, fn)
         return (lambda *a: c(*a)), "compiled C"
     except compiled.CompileError:
