@@ -43,12 +43,34 @@ CHASSIS_RECORD = ("position", "speed", "heave", "pitch", "effective_slope",
 N_X = len(rover.STATES) + len(rover.WHEELS)  # chassis states, then the four wheel angles
 
 
+def _coupled_forces(xs: list, p: dict, pt: ca.MX, angles) -> tuple[dict, list]:
+    """The chassis' inputs (by rover.INPUTS name, commands 0, slope and towing force left to
+    the caller) from the four contacts at the chassis state ``xs``, as our master couples the
+    FMUs: each wheel's sinkage, rate and slip from the chassis, its terrain parameters the
+    column of ``pt``, its angle from ``angles``. The slip is evaluated inside the contact
+    model's domain (a state outside it ends a run: :func:`simulate`). Also returns per wheel
+    (traction slip, sinkage, contact outputs by name)."""
+    fns = contact.build()
+    s = dict(zip(rover.STATES, xs, strict=True))
+    u, wheels = {}, []
+    for k, w in enumerate(rover.WHEELS):
+        z, rate = rover.wheel_kinematics(xs, p, w)
+        traction, _, _ = functions.slips(s[f"{w}.wheel_speed"], s["speed"],
+                                         p["rover.slip_radius"])
+        slip = ca.fmin(ca.fmax(traction, -1), 1)
+        out = dict(zip(contact.CONTACT_OUTPUTS,
+                       fns.contact(z, rate, slip, angles[k], pt[:, k]), strict=True))
+        u.update({f"{w}.{n}": out[n] for n in rover.WHEEL_FORCES})
+        u.update({f"{w}.{n}": 0.0 for n in rover.WHEEL_COMMANDS})
+        wheels.append((traction, z, out))
+    return u, wheels
+
+
 def _system_step() -> ca.Function:
     """``system(x, pt, pr, slope, tow, h) -> (x_next, rec)``: one communication step of the
     whole rover. ``x``: rover.STATES then four wheel angles; ``pt``: the four terrain parameter
     vectors side by side (len(NAMES) x 4); ``pr``: rover parameters; ``rec``: RECORD per wheel
     (wheel-major), then CHASSIS_RECORD, at the start of the step (the forces held over it)."""
-    fns = contact.build()
     x = ca.MX.sym("x", N_X)
     pt = ca.MX.sym("pt", len(NAMES), len(rover.WHEELS))
     pr = ca.MX.sym("pr", len(rover.ROVER_NAMES))
@@ -57,22 +79,11 @@ def _system_step() -> ca.Function:
     angles = [x[len(rover.STATES) + k] for k in range(len(rover.WHEELS))]
     p = rover.named([pr[k] for k in range(len(rover.ROVER_NAMES))])
     s = dict(zip(rover.STATES, xs, strict=True))
-    u: dict = {"slope": slope, "towing_force": tow}
-    rec = []
-    for k, w in enumerate(rover.WHEELS):
-        z, rate = rover.wheel_kinematics(xs, p, w)
-        omega = s[f"{w}.wheel_speed"]
-        traction, _, _ = functions.slips(omega, s["speed"], p["rover.slip_radius"])
-        # evaluated inside the model's domain; a step that leaves it ends the run (simulate)
-        slip = ca.fmin(ca.fmax(traction, -1), 1)
-        out = dict(zip(contact.CONTACT_OUTPUTS,
-                       fns.contact(z, rate, slip, angles[k], pt[:, k]), strict=True))
-        for name in rover.WHEEL_FORCES:
-            u[f"{w}.{name}"] = out[name]
-        u[f"{w}.wheel_speed_command"] = 0.0
-        u[f"{w}.motor_torque_command"] = 0.0
-        rec.append((traction, z, out["normal_force"], out["drawbar_pull"], out["torque"],
-                    rover.motor_torque(xs, u, p, w), omega))
+    u, wheels = _coupled_forces(xs, p, pt, angles)
+    u.update(slope=slope, towing_force=tow)
+    rec = [(traction, z, out["normal_force"], out["drawbar_pull"], out["torque"],
+            rover.motor_torque(xs, u, p, w), s[f"{w}.wheel_speed"])
+           for w, (traction, z, out) in zip(rover.WHEELS, wheels, strict=True)]
     nxt, _ = rover.step(tuple(xs), u, p, h)
     new_angles = [angles[k] + h * s[f"{w}.wheel_speed"] for k, w in enumerate(rover.WHEELS)]
     s["effective_slope"], s["effective_towing_force"] = rover.effective_inputs(xs, u, p)
@@ -141,15 +152,6 @@ class RoverResult:
     """Why the run ended before its stop time where it left the model's domain (a wheel's
     slip beyond [-1, 1], a non-finite value): the records end at the last step inside it."""
 
-    def means(self, start: float) -> dict[str, dict[str, float]]:
-        keep = self.time >= start
-        return {w: {k: float(np.mean(v[keep])) for k, v in series.items()}
-                for w, series in self.wheels.items()}
-
-
-def wheel_positions(p: Mapping[str, float], position: float) -> dict[str, float]:
-    """Each wheel's position along the path for the chassis' reference point at ``position``."""
-    return {w: position + rover.lever(p, w) + p["rover.cg_forward"] for w in rover.WHEELS}
 
 
 def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: float = STEP,
@@ -169,8 +171,8 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
     t0 = time.perf_counter()
     for b in range(blocks):
         t = b * block * step
-        where = wheel_positions(p, x[0])
-        pt = np.column_stack([soil.at(where[w]).vector() for w in rover.WHEELS])
+        pt = np.column_stack([soil.at(rover.wheel_position(p, x[0], w)).vector()
+                              for w in rover.WHEELS])
         x, rec = evaluate(x, pt.ravel(order="F"), pr, slope, towing, step)
         rec = np.asarray(rec, dtype=float).reshape(N_REC, block, order="F")
         problem = _outside(rec)
@@ -180,21 +182,34 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
             left = f"at t = {t + k * step:.3f} s {why}"
             break
         records.append(rec)
-        if stop_when is not None and stop_when(_last(rec)):
+        if stop_when is not None and stop_when(last_values(rec[:, -1])):
             break
     wall = time.perf_counter() - t0
     return from_records(np.concatenate(records, axis=1), step, wall, f"in-process ({engine})",
                         left)
 
 
+def named_record(rec) -> tuple[dict, dict]:
+    """(per wheel {RECORD name: row}, {CHASSIS_RECORD name: row}) of record rows ``rec`` (RECORD
+    per wheel, wheel-major, then CHASSIS_RECORD): a whole record or one column of it."""
+    wheels = {w: {name: rec[k * len(RECORD) + j] for j, name in enumerate(RECORD)}
+              for k, w in enumerate(rover.WHEELS)}
+    base = len(RECORD) * len(rover.WHEELS)
+    return wheels, {name: rec[base + j] for j, name in enumerate(CHASSIS_RECORD)}
+
+
+def last_values(column) -> dict:
+    """One step's record column by name (``front_left.slip``, ..., ``speed``): what a
+    ``stop_when`` is given."""
+    wheels, chassis = named_record(column)
+    return {**{f"{w}.{n}": v for w, d in wheels.items() for n, v in d.items()}, **chassis}
+
+
 def from_records(allrec: np.ndarray, step: float, wall: float, engine: str,
                  left: str | None = None) -> RoverResult:
     """A RoverResult from the record rows (RECORD per wheel, then CHASSIS_RECORD) by step."""
     n = allrec.shape[1]
-    wheels = {w: {name: allrec[k * len(RECORD) + j] for j, name in enumerate(RECORD)}
-              for k, w in enumerate(rover.WHEELS)}
-    base = len(RECORD) * len(rover.WHEELS)
-    chassis = {name: allrec[base + j] for j, name in enumerate(CHASSIS_RECORD)}
+    wheels, chassis = named_record(allrec)
     inputs = {"slope": chassis.pop("effective_slope"),
               "towing_force": chassis.pop("effective_towing_force")}
     return RoverResult(np.arange(n) * step, wheels, chassis, wall, engine, inputs, left)
@@ -217,15 +232,6 @@ def _outside(rec: np.ndarray) -> tuple[int, str] | None:
     return k, "a value became non-finite"
 
 
-def _last(rec: np.ndarray) -> dict:
-    last = rec[:, -1]
-    out = {f"{w}.{name}": last[k * len(RECORD) + j] for k, w in enumerate(rover.WHEELS)
-           for j, name in enumerate(RECORD)}
-    base = len(RECORD) * len(rover.WHEELS)
-    out.update({name: last[base + j] for j, name in enumerate(CHASSIS_RECORD)})
-    return out
-
-
 # --- the steady-state prediction: traction limit and linear stability ------------------------
 
 MOVING = tuple(n for n in rover.STATES if n not in ("position", "elapsed"))
@@ -238,23 +244,14 @@ def _closed_loop() -> tuple[ca.Function, ca.Function]:
     """``rates(x, pt, pr, slope, tow) -> dx`` of the whole rover in continuous time (the
     contacts' forces at the state, ripple as the terrain parameters say) over MOVING, and its
     exact Jacobian ``jac(x, pt, pr, slope, tow)`` by MOVING."""
-    fns = contact.build()
     x = ca.MX.sym("x", len(rover.STATES))
     pt = ca.MX.sym("pt", len(NAMES), len(rover.WHEELS))
     pr = ca.MX.sym("pr", len(rover.ROVER_NAMES))
     slope, tow = ca.MX.sym("slope"), ca.MX.sym("tow")
     xs = [x[k] for k in range(len(rover.STATES))]
     p = rover.named([pr[k] for k in range(len(rover.ROVER_NAMES))])
-    s = dict(zip(rover.STATES, xs, strict=True))
-    u: dict = {"slope": slope, "towing_force": tow}
-    for k, w in enumerate(rover.WHEELS):
-        z, rate = rover.wheel_kinematics(xs, p, w)
-        traction, _, _ = functions.slips(s[f"{w}.wheel_speed"], s["speed"],
-                                         p["rover.slip_radius"])
-        out = dict(zip(contact.CONTACT_OUTPUTS, fns.contact(z, rate, traction, 0.0, pt[:, k]),
-                       strict=True))
-        u.update({f"{w}.{n}": out[n] for n in rover.WHEEL_FORCES})
-        u.update({f"{w}.{n}": 0.0 for n in rover.WHEEL_COMMANDS})
+    u, _ = _coupled_forces(xs, p, pt, [0.0] * len(rover.WHEELS))  # grouser-period mean
+    u.update(slope=slope, towing_force=tow)
     dx = ca.vertcat(*rover.rates(tuple(xs), u, p))
     keep = [rover.STATES.index(n) for n in MOVING]
     f = ca.Function("rover_rates_closed", [x, pt, pr, slope, tow], [dx[keep]])

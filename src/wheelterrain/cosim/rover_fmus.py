@@ -172,7 +172,7 @@ def simulate(fmu_dir: Path, soil: Soil, values: Mapping[str, float], stop: float
             t = k * step
             row = system.exchange()
             rows.append(row)
-            if stop_when is not None and stop_when(_named_row(row)):
+            if stop_when is not None and stop_when(rover_system.last_values(row)):
                 break
             try:
                 system.step(t, step)
@@ -185,14 +185,6 @@ def simulate(fmu_dir: Path, soil: Soil, values: Mapping[str, float], stop: float
         wall = time.perf_counter() - t0
         system.close()
     return from_records(np.array(rows).T, step, wall, "wheelterrain master (fmpy)", left)
-
-
-def _named_row(row: list[float]) -> dict:
-    out = {f"{w}.{r}": row[k * len(RECORD) + j] for k, w in enumerate(rover.WHEELS)
-           for j, r in enumerate(RECORD)}
-    base = len(RECORD) * len(rover.WHEELS)
-    out.update({n: row[base + j] for j, n in enumerate(CHASSIS_RECORD)})
-    return out
 
 
 # what an SSP engine records, per wheel (component, variable) for each of RECORD

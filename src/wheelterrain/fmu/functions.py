@@ -294,8 +294,7 @@ def rover_outputs(x, u, p, motor_torques):
                     f"{w}.wheel_speed": state[f"{w}.wheel_speed"],
                     f"{w}.carriage_speed": state["speed"], f"{w}.motor_torque": motor_torques[k],
                     f"{w}.speed_error_integral": state[f"{w}.speed_error_integral"],
-                    f"{w}.position": state["position"] + rover.lever(p, w)
-                    + p["rover.cg_forward"]})
+                    f"{w}.position": rover.wheel_position(p, state["position"], w)})
     return tuple(out[name] for name in ROVER_OUTPUTS)
 
 

@@ -88,6 +88,12 @@ def lever(p, wheel: str):
     return (half if wheel in FRONT else -half) - p["rover.cg_forward"]
 
 
+def wheel_position(p, position, wheel: str):
+    """Where ``wheel``'s axle is along the path [m] with the chassis' reference point (the axle
+    line below the centre of mass) at ``position``."""
+    return position + lever(p, wheel) + p["rover.cg_forward"]
+
+
 def wheel_kinematics(x, p, wheel: str) -> tuple:
     """(sinkage, sinkage_rate) of ``wheel`` from the chassis state ``x``."""
     s = dict(zip(STATES, x, strict=True))
@@ -176,8 +182,8 @@ def rates(x, u, p) -> tuple:
     du, dw, dq = chassis_accelerations(x, u, p, motor)
     out = [s["speed"], du, s["heave_rate"], dw, s["pitch_rate"], dq, 1.0]
     loop = p["rover.drive"] != DRIVE_TORQUE
+    kp, ki = gains(p)
     for w in WHEELS:
-        kp, ki = gains(p)
         error = _speed_reference(u, p, w) - s[f"{w}.wheel_speed"]
         unsaturated = kp * error + ki * s[f"{w}.speed_error_integral"]
         integrating = pick(loop, pick(_saturated(unsaturated, p), 0.0, 1.0), 0.0)
