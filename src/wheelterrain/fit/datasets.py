@@ -38,10 +38,6 @@ TEST_COLUMNS = ("load", "slip", "drawbar_pull", "sinkage")
 SOIL_COMMON = ("soil.n0", "soil.cohesion", "soil.phi", "soil.gamma", "soil.shear_modulus")
 REECE = ("soil.k_c", "soil.k_phi")
 BEKKER = ("bekker.k_c", "bekker.k_phi")
-SOIL_KEYS = ("soil.cohesion", "soil.phi", "soil.k_c", "soil.k_phi", "soil.n0", "soil.gamma",
-             "soil.shear_modulus")
-"""A soil's own values in the table's names: what a data set brings; everything else (the model
-form) is the model's."""
 UNITS = {"load": "N", "slip": "1", "drawbar_pull": "N", "sinkage": "m", "torque": "N.m",
          "bekker.k_c": "N/m^(n+1)", "bekker.k_phi": "N/m^(n+2)", "dataset": "", "case": ""}
 DEFAULT_SPREAD = {

@@ -49,10 +49,6 @@ _DING_BEKKER = {"n": 1.10, "k_c": 15.6e3, "k_phi": 2407.4e3, "cohesion": 250.0,
 p = (k_c/b + k_phi)*z**n with k_c in N/m^(n+1), k_phi in N/m^(n+2); cohesion Pa; bulk density
 kg/m3; Janosi K m."""
 GRAVITY = 9.81  # m/s2: the data were taken on Earth
-SOIL_KEYS = ("soil.cohesion", "soil.phi", "soil.k_c", "soil.k_phi", "soil.n0", "soil.gamma",
-             "soil.shear_modulus")
-"""What a transfer takes from the other soil; everything else (the model form: contact form,
-n1, radius factors, exit ratio, shear law and kinematics) stays the preset's."""
 
 
 def ding_soil(width: float) -> dict[str, float]:

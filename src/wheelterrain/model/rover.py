@@ -322,34 +322,3 @@ def steady_balance(terrain: Mapping, p: Mapping, slope: float, slip: float,
     surplus = sum(out[w]["drawbar_pull"] for w in WHEELS) - m * g * math.sin(slope) - towing
     return {"loads": {w: out[w]["load"] for w in WHEELS}, "wheels": out, "surplus": surplus,
             "slip": slip, "slope": slope}
-
-
-def stall_slope(terrain: Mapping, p: Mapping, slips=None) -> dict:
-    """The steepest slope [rad] on which the rover still climbs in steady motion: where the
-    largest pull surplus over the wheels' slip (a grid refined around its best point) falls
-    to 0, with the load transfer of :func:`steady_balance`. Returns the slope and the slip of
-    the largest pull there."""
-    import numpy as np
-    from scipy.optimize import brentq, minimize_scalar
-
-    grid = np.linspace(0.02, 0.95, 32) if slips is None else np.asarray(slips)
-
-    def best(slope: float) -> tuple[float, float]:
-        values = [steady_balance(terrain, p, slope, i)["surplus"] for i in grid]
-        k = int(np.argmax(values))
-        lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
-        if hi > lo:
-            r = minimize_scalar(lambda i: -steady_balance(terrain, p, slope, i)["surplus"],
-                                bounds=(lo, hi), method="bounded",
-                                options={"xatol": 1e-6})
-            if -r.fun > values[k]:
-                return float(-r.fun), float(r.x)
-        return float(values[k]), float(grid[k])
-
-    if best(0.0)[0] <= 0:
-        return {"slope": 0.0, "slip": best(0.0)[1]}
-    top = math.radians(60)
-    if best(top)[0] > 0:
-        return {"slope": top, "slip": best(top)[1]}
-    slope = brentq(lambda a: best(a)[0], 0.0, top, xtol=1e-7)
-    return {"slope": slope, "slip": best(slope)[1]}
