@@ -84,10 +84,18 @@ def parameters(form: Form, point: Point, constants: dict[str, float] | None = No
     return ParameterSet({**form.values, **NO_RIPPLE, **(constants or {}), **point.values})
 
 
+PREDICTED = ("drawbar_pull", "sinkage", "torque")
+
+
+def steady(form: Form, point: Point, constants: dict[str, float] | None = None) -> dict:
+    """The whole steady state of ``point`` in ``form`` (:func:`wheelterrain.model.steady_state`)."""
+    return model.steady_state(parameters(form, point, constants), point.load, point.slip)
+
+
 def predict(form: Form, point: Point, constants: dict[str, float] | None = None) -> dict:
     """Steady-state drawbar pull, sinkage and torque of ``point`` in ``form``."""
-    out = model.steady_state(parameters(form, point, constants), point.load, point.slip)
-    return {k: out[k] for k in ("drawbar_pull", "sinkage", "torque")}
+    out = steady(form, point, constants)
+    return {k: out[k] for k in PREDICTED}
 
 
 def _residuals(form: Form, names: Sequence[str], x, sets: Sequence[Dataset]) -> np.ndarray:
@@ -126,11 +134,13 @@ def fit_constants(form: Form, sets: Sequence[Dataset], starts: int = 3, seed: in
     return dict(zip(names, map(float, best.x), strict=True))
 
 
-def soil_sigma(form: Form, point: Point, constants: dict[str, float]) -> dict[str, float]:
+def soil_sigma(form: Form, point: Point, constants: dict[str, float],
+               state: dict | None = None) -> dict[str, float]:
     """One standard deviation of the pull [N] and sinkage [m] of ``point`` from its soil
-    values' spreads, through the exact Jacobian of the steady state."""
+    values' spreads, through the exact Jacobian of the steady state (``state``: that steady
+    state, :func:`steady`, if the caller has it; else it is solved here)."""
     ps = parameters(form, point, constants)
-    jac = model.steady_jacobian(ps, point.load, point.slip)["d_params"]
+    jac = model.steady_jacobian(ps, point.load, point.slip, state=state)["d_params"]
     rows = {"sinkage": 0, "drawbar_pull": 2}  # steady_jacobian rows: sinkage, Fz, DP, T
     var = dict.fromkeys(rows, 0.0)
     for name, (rel, absolute) in DEFAULT_SPREAD.items():
@@ -157,8 +167,8 @@ class Discrepancy:
         for ds in sets:
             for pt in ds.points:
                 try:
-                    out = predict(form, pt, constants)
-                    sigma = soil_sigma(form, pt, constants)
+                    out = steady(form, pt, constants)
+                    sigma = soil_sigma(form, pt, constants, out)
                 except WheelTerrainError:
                     continue
                 for key, scale, needed in (("drawbar_pull", pt.load, pull),
@@ -214,15 +224,16 @@ def judge(form: Form, constants: dict[str, float], discrepancy: Discrepancy, hel
         entry = {"case": pt.case, "load": pt.load, "slip": pt.slip,
                  "measured": {"drawbar_pull": pt.drawbar_pull, "sinkage": pt.sinkage}}
         try:
-            out = predict(form, pt, constants)
+            state = steady(form, pt, constants)
         except WheelTerrainError as err:
             fold.error = f"{pt.case}: {err}"
             entry.update(drawbar_pull=None, sinkage=None)
             fold.points.append(entry)
             continue
+        out = {k: state[k] for k in PREDICTED}
         entry.update(out)
         if intervals:
-            half = discrepancy.half_widths(soil_sigma(form, pt, constants), pt.load)
+            half = discrepancy.half_widths(soil_sigma(form, pt, constants, state), pt.load)
             entry["interval"] = {k: [out[k] - h, out[k] + h] for k, h in half.items()}
             entry["inside"] = {k: bool(abs(out[k] - entry["measured"][k]) <= h)
                                for k, h in half.items()}
@@ -331,7 +342,7 @@ def preset_interval(ps: ParameterSet, load: float, slip: float,
     discrepancy = Discrepancy.learn(form, {}, shipped)
     point = Point("steady", "steady", {k: ps[k] for k in ps}, {}, load, slip, math.nan,
                   math.nan)
-    out = model.steady_state(ParameterSet({k: ps[k] for k in ps}), load, slip)
-    sigma = soil_sigma(Form("preset", "", {}), point, {})
+    out = model.steady_state(ps, load, slip)
+    sigma = soil_sigma(Form("preset", "", {}), point, {}, out)
     half = discrepancy.half_widths(sigma, load)
     return {k: [out[k] - h, out[k] + h] for k, h in half.items()}
