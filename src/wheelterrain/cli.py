@@ -28,7 +28,7 @@ from wheelterrain.errors import (
     WheelTerrainError,
 )
 from wheelterrain.model import slip as slips
-from wheelterrain.parameters import DEG, TABLE, parse_assignments
+from wheelterrain.parameters import DEG, TABLE, parse_assignments, rover_lookup
 
 EXIT_USAGE, EXIT_INFEASIBLE, EXIT_NUMERICAL = 2, 3, 4
 OUTPUT_ERRORS = {errno.ENOSPC, errno.EPIPE, errno.EIO, getattr(errno, "EDQUOT", errno.ENOSPC)}
@@ -798,23 +798,15 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     from wheelterrain import plots
     from wheelterrain.cosim import master as cosim
     from wheelterrain.cosim import rover as rover_system
-    from wheelterrain.model import rover as chassis
 
     _check_file_target(json_target)
     _check_out_dir(out)
-    chassis_values = {}
-    terrain_items = []
-    for item in assignments:
-        name = item.partition("=")[0].strip()
-        if name in chassis.ROVER_NAMES:
-            try:
-                row = next(p for p in chassis.ROVER_TABLE if p.name == name)
-                chassis_values[name] = row.check(item.partition("=")[2].strip())
-            except WheelTerrainError as err:
-                _fail(err)
-        else:
-            terrain_items.append(item)
-    ps = _load(preset, tuple(terrain_items))
+    rover_items = [a for a in assignments if a.strip().startswith("rover.")]
+    try:
+        chassis_values = parse_assignments(rover_items, find=rover_lookup)
+    except WheelTerrainError as err:
+        _fail(err)
+    ps = _load(preset, tuple(a for a in assignments if a not in rover_items))
     folder = Path(fmu_dir) if fmu_dir else next(
         (d for d in (Path("build/native"), Path("build"))
          if (d / "RoverChassis.fmu").is_file() and (d / "WheelTerrain.fmu").is_file()),

@@ -496,15 +496,29 @@ class ParameterSet(Mapping[str, float]):
         return f"ParameterSet({changed})"
 
 
-def parse_assignments(items: Iterable[str]) -> dict[str, float]:
-    """Parse ``NAME=VALUE`` strings (the CLI's ``--set``). Angles accept a ``deg`` suffix."""
+def rover_lookup(name: str) -> Parameter:
+    """The rover row ``name`` (RoverChassis.fmu), or ParameterError listing close names."""
+    for p in ROVER_TABLE:
+        if p.name == name:
+            return p
+    import difflib
+
+    close = difflib.get_close_matches(name, ROVER_NAMES, n=3)
+    hint = f"; did you mean {', '.join(close)}?" if close else ""
+    raise ParameterError(name, None, f"is not a rover parameter{hint}")
+
+
+def parse_assignments(items: Iterable[str], find=lookup) -> dict[str, float]:
+    """Parse ``NAME=VALUE`` strings (the CLI's ``--set``). Angles accept a ``deg`` suffix.
+    ``find``: the row of a name (default the terrain table's :func:`lookup`; the rover's
+    :func:`rover_lookup`)."""
     out: dict[str, float] = {}
     for item in items:
         name, sep, text = item.partition("=")
         name, text = name.strip(), text.strip()
         if not sep or not name or not text:
             raise ParameterError(item, None, "is not of the form NAME=VALUE (e.g. soil.phi=0.45)")
-        param = lookup(name)
+        param = find(name)
         factor = 1.0
         if text.lower().endswith("deg"):
             if param.unit != "rad":
