@@ -44,6 +44,7 @@ from wheelterrain.cosim.rover import (
     from_records,
 )
 from wheelterrain.errors import CosimulationError
+from wheelterrain.fmu import functions
 from wheelterrain.fmu.instance import Instance
 from wheelterrain.model import rover
 from wheelterrain.parameters import ROVER_TABLE, TABLE, ParameterSet
@@ -234,12 +235,10 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
     # the slip from the chassis' own speeds (a terrain that refused a step keeps its last
     # outputs, its slip among them, in an engine that goes on past a refusal)
     radius = chassis_values(values)["rover.slip_radius"]
-    speed = data[len(RECORD) * len(rover.WHEELS) + CHASSIS_RECORD.index("speed")]
-    for k in range(len(rover.WHEELS)):
-        omega = data[k * len(RECORD) + RECORD.index("wheel_speed")]
-        rim = omega * radius
-        data[k * len(RECORD) + RECORD.index("slip")] = np.where(
-            np.abs(rim) > 1e-9, (rim - speed) / np.where(np.abs(rim) > 1e-9, rim, 1.0), 0.0)
+    wheels, chassis = rover_system.named_record(data)
+    for k, w in enumerate(rover.WHEELS):
+        traction, _, _ = functions.slips(wheels[w]["wheel_speed"], chassis["speed"], radius)
+        data[k * len(RECORD) + RECORD.index("slip")] = np.asarray(traction).ravel()
     # the records end where the model's domain ends, as in our masters (those engines go on
     # past a refused step, with the refusing FMU's outputs frozen: not results)
     problem = rover_system._outside(data)
