@@ -51,8 +51,8 @@ DEFAULT_SPREAD = {
 }
 """One standard deviation of a soil value where a data set states none, as (relative, absolute)
 added in quadrature: friction angle 2 deg, cohesion 30 % + 100 Pa, moduli and K 30 %, exponent
-0.1, density 5 %. Typical repeatability of direct-shear and bevameter tests on one prepared soil
-(Wong, *Theory of Ground Vehicles*, ch. 2, on the scatter of measured terrain values)."""
+0.1, density 5 %. This project's assumption of the repeatability of direct-shear and bevameter
+tests on one prepared soil, not a measured figure (validation/DATA.md says so too)."""
 
 
 @dataclass(frozen=True)
