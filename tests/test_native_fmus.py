@@ -33,7 +33,7 @@ from wheelterrain.fmu.instance import Instance
 from wheelterrain.parameters import TABLE
 
 pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
-NAMES = ("WheelTerrain", "SingleWheelRig", "RoverChassis")
+NAMES = ("WheelTerrain", "SingleWheelRig", "RoverChassis", "Terrain")
 
 
 @pytest.fixture(scope="module")
@@ -1032,34 +1032,35 @@ def test_a_long_run_keeps_memory_flat(flavours, flavour, steps):
 
 
 def _edge_points(rows):
-    """(input, value) at each edge of every declared Real input range, at zero and at its
-    start: the points users reach."""
+    """(input, value) at each edge of every declared Real input range, at zero (where the range
+    holds it) and at its start: the points users reach."""
     points = []
     for v in rows:
         if v.causality == "input" and v.type == "Real":
-            values = {v.min, v.max, 0.0, v.start}
+            values = {v.min, v.max, v.start, *((0.0,) if v.min <= 0.0 <= v.max else ())}
             points += [(v.name, x) for x in sorted(x for x in values if x is not None)]
     return points
 
 
 @pytest.mark.parametrize("flavour", ["pythonfmu", "native", "fmi3"])
 @pytest.mark.parametrize(("name", "mode"), [("WheelTerrain", False), ("WheelTerrain", True),
-                                            ("SingleWheelRig", None)])
+                                            ("SingleWheelRig", None), ("Terrain", None)])
 def test_no_output_is_a_sentinel_served_as_ok_at_the_edges_of_every_input(flavours, flavour,
                                                                            name, mode):
     """Every input at each end of its declared range, at zero and at its start (the others
     at their starts): the step is refused, or every output is finite, or an output the table
     declares undefined there (functions.UNDEFINED_OUTPUTS) is NaN with a logged warning. No
-    large stand-in number (the paper's slip used to be 1e9 with the carriage at rest)."""
+    large stand-in number (the paper's slip used to be 1e9 with the carriage at rest). The
+    wheel takes its soil from its ground.* inputs, so their edges reach the model too."""
     from wheelterrain.fmu.functions import SPEED_FLOOR, UNDEFINED_OUTPUTS
 
-    rows = variables.terrain_variables() if name == "WheelTerrain" else variables.rig_variables()
+    rows = variables.VARIABLES[name]()
     outputs = [v.name for v in rows if v.causality == "output"]
     starts = {v.name: v.start for v in rows if v.causality == "input" and v.type == "Real"}
     folder = "native/fmi3" if flavour == "fmi3" else flavour
     path = flavours["root"] / folder / f"{name}.fmu"
     key = ("fmi3" if flavour == "fmi3" else flavour, name)
-    values = {} if mode is None else {"quasi_static": mode}
+    values = {} if mode is None else {"quasi_static": mode, "soil_from_inputs": True}
     served = undefined = 0
     for k, (changed, x) in enumerate(_edge_points(rows)):
         with Instance(path, flavours["unzip"][key], f"edge{k}", log=True) as fmu:

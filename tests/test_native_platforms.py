@@ -84,7 +84,19 @@ def _scripts(built):
                                                                "rear_left", "rear_right")
                         for n, a, b in (("normal_force", 24.0, 1.0), ("drawbar_pull", 1.0, 0.5),
                                         ("torque", 0.1, 0.05)))
+    g = _vrs(built, "Terrain")
+    ground_out = ",".join(str(g[n]) for n in ("ground.phi", "ground.k_phi", "ground.cohesion"))
     return {
+        # the terrain map: the query point runs from 0 to 3 m across a patch on [1, 2) m
+        "Terrain": ("Terrain", 300, 1e-2, f"{g['patch.start']}=1,{g['patch.end']}=2,"
+                    f"{g['patch.phi']}=0.3,{g['patch.k_phi']}=40,{g['patch.cohesion']}=200",
+                    f"{g['position']}=0+1", ground_out),
+        # a wheel taking its soil from its ground.* inputs (another soil than its parameters)
+        "WheelTerrain ground": ("WheelTerrain", 200, 2e-3,
+                                f"b{t['soil_from_inputs']}=1,{t['ground.phi']}=0.5,"
+                                f"{t['ground.k_phi']}=300",
+                                f"{t['sinkage']}=0.01+0.02,{t['wheel_speed']}=0.6+0,"
+                                f"{t['carriage_speed']}=0.024+0", terrain_out),
         # dynamic contact: the sinkage ramps from 10 to 20 mm while the wheel turns
         "WheelTerrain dynamic": ("WheelTerrain", 500, 2e-3, f"{t['soil.phi']}=0.6",
                                  f"{t['sinkage']}=0.01+0.02,{t['wheel_speed']}=0.6+0,"
@@ -106,7 +118,8 @@ def _scripts(built):
 
 @pytest.mark.parametrize("fmi", ["2", "3"])
 @pytest.mark.parametrize("case", ["WheelTerrain dynamic", "WheelTerrain quasi-static",
-                                  "SingleWheelRig", "RoverChassis"])
+                                  "WheelTerrain ground", "SingleWheelRig", "RoverChassis",
+                                  "Terrain"])
 def test_the_win64_binary_under_wine_gives_the_linux64_numbers(built, case, fmi):
     model, *script = _scripts(built)[case]
     linux = _run(built, "linux64", fmi, model, *script)

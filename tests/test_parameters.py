@@ -93,12 +93,26 @@ def test_rig_parameters_are_rows_of_the_one_table_and_each_fmu_takes_its_own():
     vector (TABLE) holds no rig row."""
     from wheelterrain.fmu import variables
     from wheelterrain.model import rig
-    from wheelterrain.parameters import RIG_FMU, ROVER_FMU, ROVER_TABLE, ROWS, TABLE, TERRAIN_FMU
+    from wheelterrain.parameters import (
+        GROUND_FMU,
+        GROUND_TABLE,
+        RIG_FMU,
+        ROVER_FMU,
+        ROVER_TABLE,
+        ROWS,
+        TABLE,
+        TERRAIN_FMU,
+    )
 
     assert tuple(p for p in ROWS if p.fmu == RIG_FMU) == rig.RIG_TABLE
     assert tuple(p for p in ROWS if p.fmu == TERRAIN_FMU) == TABLE
     assert tuple(p for p in ROWS if p.fmu == ROVER_FMU) == ROVER_TABLE
-    assert {p.fmu for p in ROWS} == {RIG_FMU, TERRAIN_FMU, ROVER_FMU}
+    assert tuple(p for p in ROWS if p.fmu == GROUND_FMU) == GROUND_TABLE
+    assert {p.fmu for p in ROWS} == {RIG_FMU, TERRAIN_FMU, ROVER_FMU, GROUND_FMU}
+    # the terrain map's own rows follow the soil rows it shares with WheelTerrain
+    map_params = [v.name for v in variables.ground_variables() if v.causality == "parameter"]
+    assert map_params == [*(p.name for p in variables.SOIL_ROWS),
+                          *(p.name for p in GROUND_TABLE)]
     for fmu, build in ((TERRAIN_FMU, variables.terrain_variables),
                        (RIG_FMU, variables.rig_variables)):
         params = [v.name for v in build() if v.causality == "parameter"]

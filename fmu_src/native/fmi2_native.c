@@ -83,7 +83,7 @@ typedef struct {
     char guid[48]; /* the model's GUID: a state of another FMU (or build) is refused */
     double v[N_VARS];
     int invalid[N_VARS];
-    double s[N_STATES];
+    double s[AT_LEAST_ONE(N_STATES)];
     int dirty;
     int operating_error;
     int mode;
@@ -208,7 +208,7 @@ static int any_invalid(Instance *c, int report) {
 }
 
 static void refresh(Instance *c) {
-    double dx[N_CONTINUOUS];
+    double dx[AT_LEAST_ONE(N_CONTINUOUS)];
     if (!c->b.dirty || any_invalid(c, 0)) return;
     c->b.dirty = 0;
     c->b.operating_error = 0;
@@ -640,7 +640,7 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
         /* Not evaluated since the last set: step, then evaluate once, at the step's end (what
            the master reads next), so a set + doStep + get costs one evaluation. The model's
            refusals depend on its inputs, not on its state; a refused step is not taken. */
-        double start[N_STATES];
+        double start[AT_LEAST_ONE(N_STATES)];
         memcpy(start, c->b.s, sizeof start);
         model_step(c, t, h);
         refresh(c);

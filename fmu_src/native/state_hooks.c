@@ -1,4 +1,4 @@
-/* The model hooks of a state-space FMU (SingleWheelRig, RoverChassis) for fmi2_native.c
+/* The model hooks of a state-space FMU (SingleWheelRig, RoverChassis, Terrain) for fmi2_native.c
  * (copied into the FMU as sources/model_hooks.inc).
  *
  * Values in and out of the CasADi Functions <prefix>_step / _outputs / _initial / _rates
@@ -6,7 +6,8 @@
  * model's states (the continuous states of model exchange); states N_X..N_X+N_MEM-1 hold the
  * memory of the last step (the motors' torques). Sizes, value references, the domain check and
  * its messages come from the generated model_vars.h: IN_VRS, OUT_VRS, P_VRS, N_X, N_U, N_P,
- * N_OUT, N_MEM, X_DEPTH, DEPTH_LIMIT, X_NONFINITE_0..2, MESSAGE_DEPTH, MESSAGE_NONFINITE. */
+ * N_OUT, N_MEM, X_DEPTH, DEPTH_LIMIT, X_NONFINITE_0..2, MESSAGE_DEPTH, MESSAGE_NONFINITE (the
+ * last five undefined for a model without states, Terrain: nothing to check). */
 
 /* The model's refusals depend on its state: each step is checked at its start (fmi2DoStep). */
 #define MODEL_CHECKS_AT_STEP_END 0
@@ -54,6 +55,7 @@ static void model_reset(Instance *c) { model_initialize(c); }
 /* The model's own domain (wheelterrain.fmu.functions.StateModel.problem, same checks and
    messages): a state that is not finite, or the depth state beyond DEPTH_LIMIT. */
 static int state_problem(const Instance *c, char *message) {
+#ifdef X_DEPTH
     const casadi_real *s = c->b.s;
     int k;
     for (k = 0; k < N_X; k++) {
@@ -67,6 +69,10 @@ static int state_problem(const Instance *c, char *message) {
         snprintf(message, MAX_MESSAGE, MESSAGE_DEPTH, s[X_DEPTH], DEPTH_LIMIT, DEPTH_LIMIT);
         return 1;
     }
+#else /* a model without states (X_DEPTH undefined): nothing to check */
+    (void)c;
+    (void)message;
+#endif
     return 0;
 }
 
@@ -75,7 +81,7 @@ static int state_problem(const Instance *c, char *message) {
    torques) is the one of this state and these commands (set from <prefix>_rates first); in
    co-simulation it stays that of the last step. */
 static int model_refresh(Instance *c, double *dx, char *message) {
-    casadi_real u[N_U], p[N_P], y[N_OUT], memory[N_MEM];
+    casadi_real u[N_U], p[N_P], y[N_OUT], memory[AT_LEAST_ONE(N_MEM)];
     int k;
     if (state_problem(c, message)) return 1;
     bind_state_inputs_params(c, u, p);
@@ -92,7 +98,7 @@ static int model_refresh(Instance *c, double *dx, char *message) {
 }
 
 static void model_step(Instance *c, double t, double h) {
-    casadi_real u[N_U], p[N_P], x_next[N_X], memory[N_MEM];
+    casadi_real u[N_U], p[N_P], x_next[AT_LEAST_ONE(N_X)], memory[AT_LEAST_ONE(N_MEM)];
     int k;
     (void)t;
     bind_state_inputs_params(c, u, p);

@@ -5,8 +5,8 @@
  * grouser ripple follows the wheel's rotation. Everything model-specific that is a list of names
  * (value references, sizes, status codes and their messages) comes from the generated
  * model_vars.h, itself generated from the one variables table: IN_VRS, OUT_VRS, P_VRS, N_IN,
- * N_OUT, N_P, VR_*, STATUS_*, MESSAGE_*. The wheel angle is the one continuous state of
- * model exchange. */
+ * N_OUT, N_P, N_GROUND, GROUND_VRS, GROUND_P, VR_*, STATUS_*, MESSAGE_*. The wheel angle is the
+ * one continuous state of model exchange. */
 
 /* The terrain's refusals (slip, burial, load, convergence) depend on its inputs, not on the
    wheel angle: a step with unevaluated inputs is evaluated once, at its end (fmi2DoStep). */
@@ -33,6 +33,9 @@ static int model_refresh(Instance *c, double *dx, char *message) {
     int k;
     for (k = 0; k < N_IN; k++) u[k] = c->b.v[IN_VRS[k]];
     for (k = 0; k < N_P; k++) p[k] = c->b.v[P_VRS[k]];
+    /* the soil under the wheel from a terrain map's query point (ground.* inputs) */
+    if (c->b.v[VR_SOIL_FROM_INPUTS] != 0.0)
+        for (k = 0; k < N_GROUND; k++) p[GROUND_P[k]] = c->b.v[GROUND_VRS[k]];
     c->res[0] = y;
     c->res[1] = &status;
     c->res[2] = &info;

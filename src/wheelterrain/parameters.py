@@ -24,7 +24,8 @@ import numpy as np
 from wheelterrain.errors import ParameterError
 
 DEG = math.pi / 180.0
-TERRAIN_FMU, RIG_FMU, ROVER_FMU = "WheelTerrain", "SingleWheelRig", "RoverChassis"
+TERRAIN_FMU, RIG_FMU, ROVER_FMU, GROUND_FMU = ("WheelTerrain", "SingleWheelRig", "RoverChassis",
+                                              "Terrain")
 
 
 @dataclass(frozen=True)
@@ -426,8 +427,32 @@ ROVER_TABLE: tuple[Parameter, ...] = (
        "the integrator stops while saturated).",
        f"{_ASSUMED}: a small geared DC motor", quantity="Torque"),
 )
-ROWS: tuple[Parameter, ...] = (*TABLE, *RIG_TABLE, *ROVER_TABLE)
-"""Every parameter of the project, terrain rows, rig rows, rover rows: the one table."""
+
+
+# --- a terrain map along the path (Terrain.fmu): its soil is the soil rows above, and a patch ---
+
+
+def _patch_row(p: Parameter) -> Parameter:
+    """The soil row ``p`` inside the map's patch (``soil.phi`` -> ``patch.phi``)."""
+    return Parameter(f"patch.{p.name.split('.', 1)[1]}", p.unit, p.default, p.min, p.max,
+                     f"Inside the patch [patch.start, patch.end): {p.description}",
+                     "Scenario value: the map's second soil (default: the soil row's default)",
+                     quantity=p.quantity, display_unit=p.display_unit, plausible=p.plausible,
+                     fmu=GROUND_FMU)
+
+
+GROUND_TABLE: tuple[Parameter, ...] = (
+    Parameter("patch.start", "m", 0.0, -1.0e6, 1.0e6,
+              "Where along the path the patch begins (its soil: the patch.* rows; elsewhere "
+              "the soil.* rows).", "Scenario value", quantity="Length", fmu=GROUND_FMU),
+    Parameter("patch.end", "m", 0.0, -1.0e6, 1.0e6,
+              "Where along the path the patch ends (exclusive; patch.end <= patch.start: no "
+              "patch).", "Scenario value", quantity="Length", fmu=GROUND_FMU),
+    *(_patch_row(p) for p in TABLE if p.name.startswith("soil.")),
+)
+ROWS: tuple[Parameter, ...] = (*TABLE, *RIG_TABLE, *ROVER_TABLE, *GROUND_TABLE)
+"""Every parameter of the project, terrain rows, rig rows, rover rows, terrain-map rows: the one
+table."""
 
 INDEX: Mapping[str, int] = MappingProxyType({p.name: k for k, p in enumerate(TABLE)})
 BY_NAME: Mapping[str, Parameter] = MappingProxyType({p.name: p for p in TABLE})

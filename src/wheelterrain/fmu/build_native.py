@@ -32,8 +32,8 @@ from wheelterrain.fmu import build_fmi3 as fmi3
 from wheelterrain.fmu import functions as fmu_model
 from wheelterrain.fmu.build_pythonfmu import VARIABLES, BuildError, describe, pretty, source_dir
 from wheelterrain.fmu.build_pythonfmu import build as build_pythonfmu
-from wheelterrain.fmu.variables import continuous_states, derivative_variables
-from wheelterrain.parameters import TABLE
+from wheelterrain.fmu.variables import GROUND, SOIL_ROWS, continuous_states, derivative_variables
+from wheelterrain.parameters import INDEX, TABLE
 
 SOURCES = ("fmi2_native.c", "model_vars.h", "model_hooks.inc", "casadi_functions.inc",
            "fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
@@ -119,6 +119,8 @@ def _model_vars(model: str, root: ET.Element) -> str:
         f"#define MODEL_GUID {_c_string(root.get('guid'))}",
         f"#define N_VARS {len(rows)}",
         f"#define N_STATES {n_states}",
+        "/* a state model without states (Terrain) has empty lists: C99 has no empty arrays */",
+        "#define AT_LEAST_ONE(n) ((n) > 0 ? (n) : 1)",
         "/* CasADi's generated functions share one signature, so some leave parameters unused;",
         "   everything else is compiled with -Wall -Wextra -Werror in tests/test_native_fmus.py.",
         "   CasADi's functions are internal to the binary: hidden, whatever the build flags. */",
@@ -133,11 +135,12 @@ def _model_vars(model: str, root: ET.Element) -> str:
         "};",
         "/* model exchange: the continuous states (outputs), their derivatives, nominals */",
         f"#define N_CONTINUOUS {len(states)}",
-        f"static const int STATE_VRS[N_CONTINUOUS] = {_int_list(vr_of[s] for s in states)};",
-        f"static const int DER_VRS[N_CONTINUOUS] = "
+        "static const int STATE_VRS[AT_LEAST_ONE(N_CONTINUOUS)] = "
+        f"{_int_list(vr_of[s] for s in states)};",
+        "static const int DER_VRS[AT_LEAST_ONE(N_CONTINUOUS)] = "
         f"{_int_list(vr_of[f'der({s})'] for s in states)};",
-        "static const double NOMINALS[N_CONTINUOUS] = {"
-        + ", ".join(_c_double(variables[s].nominal) for s in states) + "};",
+        "static const double NOMINALS[AT_LEAST_ONE(N_CONTINUOUS)] = {"
+        + (", ".join(_c_double(variables[s].nominal) for s in states) or "1.0") + "};",
         f"/* for the model hooks ({HOOKS[model]}) */",
         *_hook_config(model, vr_of),
         "",
@@ -146,11 +149,12 @@ def _model_vars(model: str, root: ET.Element) -> str:
 
 
 def _int_list(values) -> str:
-    return "{" + ", ".join(str(int(v)) for v in values) + "}"
+    """A C initializer; an empty list is {-1} (the array has AT_LEAST_ONE element, unused)."""
+    return "{" + (", ".join(str(int(v)) for v in values) or "-1") + "}"
 
 
 HOOKS = {"WheelTerrain": "terrain_hooks.c", "SingleWheelRig": "state_hooks.c",
-         "RoverChassis": "state_hooks.c"}
+         "RoverChassis": "state_hooks.c", "Terrain": "state_hooks.c"}
 """The model hooks of each FMU: real C in fmu_src/native/, shipped as sources/model_hooks.inc.
 What they need that is a list of names comes from model_vars.h (:func:`_hook_config`)."""
 
@@ -165,6 +169,13 @@ def _hook_config(model: str, vr: dict[str, int]) -> list[str]:
         lines += [f"#define VR_{name.upper()} {vr[name]}" for name in
                   ("quasi_static", "warm_start", "wheel_angle", "sinkage", "wheel_speed",
                    "carriage_speed", "load", "contact_sinkage")]
+        # soil_from_inputs: the ground.* inputs replace the soil's entries of p
+        lines += [f"#define VR_SOIL_FROM_INPUTS {vr['soil_from_inputs']}",
+                  f"#define N_GROUND {len(GROUND)}",
+                  f"static const int GROUND_VRS[{len(GROUND)}] = "
+                  f"{_int_list(vr[n] for n in GROUND)};",
+                  f"static const int GROUND_P[{len(GROUND)}] = "
+                  f"{_int_list(INDEX[p.name] for p in SOIL_ROWS)};"]
         lines += [f"#define STATUS_{key} {_c_double(getattr(fmu_model, f'STATUS_{key}'))}"
                   for key in ("OK", "SLIP", "LOAD", "UNCONVERGED", "BURIED", "NONFINITE")]
         lines += [f"#define MESSAGE_{key} "
@@ -175,11 +186,12 @@ def _hook_config(model: str, vr: dict[str, int]) -> list[str]:
         inputs, outputs, params = m.inputs, m.outputs, list(m.parameters)
         lines = [f"#define MODEL_PREFIX {m.prefix}", f"#define N_X {len(m.states)}",
                  f"#define N_U {len(inputs)}", f"#define N_MEM {m.memory}",
-                 f"#define FINITE_LIMIT {_c_double(fmu_model.FINITE_LIMIT)}",
-                 f"#define DEPTH_LIMIT {_c_double(m.depth_limit)}",
-                 f"#define X_DEPTH {m.states.index(m.depth_state)}"]
-        lines += [f"#define X_NONFINITE_{k} {m.states.index(name)}"
-                  for k, name in enumerate(m.nonfinite_states)]
+                 f"#define FINITE_LIMIT {_c_double(fmu_model.FINITE_LIMIT)}"]
+        if m.depth_state is not None:  # a model without states has no domain to check
+            lines += [f"#define DEPTH_LIMIT {_c_double(m.depth_limit)}",
+                      f"#define X_DEPTH {m.states.index(m.depth_state)}"]
+            lines += [f"#define X_NONFINITE_{k} {m.states.index(name)}"
+                      for k, name in enumerate(m.nonfinite_states)]
         lines += [f"#define MESSAGE_{key.upper()} {_c_string(text)}"
                   for key, text in m.messages.items()]
     lines += [f"#define N_OUT {len(outputs)}", f"#define N_P {len(params)}",
@@ -244,7 +256,7 @@ def _native_description(root: ET.Element, model: str) -> ET.Element:
 
 
 def build(out: Path, models: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig",
-                                               "RoverChassis")) -> list[Path]:
+                                               "RoverChassis", "Terrain")) -> list[Path]:
     """Build the native FMUs into ``out`` (FMI 2.0) and ``out/fmi3`` (FMI 3.0); returns their
     paths, per model the FMI 2 then the FMI 3 one. Each has Linux binaries and, when the
     MinGW-w64 cross compiler is installed, Windows ones, all from the same sources."""

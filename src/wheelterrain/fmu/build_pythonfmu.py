@@ -39,7 +39,8 @@ PACKAGE_DIR = Path(__file__).resolve().parents[1]  # the wheelterrain package, b
 REPO_DIR = PACKAGE_DIR.parents[1]
 SOURCES = {"WheelTerrain": "wheelterrain_slave_terrain.py",
            "SingleWheelRig": "wheelterrain_slave_rig.py",
-           "RoverChassis": "wheelterrain_slave_rover.py"}
+           "RoverChassis": "wheelterrain_slave_rover.py",
+           "Terrain": "wheelterrain_slave_ground.py"}
 VARIABLES = variables.VARIABLES
 
 # unit -> SI base-unit exponents (FMI 2 BaseUnit attributes)

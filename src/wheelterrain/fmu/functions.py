@@ -34,6 +34,7 @@ from functools import lru_cache
 import casadi as ca
 
 from wheelterrain.fmu.variables import (
+    GROUND_OUTPUTS,
     RIG_INPUTS,
     RIG_OUTPUTS,
     ROVER_INPUTS,
@@ -42,7 +43,7 @@ from wheelterrain.fmu.variables import (
     TERRAIN_INPUTS,
     TERRAIN_OUTPUTS,
 )
-from wheelterrain.model import contact, rig, rover, solve
+from wheelterrain.model import contact, ground, rig, rover, solve
 from wheelterrain.model.slip import reference_radius
 from wheelterrain.parameters import NAMES
 
@@ -315,6 +316,33 @@ def rover_functions() -> tuple[ca.Function, ca.Function, ca.Function, ca.Functio
     return step, outputs, initial, rates
 
 
+# --- Terrain (a terrain map: no state, its outputs the soil at its input position) -------------
+
+
+def ground_outputs(x, u, p, memory):
+    """GROUND_OUTPUTS (the ground.* variables), in that order, at the position u[0]."""
+    del x, memory  # the map has neither
+    return ground.soil_at(u[0], p)
+
+
+@lru_cache(maxsize=1)
+def ground_functions() -> tuple[ca.Function, ca.Function, ca.Function, ca.Function]:
+    """(ground_step, ground_outputs, ground_initial, ground_rates): a state model without
+    states, so that the map runs through the state models' machinery in both flavours."""
+    x, u = ca.SX.sym("x", 0), ca.SX.sym("u", len(ground.INPUTS))
+    p, h, memory = ca.SX.sym("p", len(ground.NAMES)), ca.SX.sym("h"), ca.SX.sym("memory", 0)
+    named = {name: p[k] for k, name in enumerate(ground.NAMES)}
+    y = ca.vertcat(*ground_outputs(x, [u[0]], named, memory))
+    empty = ca.SX(0, 1)
+    return (ca.Function("ground_step", [x, u, p, h], [empty, empty], ["x", "u", "p", "h"],
+                        ["x_next", "memory"]),
+            ca.Function("ground_outputs", [x, u, p, memory], [y], ["x", "u", "p", "memory"],
+                        ["y"]),
+            ca.Function("ground_initial", [p], [empty], ["p"], ["x0"]),
+            ca.Function("ground_rates", [x, u, p], [empty, empty], ["x", "u", "p"],
+                        ["xdot", "memory"]))
+
+
 @dataclass(frozen=True)
 class StateModel:
     """A state-space FMU (SingleWheelRig, RoverChassis): what both flavours need to run it.
@@ -332,9 +360,9 @@ class StateModel:
     outputs: tuple[str, ...]
     parameters: tuple[str, ...]
     memory: int
-    depth_state: str
+    depth_state: str | None  # None: a model without states (nothing to check)
     depth_limit: float
-    nonfinite_states: tuple[str, str, str]
+    nonfinite_states: tuple[str, ...]
     messages: dict
     step: Callable
     output_values: Callable
@@ -371,5 +399,9 @@ STATE_MODELS = {
         len(rover.WHEELS), "heave", ROVER_HEAVE_LIMIT, ("heave", "speed", "pitch"),
         ROVER_MESSAGES, _rover_step, _rover_outputs, rover.initial_state, rover_state_problem,
         rover_functions),
+    "Terrain": StateModel(
+        "Terrain", "ground", ground.STATES, ground.INPUTS, GROUND_OUTPUTS, ground.NAMES, 0,
+        None, 0.0, (), {}, lambda x, u, p, h: ((), ()), ground_outputs, lambda p: (),
+        lambda x: None, ground_functions),
 }
 """The state-space FMUs by model name."""

@@ -32,9 +32,9 @@ import numpy as np
 from wheelterrain import compiled as native
 from wheelterrain.errors import ParameterError
 from wheelterrain.fmu import functions as fmu_model
-from wheelterrain.fmu.variables import VARIABLES, Var, terrain_variables
+from wheelterrain.fmu.variables import VARIABLES, Var, soil_from_ground, terrain_variables
 from wheelterrain.model import rig
-from wheelterrain.parameters import BY_NAME, ROVER_TABLE, TABLE
+from wheelterrain.parameters import BY_NAME, GROUND_TABLE, ROVER_TABLE, TABLE
 
 
 def compiled_or_vm(fn, resources: str | None = None):
@@ -343,6 +343,8 @@ class TerrainCore(_Core):
         v = self.values
         u = [float(v[name]) for name in fmu_model.TERRAIN_INPUTS]
         p = [float(v[prm.name]) for prm in TABLE]
+        if v["soil_from_inputs"]:
+            p = soil_from_ground(p, v)
         if v["quasi_static"]:
             # warm start: from the last solved sinkage (none yet: 0, cold)
             guess = float(v.get("contact_sinkage", 0.0)) if v["warm_start"] else 0.0
@@ -392,7 +394,8 @@ class TerrainCore(_Core):
         return True
 
 
-_PARAMETERS = {**BY_NAME, **{p.name: p for p in (*rig.RIG_TABLE, *ROVER_TABLE)}}
+_PARAMETERS = {**BY_NAME,
+               **{p.name: p for p in (*rig.RIG_TABLE, *ROVER_TABLE, *GROUND_TABLE)}}
 OPERATING_POINT = "operating point"  # the key of the error the model's status reports
 
 
@@ -459,3 +462,9 @@ class RoverCore(StateCore):
     """RoverChassis: the rover's chassis on four driven wheels (rover.step)."""
 
     model_name = "RoverChassis"
+
+
+class GroundCore(StateCore):
+    """Terrain: a terrain map's query point, the soil at its position (model.ground)."""
+
+    model_name = "Terrain"

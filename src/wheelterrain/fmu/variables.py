@@ -20,7 +20,15 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
-from wheelterrain.parameters import RIG_FMU, ROVER_FMU, ROWS, TERRAIN_FMU, Parameter
+from wheelterrain.parameters import (
+    GROUND_FMU,
+    INDEX,
+    RIG_FMU,
+    ROVER_FMU,
+    ROWS,
+    TERRAIN_FMU,
+    Parameter,
+)
 
 
 @dataclass(frozen=True)
@@ -54,6 +62,26 @@ class Var:
 def _outputs(rows: list[Var], inputs: tuple[str, ...]) -> list[Var]:
     """Terrain outputs computed from the inputs: direct feedthrough of all of them."""
     return [replace(v, depends_on=inputs) if v.depends_on is None else v for v in rows]
+
+
+def ground_name(soil: str) -> str:
+    """The ``ground.*`` variable that carries the soil row ``soil`` (``soil.phi`` ->
+    ``ground.phi``): a WheelTerrain input and a Terrain output."""
+    return "ground." + soil.split(".", 1)[1]
+
+
+SOIL_ROWS: tuple[Parameter, ...] = tuple(p for p in ROWS if p.name.startswith("soil."))
+"""The soil's rows of the parameter table: what a terrain map supplies along a path."""
+GROUND: tuple[str, ...] = tuple(ground_name(p.name) for p in SOIL_ROWS)
+"""The ground.* variables, in the order of :data:`SOIL_ROWS`."""
+
+
+def _ground_inputs() -> list[Var]:
+    """WheelTerrain's ground.* inputs: a soil row each, with its unit and validity range."""
+    return [Var(ground_name(p.name), "input", "Soil under the wheel when soil_from_inputs is "
+                f"true (a terrain map's output, else unused): {p.description}", p.unit,
+                p.quantity, p.display_unit, start=p.default, min=p.min, max=p.max)
+            for p in SOIL_ROWS]
 
 
 SINKAGE_RANGE = (-1.0, 1.0)
@@ -121,10 +149,17 @@ TERRAIN_IO: tuple[Var, ...] = (
             "Pressure"),
         Var("ripple_amplitude", "output", "Amplitude A of the grouser stress ripple (0 in "
             "quasi-static mode)", "Pa", "Pressure"),
-    ], _TERRAIN_INPUTS),
+    ], (*_TERRAIN_INPUTS, *GROUND)),
     Var("wheel_angle", "output", "Wheel rotation angle, integrated from wheel_speed (phase of "
         "the grouser ripple)", "rad", "Angle", "deg", depends_on=(), integrated=True,
         nominal=1.0),
+    # after everything else, so that the value references of the variables above stay as they
+    # were before a terrain map could feed the soil
+    Var("soil_from_inputs", "parameter",
+        "false: the soil is the soil.* parameters (one soil for the whole run); true: the soil "
+        "under the wheel is the ground.* inputs, connected to a terrain map's query point (e.g. "
+        "Terrain.fmu), the soil.* parameters unused", type="Boolean", start=False),
+    *_ground_inputs(),
 )
 
 RIG_IO: tuple[Var, ...] = (
@@ -238,13 +273,25 @@ ROVER_IO: tuple[Var, ...] = (
 )
 
 
+# --- Terrain: a terrain map's query point -----------------------------------------------------
+GROUND_IO: tuple[Var, ...] = (
+    Var("position", "input", "Position of the query point along the path (a wheel's axle: "
+        "RoverChassis' <wheel>.position)", "m", "Length", start=0.0, min=-1.0e6, max=1.0e6),
+    *(Var(ground_name(p.name), "output", "Soil at the query point (to a WheelTerrain's input of "
+          f"the same name, with soil_from_inputs): {p.description}", p.unit, p.quantity,
+          p.display_unit, depends_on=("position",)) for p in SOIL_ROWS),
+)
+
+
 def _names(rows: tuple[Var, ...], causality: str, computed: bool = False) -> tuple[str, ...]:
     return tuple(v.name for v in rows
                  if v.causality == causality and not (computed and v.integrated))
 
 
-TERRAIN_INPUTS = _names(TERRAIN_IO, "input")
-"""The order of the terrain Functions' ``u`` (terrain_dynamic, terrain_quasi_static)."""
+TERRAIN_INPUTS = _TERRAIN_INPUTS
+"""The order of the terrain Functions' ``u`` (terrain_dynamic, terrain_quasi_static). The
+ground.* inputs (:data:`GROUND`) are not in it: with soil_from_inputs they replace the soil's
+entries of the Functions' ``p`` (:func:`soil_from_ground`)."""
 TERRAIN_OUTPUTS = _names(TERRAIN_IO, "output", computed=True)
 """The order of the terrain Functions' ``y`` (the wrapper keeps wheel_angle itself)."""
 RIG_INPUTS = _names(RIG_IO, "input")
@@ -259,6 +306,18 @@ ROVER_INPUTS = _names(ROVER_IO, "input")
 """The order of the rover Functions' ``u`` (equal to wheelterrain.model.rover.INPUTS)."""
 ROVER_OUTPUTS = _names(ROVER_IO, "output")
 """The order of rover_outputs' ``y``."""
+GROUND_OUTPUTS = _names(GROUND_IO, "output")
+"""The order of ground_outputs' ``y``: :data:`GROUND`."""
+
+
+def soil_from_ground(p: list[float], values: Mapping[str, float]) -> list[float]:
+    """The terrain Functions' parameter vector ``p`` (table order) with the soil's entries
+    replaced by the ground.* ``values`` by name: what both WheelTerrain flavours evaluate when
+    soil_from_inputs is true (the native wrapper does the same with GROUND_VRS/GROUND_P)."""
+    out = list(p)
+    for row, name in zip(SOIL_ROWS, GROUND, strict=True):
+        out[INDEX[row.name]] = float(values[name])
+    return out
 
 
 def parameter_var(p: Parameter, start: float) -> Var:
@@ -278,7 +337,8 @@ def terrain_variables() -> list[Var]:
 
     start = dict(presets.load(presets.DEFAULT_PRESET))
     rim_speed = rig.defaults()["rig.rim_speed"]
-    starts = {"wheel_speed": rim_speed / start["wheel.radius"], "carriage_speed": rim_speed}
+    starts = {"wheel_speed": rim_speed / start["wheel.radius"], "carriage_speed": rim_speed,
+              **{ground_name(p.name): start[p.name] for p in SOIL_ROWS}}
     rows = (p for p in ROWS if p.fmu == TERRAIN_FMU)
     return [*(parameter_var(p, start[p.name]) for p in rows),
             *(replace(v, start=starts[v.name]) if v.name in starts else v for v in TERRAIN_IO)]
@@ -296,8 +356,18 @@ def rover_variables() -> list[Var]:
     return [*(parameter_var(p, p.default) for p in ROWS if p.fmu == ROVER_FMU), *ROVER_IO]
 
 
+def ground_variables() -> list[Var]:
+    """Terrain.fmu's variables in value-reference order: the soil rows (starts from the default
+    preset, as WheelTerrain's), the map's own rows (patch.*), then :data:`GROUND_IO`."""
+    from wheelterrain import presets
+
+    start = dict(presets.load(presets.DEFAULT_PRESET))
+    return [*(parameter_var(p, start[p.name]) for p in SOIL_ROWS),
+            *(parameter_var(p, p.default) for p in ROWS if p.fmu == GROUND_FMU), *GROUND_IO]
+
+
 VARIABLES = {TERRAIN_FMU: terrain_variables, RIG_FMU: rig_variables,
-             ROVER_FMU: rover_variables}
+             ROVER_FMU: rover_variables, GROUND_FMU: ground_variables}
 """Each FMU's variable list, by model name."""
 
 
@@ -312,6 +382,8 @@ def continuous_states(model: str) -> tuple[str, ...]:
     the very states its co-simulation step advances). Each is an output of the FMU."""
     if model == TERRAIN_FMU:
         return ("wheel_angle",)
+    if model == GROUND_FMU:
+        return ()
     if model == ROVER_FMU:
         from wheelterrain.model import rover
 
@@ -339,6 +411,6 @@ def units() -> dict[str, str]:
     """The unit (Modelica.Units.SI string) of every variable of both FMUs by name, parameters
     included, plus the master's ``time`` [s]: the units result files carry in their headers."""
     out = {"time": "s"}
-    for v in (*terrain_variables(), *rig_variables(), *rover_variables()):
+    for v in (*terrain_variables(), *rig_variables(), *rover_variables(), *ground_variables()):
         out.setdefault(v.name, v.unit)
     return out

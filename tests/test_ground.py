@@ -1,0 +1,118 @@
+"""The terrain map (model.ground, Terrain.fmu) and WheelTerrain's soil from its ground.* inputs."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
+
+from wheelterrain import compiled as native
+from wheelterrain import presets
+from wheelterrain.fmu import build_native as nativebuild
+from wheelterrain.fmu import build_pythonfmu as fmubuild
+from wheelterrain.fmu import functions as fmu_model
+from wheelterrain.fmu import variables
+from wheelterrain.fmu.instance import Instance
+from wheelterrain.model import ground
+
+FLAVOURS = ["pythonfmu", "native", "native/fmi3"]
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    if native.compiler() is None:
+        pytest.skip("needs a C compiler")
+    root = tmp_path_factory.mktemp("ground")
+    fmubuild.build(root / "pythonfmu", ("Terrain", "WheelTerrain"))
+    nativebuild.build(root / "native", ("Terrain", "WheelTerrain"))
+    return root
+
+
+def _map(**changes) -> dict:
+    return {**ground.defaults(), "patch.start": 1.0, "patch.end": 2.0, "patch.phi": 0.3,
+            "patch.k_phi": 40.0, **changes}
+
+
+def test_the_map_is_the_patch_on_its_half_open_interval_and_the_soil_elsewhere():
+    p = _map()
+    phi = ground.SOIL_NAMES.index("soil.phi")
+    for position, inside in ((0.999, False), (1.0, True), (1.5, True), (2.0, False),
+                             (-5.0, False)):
+        soil = ground.soil_at(position, p)
+        assert soil[phi] == (0.3 if inside else p["soil.phi"]), position
+    # a patch whose end is not after its start is no patch
+    assert ground.soil_at(1.5, _map(**{"patch.end": 1.0})) == ground.soil_at(0.0, p)
+
+
+def test_the_fmu_function_is_the_model_on_floats():
+    """Terrain.fmu's generated Function and the slave's float path are one expression."""
+    model = fmu_model.STATE_MODELS["Terrain"]
+    outputs = model.functions()[1]
+    p = _map()
+    for position in (0.5, 1.0, 1.7, 2.0):
+        y = [float(v) for v in outputs([], [position], [p[n] for n in ground.NAMES], [])
+             .full().ravel()]
+        assert y == list(model.output_values((), (position,), p, ()))
+    assert model.outputs == variables.GROUND
+
+
+@pytest.mark.parametrize("flavour", FLAVOURS)
+def test_terrain_fmus_validate(built, flavour):
+    assert validate_fmu(str(built / flavour / "Terrain.fmu")) == []
+
+
+@pytest.mark.parametrize(("flavour", "interface"), [
+    ("pythonfmu", "cs"), ("native", "cs"), ("native", "me"), ("native/fmi3", "cs"),
+    ("native/fmi3", "me")])  # the pythonfmu flavour is co-simulation only
+def test_terrain_fmu_answers_the_map_at_its_query_point(built, flavour, interface):
+    p = _map()
+    with Instance(built / flavour / "Terrain.fmu", log=True, interface=interface) as inst:
+        inst.start({k: v for k, v in p.items() if not k.startswith("soil.")}, 1.0)
+        for position in (0.5, 1.0, 1.99, 2.0):
+            inst.set({"position": position})
+            if interface == "cs":
+                inst.fmu.doStep(0.0, 1e-3) if position == 0.5 else None
+            got = inst.get(variables.GROUND)
+            # the soil rows start at the default preset's values, as WheelTerrain's do
+            want = ground.soil_at(position, {**p, **{
+                n: v for n, v in presets.load(presets.DEFAULT_PRESET).items()
+                if n in ground.SOIL_NAMES}})
+            assert got == pytest.approx(list(want), rel=0, abs=0), position
+        assert inst.errors() == []
+
+
+@pytest.mark.parametrize("flavour", FLAVOURS)
+@pytest.mark.parametrize("quasi_static", [False, True])
+def test_wheel_soil_from_its_ground_inputs_equals_the_same_soil_as_parameters(
+        built, flavour, quasi_static):
+    """WheelTerrain with soil_from_inputs and another soil on its ground.* inputs gives the
+    forces of that soil set as its soil.* parameters, exactly; with the switch off the inputs
+    are ignored."""
+    other = presets.load("paper-table1")
+    soil = {row.name: other[row.name] for row in variables.SOIL_ROWS}
+    inputs = {variables.ground_name(k): v for k, v in soil.items()}
+    common = {"quasi_static": quasi_static, "sinkage": 0.015, "load": 40.0}
+    outputs = ["normal_force", "drawbar_pull", "torque", "contact_sinkage"]
+    results = []
+    for values in ({**common, **soil}, {**common, "soil_from_inputs": True, **inputs},
+                   {**common, **inputs}):
+        with Instance(built / flavour / "WheelTerrain.fmu", log=True) as inst:
+            inst.start(values, 1.0)
+            inst.fmu.doStep(0.0, 1e-3)
+            results.append(inst.get(outputs))
+            assert inst.errors() == []
+    assert results[1] == results[0]
+    assert results[2] != results[0]  # switch off: the default soil, not the inputs'
+    assert all(math.isfinite(v) for v in results[1])
+
+
+@pytest.mark.parametrize("flavour", FLAVOURS)
+def test_a_ground_input_outside_the_soil_rows_range_is_refused_with_it(built, flavour):
+    row = next(r for r in variables.SOIL_ROWS if r.name == "soil.phi")
+    with Instance(built / flavour / "WheelTerrain.fmu", log=True) as inst:
+        inst.start({"soil_from_inputs": True}, 1.0)
+        with pytest.raises(FMICallException):  # refused at set time (fmi2Error)
+            inst.set({"ground.phi": row.max + 0.1})
+        assert any("ground.phi" in m for m in inst.errors()), inst.errors()
