@@ -1,4 +1,5 @@
-"""RoverChassis.fmu in both flavours, the rover's FMU master, Rover.ssp in libcosim and ecos."""
+"""RoverChassis.fmu in both flavours, the rover's FMU master, Rover.ssp in libcosim and ecos,
+and a soil map along the path through Terrain.fmu."""
 
 from __future__ import annotations
 
@@ -14,7 +15,6 @@ from wheelterrain import compiled as native
 from wheelterrain import presets
 from wheelterrain.cosim import rover as rover_system
 from wheelterrain.cosim import rover_fmus
-from wheelterrain.errors import CosimulationError
 from wheelterrain.fmu import build_native as nativebuild
 from wheelterrain.fmu import build_pythonfmu as fmubuild
 from wheelterrain.model import rover
@@ -26,8 +26,9 @@ STOP = 4.0  # s: the drop into the soil and the settling, about 4000 steps
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
     root = tmp_path_factory.mktemp("rover_fmus")
-    fmubuild.build(root / "pythonfmu", ("RoverChassis", "WheelTerrain"))
-    nativebuild.build(root / "native", ("RoverChassis", "WheelTerrain"))
+    models = ("RoverChassis", "WheelTerrain", "Terrain")
+    fmubuild.build(root / "pythonfmu", models)
+    nativebuild.build(root / "native", models)
     return root
 
 
@@ -109,12 +110,57 @@ def test_a_ramp_in_the_chassis_profile_runs_alike_in_every_engine(built, terrain
         assert abs(b[key] - value) <= 1e-3 * scale, (key, b[key], value)
 
 
-def test_a_soil_along_the_path_is_refused_by_the_fmu_engines(built, terrain):
-    soft = rover_system.Soil(terrain, {"soil.k_phi": 40.0}, 0.5, 0.8)
-    with pytest.raises(CosimulationError, match="parameter contract"):
-        rover_fmus.simulate(built / "native", soft, {}, 1.0)
-    with pytest.raises(CosimulationError, match="along the path"):
-        rover_fmus.simulate_ssp("libcosim", built / "native", "soft-patch", soft, {}, 1.0)
+def _patched(terrain, in_process) -> rover_system.Soil:
+    """A looser soil from where the front axle is at 1 s to where it is at 3 s of the short
+    run: the front wheels cross both edges of the patch within it."""
+    p = rover.defaults()
+    x = in_process.chassis["position"]
+    front = [rover.wheel_position(p, float(np.interp(t, in_process.time, x)), "front_left")
+             for t in (1.0, 3.0)]
+    assert front[1] - front[0] > 0.05  # m: the crossing is not a formality
+    soft = {k: terrain[k] * f for k, f in rover_system.SOFT.items()}
+    return rover_system.Soil(terrain, soft, front[0], front[1])
+
+
+@pytest.mark.parametrize("flavour", ["pythonfmu", "native"])
+def test_a_soil_map_runs_through_terrain_fmus_as_in_process(built, terrain, in_process,
+                                                            flavour):
+    """Soil that changes along the path: each wheel's Terrain.fmu answers at the wheel's
+    position, the wheels take their soil from it (soil_from_inputs). Our master gives the
+    in-process rover (the map evaluated at every step inside the stepped system) to rounding,
+    and the patch does change the run."""
+    soil = _patched(terrain, in_process)
+    ours = rover_system.simulate(soil, {}, STOP)
+    res = rover_fmus.simulate(built / flavour, soil, {}, STOP)
+    tol = 0.0 if flavour == "native" else 1e-9
+    for w in rover.WHEELS:
+        for key in ("sinkage", "slip", "normal_force", "drawbar_pull"):
+            np.testing.assert_allclose(res.wheels[w][key], ours.wheels[w][key], rtol=tol,
+                                       atol=tol * 1e-3, err_msg=f"{w}.{key}")
+    change = np.max(np.abs(ours.wheels["front_left"]["sinkage"]
+                           - in_process.wheels["front_left"]["sinkage"]))
+    assert change > 1e-4  # m: the looser soil lets the front wheels sink deeper
+
+
+@pytest.mark.parametrize("engine", ["libcosim", "ecos"])
+def test_a_soil_map_in_rover_ssp_gives_the_same_means_in_other_engines(built, terrain,
+                                                                       in_process, engine):
+    """Rover.ssp with four Terrain.fmu (the soil map's query points) runs unchanged in libcosim
+    and ecos, with the in-process means within 1e-3 (those engines see the soil two steps
+    late)."""
+    module = {"libcosim": "libcosimpy", "ecos": "ecospy"}[engine]
+    if importlib.util.find_spec(module) is None:
+        pytest.skip(f"{module} is not installed")
+    if engine == "ecos" and not shutil.which("ldconfig"):
+        pytest.skip("ecos needs its runtime (libtbb)")
+    soil = _patched(terrain, in_process)
+    ours = _means(rover_system.simulate(soil, {}, STOP))
+    theirs = _means(rover_fmus.simulate_ssp(engine, built / "native", "soft-patch", soil, {},
+                                            STOP))
+    for key, value in ours.items():
+        wheel = key.split(".")[0]
+        scale = abs(ours[f"{wheel}.normal_force"]) if "pull" in key else abs(value)
+        assert abs(theirs[key] - value) <= 1e-3 * scale, (key, theirs[key], value)
 
 
 def test_model_exchange_agrees_with_co_simulation(built):

@@ -305,7 +305,7 @@ def _platforms(fmu) -> str:
 @click.option("--flavor", type=click.Choice(["pythonfmu", "native", "all"]), default="pythonfmu",
               show_default=True, help="Which FMUs to build.")
 def build(out: str, flavor: str) -> None:
-    """Build the FMI 2.0 co-simulation FMUs WheelTerrain.fmu and SingleWheelRig.fmu.
+    """Build the FMUs: WheelTerrain, SingleWheelRig, RoverChassis and Terrain (a terrain map).
 
     \b
     pythonfmu (OUT/): for Python hosts (fmpy); the host needs numpy and casadi, the
@@ -764,7 +764,8 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool,
               default="in-process", show_default=True,
               help="in-process: the chassis and contact Functions stepped together, compiled; "
               "fmus: RoverChassis.fmu + four WheelTerrain.fmu through fmpy, our master; "
-              "libcosim, ecos: Rover.ssp in those engines (all but soft-patch).")
+              "libcosim, ecos: Rover.ssp in those engines (soft-patch adds four "
+              "Terrain.fmu, the soil map's query points).")
 @click.option("--fmu-dir", default=None, type=click.Path(file_okay=False),
               help="Where the FMUs are (default: build/native if built, else build).")
 @click.option("--out", default="validation/output/rover", show_default=True,
@@ -780,7 +781,8 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     The chassis (rigid, in the vertical plane: position, heave, pitch; four rigidly mounted
     wheels, a speed loop each) and the four wheel-soil contacts of the one CasADi core: stepped
     together in process (compiled C where a compiler is available), or as RoverChassis.fmu and
-    four WheelTerrain.fmu in our master, libcosim or ecos (--engine). Scenarios:
+    four WheelTerrain.fmu in our master, libcosim or ecos (--engine); on soft-patch each
+    wheel's soil comes from a Terrain.fmu at the wheel's position. Scenarios:
       level       steady traverse at the commanded rim speed: per-wheel slip, sinkage, load
       slope       the slope rises until the rover stalls (slip 0.95), beside the predicted
                   stall slope (traction limit, or loss of stability of the steady motion)
@@ -789,7 +791,7 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
       pull-test   a resisting force rising slowly: the rover's pull-slip curve, beside the
                   sum of four single-wheel curves at the axle loads
     --set changes the terrain (soil, wheel, model) and the chassis (rover.*) parameters.
-    Writes OUT/<scenario>-<gravity>.png and .csv, and OUT/Rover-<scenario>.ssp (the five FMUs,
+    Writes OUT/<scenario>-<gravity>.png and .csv, and OUT/Rover-<scenario>.ssp (the FMUs,
     their connections, the scenario's parameters, its slope and towing ramps included as the
     chassis' input profile) where the FMUs are built.
     """
@@ -807,16 +809,18 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     except WheelTerrainError as err:
         _fail(err)
     ps = _load(preset, tuple(a for a in assignments if a not in rover_items))
+    from wheelterrain.cosim import rover_fmus
+
+    soil = rover_system.scenario_soil(scenario, ps)
+    needed = rover_fmus.fmu_names(bool(soil.patch))
     folder = Path(fmu_dir) if fmu_dir else next(
         (d for d in (Path("build/native"), Path("build"))
-         if (d / "RoverChassis.fmu").is_file() and (d / "WheelTerrain.fmu").is_file()),
-        Path("build/native"))
-    built = (folder / "RoverChassis.fmu").is_file() and (folder / "WheelTerrain.fmu").is_file()
+         if all((d / f"{n}.fmu").is_file() for n in needed)), Path("build/native"))
+    built = all((folder / f"{n}.fmu").is_file() for n in needed)
     if engine != "in-process" and not built:
-        _usage_error(f"--engine {engine} needs RoverChassis.fmu and WheelTerrain.fmu in "
+        _usage_error(f"--engine {engine} needs {', '.join(f'{n}.fmu' for n in needed)} in "
                      f"{folder}: build them (`wheelterrain build --flavor all`) or give "
                      "--fmu-dir")
-    from wheelterrain.cosim import rover_fmus
 
     runner = None
     if engine == "fmus":
@@ -845,8 +849,8 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
                        units=rover_system.record_units())
     ssp_path = None
     if built:
-        ssp_path = rover_fmus.write_ssp(out_dir / f"Rover-{scenario}.ssp", folder, scenario, ps,
-                                        run["values"], run["stop"])
+        ssp_path = rover_fmus.write_ssp(out_dir / f"Rover-{scenario}.ssp", folder, scenario,
+                                        soil, run["values"], run["stop"])
     figures["ssp"] = str(ssp_path) if ssp_path else None
     if _emit_json(json_target, figures):
         return

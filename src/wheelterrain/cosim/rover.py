@@ -10,9 +10,9 @@ Two ways to run the same equations:
 - as FMUs (RoverChassis.fmu and four WheelTerrain.fmu in Rover.ssp): see
   :mod:`wheelterrain.cosim.rover_fmus`.
 
-Soil along the path: each wheel's terrain parameters are a function of the wheel's position
-(:class:`Soil`), evaluated once per block of steps (the blocks are short against the time a
-wheel takes to cross a soil boundary).
+Soil along the path: each wheel's soil is the terrain map's (:mod:`wheelterrain.model.ground`,
+Terrain.fmu's equations) at the wheel's position, evaluated at every step inside the stepped
+system, as the FMUs evaluate it (:class:`Soil` holds the map's values).
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ import numpy as np
 from wheelterrain import compiled
 from wheelterrain.errors import WheelTerrainError
 from wheelterrain.fmu import functions
-from wheelterrain.model import contact, rover
+from wheelterrain.model import contact, ground, rover
 from wheelterrain.parameters import NAMES, ParameterSet
 
 STEP = 1e-3  # s: communication step. Engines that pass the forces one step late (Jacobi:
@@ -66,20 +66,34 @@ def _coupled_forces(xs: list, p: dict, pt: ca.MX, angles) -> tuple[dict, list]:
     return u, wheels
 
 
+def _wheel_soils(xs: list, p: dict, pw: ca.MX, pg: ca.MX) -> ca.MX:
+    """The four wheels' terrain parameter vectors side by side (len(NAMES) x 4): the wheels'
+    parameters ``pw`` with the soil the map (values ``pg``, ground.NAMES order) has at each
+    wheel's position, as each WheelTerrain with soil_from_inputs takes it from its Terrain."""
+    g = {name: pg[k] for k, name in enumerate(ground.NAMES)}
+    columns = []
+    for w in rover.WHEELS:
+        soil = dict(zip(ground.SOIL_NAMES,
+                        ground.soil_at(rover.wheel_position(p, xs[0], w), g), strict=True))
+        columns.append(ca.vertcat(*(soil.get(name, pw[k]) for k, name in enumerate(NAMES))))
+    return ca.horzcat(*columns)
+
+
 def _system_step() -> ca.Function:
-    """``system(x, pt, pr, slope, tow, h) -> (x_next, rec)``: one communication step of the
-    whole rover. ``x``: rover.STATES then four wheel angles; ``pt``: the four terrain parameter
-    vectors side by side (len(NAMES) x 4); ``pr``: rover parameters; ``rec``: RECORD per wheel
-    (wheel-major), then CHASSIS_RECORD, at the start of the step (the forces held over it)."""
+    """``system(x, pw, pg, pr, slope, tow, h) -> (x_next, rec)``: one communication step of the
+    whole rover. ``x``: rover.STATES then four wheel angles; ``pw``: the wheels' terrain
+    parameters (their soil replaced by the map's); ``pg``: the terrain map's values
+    (ground.NAMES); ``pr``: rover parameters; ``rec``: RECORD per wheel (wheel-major), then
+    CHASSIS_RECORD, at the start of the step (the forces held over it)."""
     x = ca.MX.sym("x", N_X)
-    pt = ca.MX.sym("pt", len(NAMES), len(rover.WHEELS))
+    pw, pg = ca.MX.sym("pw", len(NAMES)), ca.MX.sym("pg", len(ground.NAMES))
     pr = ca.MX.sym("pr", len(rover.ROVER_NAMES))
     slope, tow, h = ca.MX.sym("slope"), ca.MX.sym("tow"), ca.MX.sym("h")
     xs = [x[k] for k in range(len(rover.STATES))]
     angles = [x[len(rover.STATES) + k] for k in range(len(rover.WHEELS))]
     p = rover.named([pr[k] for k in range(len(rover.ROVER_NAMES))])
     s = dict(zip(rover.STATES, xs, strict=True))
-    u, wheels = _coupled_forces(xs, p, pt, angles)
+    u, wheels = _coupled_forces(xs, p, _wheel_soils(xs, p, pw, pg), angles)
     u.update(slope=slope, towing_force=tow)
     rec = [(traction, z, out["normal_force"], out["drawbar_pull"], out["torque"],
             rover.motor_torque(xs, u, p, w), s[f"{w}.wheel_speed"])
@@ -88,9 +102,9 @@ def _system_step() -> ca.Function:
     new_angles = [angles[k] + h * s[f"{w}.wheel_speed"] for k, w in enumerate(rover.WHEELS)]
     s["effective_slope"], s["effective_towing_force"] = rover.effective_inputs(xs, u, p)
     record = [v for wheel in rec for v in wheel] + [s[n] for n in CHASSIS_RECORD]
-    return ca.Function("rover_system", [x, pt, pr, slope, tow, h],
+    return ca.Function("rover_system", [x, pw, pg, pr, slope, tow, h],
                        [ca.vertcat(*nxt, *new_angles), ca.vertcat(*record)],
-                       ["x", "pt", "pr", "slope", "tow", "h"], ["x_next", "rec"])
+                       ["x", "pw", "pg", "pr", "slope", "tow", "h"], ["x_next", "rec"])
 
 
 N_REC = len(RECORD) * len(rover.WHEELS) + len(CHASSIS_RECORD)
@@ -103,12 +117,12 @@ def block_function(block: int = BLOCK) -> ca.Function:
     one = _system_step()
     acc = one.mapaccum("rover_block", block)
     x0 = ca.MX.sym("x", N_X)
-    pt = ca.MX.sym("pt", len(NAMES), len(rover.WHEELS))
+    pw, pg = ca.MX.sym("pw", len(NAMES)), ca.MX.sym("pg", len(ground.NAMES))
     pr = ca.MX.sym("pr", len(rover.ROVER_NAMES))
     slope, tow, h = ca.MX.sym("slope"), ca.MX.sym("tow"), ca.MX.sym("h")
-    xs, recs = acc(x0, pt, pr, slope, tow, h)
-    return ca.Function(f"rover_block{block}", [x0, pt, pr, slope, tow, h],
-                       [xs[:, -1], recs], ["x", "pt", "pr", "slope", "tow", "h"],
+    xs, recs = acc(x0, pw, pg, pr, slope, tow, h)
+    return ca.Function(f"rover_block{block}", [x0, pw, pg, pr, slope, tow, h],
+                       [xs[:, -1], recs], ["x", "pw", "pg", "pr", "slope", "tow", "h"],
                        ["x_end", "rec"])
 
 
@@ -126,18 +140,27 @@ def _evaluator(block: int) -> tuple[Callable, str]:
 
 @dataclass
 class Soil:
-    """Terrain parameters under each wheel as a function of the wheel's position along the path
-    [m]: ``base`` everywhere, ``patch`` (values overriding base) on [start, end)."""
+    """The wheels' terrain parameters ``base`` and the terrain map along the path: ``base``'s
+    soil everywhere, ``patch`` (soil values overriding base's) on [start, end) m."""
 
     base: ParameterSet
     patch: Mapping[str, float] | None = None
-    start: float = math.inf
-    end: float = math.inf
+    start: float = 0.0
+    end: float = 0.0
 
-    def at(self, position: float) -> ParameterSet:
-        if self.patch and self.start <= position < self.end:
-            return self.base.with_values(dict(self.patch))
-        return self.base
+    def __post_init__(self) -> None:
+        self.patched = self.base.with_values(dict(self.patch or {}))  # checks the values
+
+    def map_values(self) -> dict[str, float]:
+        """Terrain.fmu's parameters (ground.NAMES) for this map."""
+        out = {name: self.base[name] for name in ground.SOIL_NAMES}
+        out.update({patch: self.patched[soil]
+                    for soil, patch in zip(ground.SOIL_NAMES, ground.PATCH_NAMES, strict=True)})
+        if self.patch:
+            out.update({"patch.start": self.start, "patch.end": self.end})
+        else:
+            out.update({"patch.start": 0.0, "patch.end": 0.0})
+        return out
 
 
 @dataclass
@@ -164,6 +187,9 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
     p = {**rover.defaults(), **rover_values}
     evaluate, engine = _evaluator(block)
     pr = [p[n] for n in rover.ROVER_NAMES]
+    pw = soil.base.vector()
+    g = soil.map_values()
+    pg = [g[n] for n in ground.NAMES]
     x = list(rover.initial_state(p)) + [0.0] * len(rover.WHEELS)
     blocks = max(1, round(stop / (step * block)))
     records = []
@@ -171,9 +197,7 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
     t0 = time.perf_counter()
     for b in range(blocks):
         t = b * block * step
-        pt = np.column_stack([soil.at(rover.wheel_position(p, x[0], w)).vector()
-                              for w in rover.WHEELS])
-        x, rec = evaluate(x, pt.ravel(order="F"), pr, slope, towing, step)
+        x, rec = evaluate(x, pw, pg, pr, slope, towing, step)
         rec = np.asarray(rec, dtype=float).reshape(N_REC, block, order="F")
         problem = _outside(rec)
         if problem is not None:
@@ -414,6 +438,15 @@ def terrain_of(preset_values: ParameterSet) -> dict[str, ParameterSet]:
     return {w: preset_values for w in rover.WHEELS}
 
 
+def scenario_soil(name: str, terrain: ParameterSet) -> Soil:
+    """The soil along the path of scenario ``name``: ``terrain``'s everywhere, but for the
+    soft patch of ``soft-patch`` (a terrain map: Terrain.fmu in the FMU engines)."""
+    if name != "soft-patch":
+        return Soil(terrain)
+    return Soil(terrain, {k: terrain[k] * f for k, f in SOFT.items()}, PATCH_START,
+                PATCH_START + PATCH_LENGTH)
+
+
 def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
                  rover_values: Mapping[str, float] | None = None, step: float = STEP,
                  engine: Callable | None = None) -> dict:
@@ -433,10 +466,7 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
         pred = limit_slope(quiet, p, 1 if name == "slope" else -1)
     knee = max(math.degrees(pred["slope"]) - 1.0, 0.0) if name == "slope" else 15.0
     sc = scenarios(gravity, knee, p["rover.mass"] * p["rover.gravity"])[name]
-    patch = None
-    if name == "soft-patch":
-        patch = {k: terrain[k] * f for k, f in SOFT.items()}
-    soil = Soil(terrain, patch, PATCH_START, PATCH_START + PATCH_LENGTH)
+    soil = scenario_soil(name, terrain)
     stalled = (lambda last: last["front_left.slip"] >= STALL_SLIP) \
         if name in STALL_SCENARIOS else None
     run = engine or (lambda *a, **k: simulate(*a, **k))

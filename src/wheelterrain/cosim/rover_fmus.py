@@ -1,23 +1,28 @@
-"""The rover as FMUs: RoverChassis.fmu and four WheelTerrain.fmu, our master and Rover.ssp.
+"""The rover as FMUs: RoverChassis.fmu and four WheelTerrain.fmu (and, for a soil that changes
+along the path, four Terrain.fmu), our master and Rover.ssp.
 
 Coupling per communication step h (fixed), Gauss-Seidel on the algebraic terrains, as the
 single-wheel master couples the rig (:mod:`wheelterrain.cosim.master`):
 
 1. the chassis' per-wheel outputs at t (``<wheel>.sinkage``, ``.sinkage_rate``,
-   ``.wheel_speed``, ``.carriage_speed``) are set as each wheel's WheelTerrain inputs;
+   ``.wheel_speed``, ``.carriage_speed``) are set as each wheel's WheelTerrain inputs; with a
+   soil map, ``<wheel>.position`` is set as the position of the wheel's Terrain instance (its
+   query point), whose ground.* outputs are set as the wheel's ground.* inputs (the wheels
+   take their soil from them: soil_from_inputs);
 2. each WheelTerrain's forces at t (normal_force, drawbar_pull, torque) are set as the
    chassis' ``<wheel>.*`` inputs, with the scenario's slope and towing force at t;
-3. all five FMUs step t -> t + h.
+3. all FMUs step t -> t + h.
 
 The in-process rover (:mod:`wheelterrain.cosim.rover`) couples the same Functions the same
 way, so the two agree to rounding (tests/test_rover_fmus.py).
 
-Rover.ssp (``Rover_<scenario>`` system; components ``chassis`` and one per wheel, named as the
-wheels) holds the five FMUs, the 24 connections and one parameter set named after the
-scenario: the terrain parameters on each wheel and the chassis' parameters, its input profile
-(the slope and towing ramps of the scenario) included, so any engine runs the scenario whole.
-A soil that changes along the path is the one thing it cannot carry (WheelTerrain's soil
-values are fixed parameters).
+Rover.ssp (``Rover_<scenario>`` system; components ``chassis``, one per wheel, named as the
+wheels, and with a soil map ``<wheel>_ground``) holds the FMUs, their connections and one
+parameter set named after the scenario: the terrain parameters on each wheel, the map's soils
+and patch, and the chassis' parameters, its input profile (the slope and towing ramps of the
+scenario) included, so any engine runs the scenario whole. Engines that pass every output one
+step late (libcosim, ecos) see the soil under a wheel two steps late (chassis -> map ->
+wheel): at the rover's speed, 0.1 mm of travel.
 """
 
 from __future__ import annotations
@@ -43,11 +48,11 @@ from wheelterrain.cosim.rover import (
     Soil,
     from_records,
 )
-from wheelterrain.errors import CosimulationError
 from wheelterrain.fmu import functions
 from wheelterrain.fmu.instance import Instance
+from wheelterrain.fmu.variables import GROUND
 from wheelterrain.model import rover
-from wheelterrain.parameters import ROVER_TABLE, TABLE, ParameterSet
+from wheelterrain.parameters import GROUND_TABLE, ROVER_TABLE, TABLE, ParameterSet
 
 CHASSIS = "chassis"
 COMPONENTS = (CHASSIS, *rover.WHEELS)
@@ -55,17 +60,28 @@ TO_TERRAIN = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")
 TO_CHASSIS = rover.WHEEL_FORCES
 
 
-def connections() -> list[tuple[str, str, str, str]]:
-    """(from component, output, to component, input) of Rover.ssp and of our master."""
+def map_component(wheel: str) -> str:
+    """The Terrain.fmu instance that answers for ``wheel``'s position (a soil map only)."""
+    return f"{wheel}_ground"
+
+
+def connections(with_map: bool = False) -> list[tuple[str, str, str, str]]:
+    """(from component, output, to component, input) of Rover.ssp and of our master;
+    ``with_map``: each wheel's soil from its Terrain instance (query point: the wheel's
+    position)."""
     out = []
     for w in rover.WHEELS:
         out += [(CHASSIS, f"{w}.{n}", w, n) for n in TO_TERRAIN]
         out += [(w, n, CHASSIS, f"{w}.{n}") for n in TO_CHASSIS]
+        if with_map:
+            out.append((CHASSIS, f"{w}.position", map_component(w), "position"))
+            out += [(map_component(w), n, w, n) for n in GROUND]
     return out
 
 
-def terrain_values(ps: ParameterSet) -> dict:
-    return {**{p.name: ps[p.name] for p in TABLE}, "quasi_static": False}
+def terrain_values(ps: ParameterSet, with_map: bool = False) -> dict:
+    return {**{p.name: ps[p.name] for p in TABLE}, "quasi_static": False,
+            "soil_from_inputs": with_map}
 
 
 def chassis_values(values: Mapping[str, float]) -> dict:
@@ -75,29 +91,34 @@ def chassis_values(values: Mapping[str, float]) -> dict:
 class RoverFMUs:
     """The five instances, started, and the coupling of the module doc."""
 
-    def __init__(self, fmu_dir: Path, terrain: ParameterSet, values: Mapping[str, float],
+    def __init__(self, fmu_dir: Path, soil: Soil, values: Mapping[str, float],
                  stop: float | None = None) -> None:
         from fmpy import extract
 
         fmu_dir = Path(fmu_dir)
-        paths = {"RoverChassis": fmu_dir / "RoverChassis.fmu",
-                 "WheelTerrain": fmu_dir / "WheelTerrain.fmu"}
+        self.with_map = bool(soil.patch)
+        paths = {name: fmu_dir / f"{name}.fmu" for name in fmu_names(self.with_map)}
         missing = [str(p) for p in paths.values() if not p.is_file()]
         if missing:
             raise FileNotFoundError(f"{', '.join(missing)} not found: build the FMUs first "
                                     "(`wheelterrain build --flavor all`)")
-        self._unzip = extract(str(paths["WheelTerrain"]))
+        self._unzip = [extract(str(paths[name])) for name in paths if name != "RoverChassis"]
         self.instances: dict[str, Instance] = {}
         try:
             # log=True: the FMUs' messages are kept, not printed (standard output may be a
             # JSON document), and a refusal's reason ends up in the result
             self.instances[CHASSIS] = Instance(paths["RoverChassis"], name=CHASSIS, log=True)
             for w in rover.WHEELS:
-                self.instances[w] = Instance(paths["WheelTerrain"], self._unzip, name=w,
+                self.instances[w] = Instance(paths["WheelTerrain"], self._unzip[0], name=w,
                                              log=True)
+                if self.with_map:
+                    self.instances[map_component(w)] = Instance(
+                        paths["Terrain"], self._unzip[1], name=map_component(w), log=True)
             self.instances[CHASSIS].start(chassis_values(values), stop)
             for w in rover.WHEELS:
-                self.instances[w].start(terrain_values(terrain), stop)
+                self.instances[w].start(terrain_values(soil.base, self.with_map), stop)
+                if self.with_map:
+                    self.instances[map_component(w)].start(soil.map_values(), stop)
         except BaseException:
             self.close()
             raise
@@ -107,6 +128,11 @@ class RoverFMUs:
         self._ch_record = ch.refs([*(f"{w}.{n}" for w in rover.WHEELS for n in
                                      ("motor_torque", "wheel_speed")), *CHASSIS_RECORD])
         self._ter_in = {w: self.instances[w].refs(TO_TERRAIN) for w in rover.WHEELS}
+        if self.with_map:
+            self._position = ch.refs(f"{w}.position" for w in rover.WHEELS)
+            self._map = {w: (self.instances[map_component(w)].refs(["position"]),
+                             self.instances[map_component(w)].refs(GROUND),
+                             self.instances[w].refs(GROUND)) for w in rover.WHEELS}
         self._ter_out = {w: self.instances[w].refs((*TO_CHASSIS, "slip", "contact_sinkage"))
                          for w in rover.WHEELS}
 
@@ -117,8 +143,14 @@ class RoverFMUs:
         x = ch.getReal(self._ch_out)
         forces, per = [], {}
         n = len(TO_TERRAIN)
+        positions = ch.getReal(self._position) if self.with_map else None
         for k, w in enumerate(rover.WHEELS):
             t = self.instances[w].fmu
+            if self.with_map:  # the soil under the wheel, from its query point
+                where, ground_out, ground_in = self._map[w]
+                g = self.instances[map_component(w)].fmu
+                g.setReal(where, [positions[k]])
+                t.setReal(ground_in, g.getReal(ground_out))
             t.setReal(self._ter_in[w], x[k * n:(k + 1) * n])
             y = t.getReal(self._ter_out[w])
             forces += y[:len(TO_CHASSIS)]
@@ -150,22 +182,18 @@ class RoverFMUs:
             with contextlib.suppress(Exception):  # the others still close
                 inst.close()
         self.instances = {}
-        shutil.rmtree(self._unzip, ignore_errors=True)
+        for folder in self._unzip:
+            shutil.rmtree(folder, ignore_errors=True)
 
 
 def simulate(fmu_dir: Path, soil: Soil, values: Mapping[str, float], stop: float,
              step: float = STEP, stop_when: Callable[[dict], bool] | None = None
              ) -> RoverResult:
-    """The rover's five FMUs through fmpy, coupled by our master (module doc); the interface
-    of :func:`wheelterrain.cosim.rover.simulate`. A soil that changes along the path needs
-    WheelTerrain parameters that change during the run, which the FMUs do not take: refused."""
-    if soil.patch:
-        raise CosimulationError("a soil that changes along the path is not in the FMUs' "
-                                "parameter contract (WheelTerrain's soil values are fixed "
-                                "parameters): run this scenario in process")
+    """The rover's FMUs through fmpy, coupled by our master (module doc); the interface of
+    :func:`wheelterrain.cosim.rover.simulate`."""
     n = round(stop / step)
     rows = []
-    system = RoverFMUs(fmu_dir, soil.base, values, stop)
+    system = RoverFMUs(fmu_dir, soil, values, stop)
     left = None
     t0 = time.perf_counter()
     try:
@@ -208,15 +236,10 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
                  values: Mapping[str, float], stop: float, step: float = STEP,
                  stop_when=None) -> RoverResult:
     """The scenario's Rover.ssp in ``engine`` ("ecos" or "libcosim"), to ``stop`` (the run is
-    not ended early: ``stop_when`` is not an SSP's). A soil that changes along the path is not
-    in the FMUs' parameter contract: refused with the reason."""
-    if soil.patch:
-        raise CosimulationError(
-            f"{engine} runs Rover.ssp, which cannot carry a soil that changes along the path "
-            "(WheelTerrain's soil values are fixed parameters): run it in process")
+    not ended early: ``stop_when`` is not an SSP's)."""
     names = _ssp_variables()
     with tempfile.TemporaryDirectory(prefix="wheelterrain_rover_") as tmp:
-        path = write_ssp(Path(tmp) / "Rover.ssp", fmu_dir, scenario, soil.base, values, stop)
+        path = write_ssp(Path(tmp) / "Rover.ssp", fmu_dir, scenario, soil, values, stop)
         t0 = time.perf_counter()
         with _stdout_to_stderr():  # the engines' own log lines: not on standard output
             if engine == "libcosim":
@@ -282,7 +305,12 @@ def system_name(scenario: str) -> str:
     return "Rover_" + scenario.replace("-", "_")
 
 
-def system_description(scenario: str, terrain: ParameterSet, values: Mapping[str, float],
+def fmu_names(with_map: bool) -> tuple[str, ...]:
+    """The FMUs a Rover.ssp holds: a soil map adds Terrain.fmu."""
+    return ("RoverChassis", "WheelTerrain", *(("Terrain",) if with_map else ()))
+
+
+def system_description(scenario: str, soil: Soil, values: Mapping[str, float],
                        stop: float) -> bytes:
     q = ssp._q
     for prefix, uri in ssp.NS.items():
@@ -295,15 +323,26 @@ def system_description(scenario: str, terrain: ParameterSet, values: Mapping[str
     elements = ET.SubElement(system, q("ssd", "Elements"))
     chassis = {p.name: ssp._binding(p, chassis_values(values)[p.name]) for p in ROVER_TABLE}
     ins = [f"{w}.{n}" for w in rover.WHEELS for n in TO_CHASSIS]
-    outs = [f"{w}.{n}" for w in rover.WHEELS for n in TO_TERRAIN]
+    with_map = bool(soil.patch)
+    outs = [f"{w}.{n}" for w in rover.WHEELS
+            for n in (*TO_TERRAIN, *(("position",) if with_map else ()))]
     ssp._component(elements, CHASSIS, "resources/RoverChassis.fmu", ins, outs, chassis,
                    scenario)
-    soil = {p.name: ssp._binding(p, terrain[p.name]) for p in TABLE}
+    wheel = {p.name: ssp._binding(p, soil.base[p.name]) for p in TABLE}
+    if with_map:
+        wheel["soil_from_inputs"] = ("Boolean", "true")
+    ground_rows = {p.name: p for p in (*TABLE, *GROUND_TABLE)}
+    terrain_map = {name: ssp._binding(ground_rows[name], value)
+                   for name, value in soil.map_values().items()}
     for w in rover.WHEELS:
-        ssp._component(elements, w, "resources/WheelTerrain.fmu", TO_TERRAIN, TO_CHASSIS,
-                       soil, scenario)
+        ssp._component(elements, w, "resources/WheelTerrain.fmu",
+                       (*TO_TERRAIN, *(GROUND if with_map else ())), TO_CHASSIS, wheel,
+                       scenario)
+        if with_map:
+            ssp._component(elements, map_component(w), "resources/Terrain.fmu", ("position",),
+                           GROUND, terrain_map, scenario)
     conns = ET.SubElement(system, q("ssd", "Connections"))
-    for a, av, b, bv in connections():
+    for a, av, b, bv in connections(with_map):
         ET.SubElement(conns, q("ssd", "Connection"), startElement=a, startConnector=av,
                       endElement=b, endConnector=bv)
     ET.SubElement(root, q("ssd", "DefaultExperiment"), startTime="0.0", stopTime=repr(stop))
@@ -311,7 +350,7 @@ def system_description(scenario: str, terrain: ParameterSet, values: Mapping[str
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
-def write_ssp(path: Path, fmu_dir: Path, scenario: str, terrain: ParameterSet,
+def write_ssp(path: Path, fmu_dir: Path, scenario: str, soil: Soil,
               values: Mapping[str, float], stop: float) -> Path:
     """Rover.ssp for ``scenario`` (module doc), written atomically."""
     path = Path(path)
@@ -321,9 +360,9 @@ def write_ssp(path: Path, fmu_dir: Path, scenario: str, terrain: ParameterSet,
         partial = Path(tmp.name)
     try:
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
-            z.writestr("SystemStructure.ssd", system_description(scenario, terrain, values,
+            z.writestr("SystemStructure.ssd", system_description(scenario, soil, values,
                                                                  stop))
-            for name in ("RoverChassis", "WheelTerrain"):
+            for name in fmu_names(bool(soil.patch)):
                 z.write(Path(fmu_dir) / f"{name}.fmu", f"resources/{name}.fmu")
         os.replace(partial, path)
     finally:
