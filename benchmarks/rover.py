@@ -7,7 +7,8 @@ second, every master measured in the same run on the level scenario.
 
 Masters: in process (the chassis and contact Functions stepped together, compiled C, blocks of
 steps per call); our master through fmpy on the native FMUs (FMU_DIR/native) and on the
-pythonfmu ones (FMU_DIR); libcosim and ecos on Rover.ssp with the native FMUs (where installed).
+pythonfmu ones (FMU_DIR); libcosim, ecos and fmpy's own SSP runner on Rover.ssp with the
+native FMUs (where installed).
 Each figure is the median over repeats of one run's real-time factor (simulated time over wall
 time, start-up excluded: each engine's own loop is timed). The baseline measured in the same
 run is one call of the core contact Function from Python per simulated step, four wheels: what
@@ -15,9 +16,10 @@ a Python loop over the CasADi model could at best do; the ratios say how far eac
 from it.
 
 ``--json`` prints ``rover_rtf_fastest`` (the fastest master), ``rover_how`` (which),
-``rover_rtf_fmpy`` (our master through fmpy, native FMUs), and every master's figure. Goals
-(issue 30): >= 100x real time fastest, >= 10x through fmpy. Chrono's published SCM benchmark
-runs a four-wheel vehicle at 2-3x real time.
+``rover_rtf_fmpy`` (our master through fmpy's FMU classes, native FMUs),
+``rover_rtf_fmpy_ssp`` (fmpy's own SSP runner, fmpy.ssp, on Rover.ssp with the native FMUs),
+and every master's figure. Goals (issue 30): >= 100x real time fastest, >= 10x through fmpy.
+Chrono's published SCM benchmark runs a four-wheel vehicle at 2-3x real time.
 """
 
 from __future__ import annotations
@@ -76,7 +78,8 @@ def main() -> None:
     if (native / "RoverChassis.fmu").is_file():
         masters["wheelterrain master (fmpy), native FMUs"] = lambda: rover_fmus.simulate(
             native, soil, {}, args.seconds)
-        for engine, module in (("libcosim", "libcosimpy"), ("ecos", "ecospy")):
+        for engine, module in (("libcosim", "libcosimpy"), ("ecos", "ecospy"),
+                               ("fmpy-ssp", "fmpy")):
             if importlib.util.find_spec(module) is not None:
                 masters[f"{engine}, native FMUs"] = (
                     lambda engine=engine: rover_fmus.simulate_ssp(
@@ -92,7 +95,8 @@ def main() -> None:
     rtfs = {k[4:]: v for k, v in figures.items() if k.startswith("rtf ")}
     fastest = max(rtfs, key=rtfs.get)
     figures.update(rover_rtf_fastest=rtfs[fastest], rover_how=fastest,
-                   rover_rtf_fmpy=rtfs.get("wheelterrain master (fmpy), native FMUs"))
+                   rover_rtf_fmpy=rtfs.get("wheelterrain master (fmpy), native FMUs"),
+                   rover_rtf_fmpy_ssp=rtfs.get("fmpy-ssp, native FMUs"))
     print(f"baseline (4 Python calls of the contact Function a step): "
           f"{figures['baseline_rtf_python_calls']:.1f}x real time", file=sys.stderr)
     if args.json:

@@ -15,6 +15,7 @@ from wheelterrain import compiled as native
 from wheelterrain import presets
 from wheelterrain.cosim import rover as rover_system
 from wheelterrain.cosim import rover_fmus
+from wheelterrain.errors import CosimulationError
 from wheelterrain.fmu import build_native as nativebuild
 from wheelterrain.fmu import build_pythonfmu as fmubuild
 from wheelterrain.model import rover
@@ -68,10 +69,11 @@ def _means(res, start: float = 2.0) -> dict:
             for k, v in d.items() if k in ("normal_force", "sinkage", "slip", "drawbar_pull")}
 
 
-@pytest.mark.parametrize("engine", ["libcosim", "ecos"])
+@pytest.mark.parametrize("engine", ["libcosim", "ecos", "fmpy-ssp"])
 def test_rover_ssp_runs_unchanged_in_other_engines_with_the_same_means(built, terrain,
                                                                         in_process, engine):
-    module = {"libcosim": "libcosimpy", "ecos": "ecospy"}[engine]
+    """libcosim, ecos and fmpy's own SSP runner (fmpy.ssp) run Rover.ssp as written."""
+    module = {"libcosim": "libcosimpy", "ecos": "ecospy", "fmpy-ssp": "fmpy"}[engine]
     if importlib.util.find_spec(module) is None:
         pytest.skip(f"{module} is not installed")
     if engine == "ecos" and not shutil.which("ldconfig"):
@@ -161,6 +163,14 @@ def test_a_soil_map_in_rover_ssp_gives_the_same_means_in_other_engines(built, te
         wheel = key.split(".")[0]
         scale = abs(ours[f"{wheel}.normal_force"]) if "pull" in key else abs(value)
         assert abs(theirs[key] - value) <= 1e-3 * scale, (key, theirs[key], value)
+
+
+def test_fmpy_ssp_runner_refuses_a_soil_map_with_the_reason(built, terrain, in_process):
+    """fmpy.ssp starts every connection at 0, outside the ground.* inputs' ranges: refused
+    before anything runs, with that reason."""
+    with pytest.raises(CosimulationError, match="sets every connected input to 0"):
+        rover_fmus.simulate_ssp("fmpy-ssp", built / "native", "soft-patch",
+                                _patched(terrain, in_process), {}, STOP)
 
 
 def test_model_exchange_agrees_with_co_simulation(built):

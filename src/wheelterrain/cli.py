@@ -760,12 +760,14 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool,
 @set_option
 @click.option("--step", default=1e-3, show_default=True, type=click.FloatRange(1e-4, 1e-2),
               help="Communication step [s] (halve it to check convergence).")
-@click.option("--engine", type=click.Choice(["in-process", "fmus", "libcosim", "ecos"]),
+@click.option("--engine", type=click.Choice(["in-process", "fmus", "libcosim", "ecos",
+                                             "fmpy-ssp"]),
               default="in-process", show_default=True,
               help="in-process: the chassis and contact Functions stepped together, compiled; "
               "fmus: RoverChassis.fmu + four WheelTerrain.fmu through fmpy, our master; "
-              "libcosim, ecos: Rover.ssp in those engines (soft-patch adds four "
-              "Terrain.fmu, the soil map's query points).")
+              "libcosim, ecos, fmpy-ssp: Rover.ssp in those engines (fmpy-ssp: fmpy's own SSP "
+              "runner; soft-patch adds four Terrain.fmu, the soil map's query points, which "
+              "fmpy-ssp cannot start).")
 @click.option("--fmu-dir", default=None, type=click.Path(file_okay=False),
               help="Where the FMUs are (default: build/native if built, else build).")
 @click.option("--out", default="validation/output/rover", show_default=True,
@@ -826,7 +828,7 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     if engine == "fmus":
         def runner(soil, values, stop, step, stop_when):
             return rover_fmus.simulate(folder, soil, values, stop, step, stop_when)
-    elif engine in ("libcosim", "ecos"):
+    elif engine in ("libcosim", "ecos", "fmpy-ssp"):
         def runner(soil, values, stop, step, stop_when):
             return rover_fmus.simulate_ssp(engine, folder, scenario, soil, values, stop, step)
     try:

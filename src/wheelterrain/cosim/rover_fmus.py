@@ -48,6 +48,7 @@ from wheelterrain.cosim.rover import (
     Soil,
     from_records,
 )
+from wheelterrain.errors import CosimulationError
 from wheelterrain.fmu import functions
 from wheelterrain.fmu.instance import Instance
 from wheelterrain.fmu.variables import GROUND
@@ -235,8 +236,13 @@ def _ssp_variables() -> list[tuple[str, str]]:
 def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
                  values: Mapping[str, float], stop: float, step: float = STEP,
                  stop_when=None) -> RoverResult:
-    """The scenario's Rover.ssp in ``engine`` ("ecos" or "libcosim"), to ``stop`` (the run is
-    not ended early: ``stop_when`` is not an SSP's)."""
+    """The scenario's Rover.ssp in ``engine`` ("ecos", "libcosim" or "fmpy-ssp": fmpy's own SSP
+    runner), to ``stop`` (the run is not ended early: ``stop_when`` is not an SSP's)."""
+    if engine == "fmpy-ssp" and soil.patch:
+        raise CosimulationError(
+            "fmpy's SSP runner sets every connected input to 0 before the first step, and 0 is "
+            "outside the declared ranges of the wheels' ground.* inputs (soil.k_phi >= 10, "
+            "...): a soil map cannot run there (ecos, libcosim and our master run it)")
     names = _ssp_variables()
     with tempfile.TemporaryDirectory(prefix="wheelterrain_rover_") as tmp:
         path = write_ssp(Path(tmp) / "Rover.ssp", fmu_dir, scenario, soil, values, stop)
@@ -247,6 +253,11 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
                                                  tuple(f"{c}.{v}" for c, v in names))
                 wall = time.perf_counter() - t0
                 data = np.array([out[f"{c}.{v}"] for c, v in names])
+            elif engine == "fmpy-ssp":
+                out = ssp.simulate_with_fmpy(path, stop, step)
+                wall = time.perf_counter() - t0
+                steps = round(stop / step)
+                data = np.array([out[f"{c}.{v}"][:steps] for c, v in names])
             elif engine == "ecos":
                 csv_path = Path(tmp) / "ecos.csv"
                 ids = tuple(f"{c}::{v}" for c, v in names)
@@ -326,6 +337,9 @@ def system_description(scenario: str, soil: Soil, values: Mapping[str, float],
     with_map = bool(soil.patch)
     outs = [f"{w}.{n}" for w in rover.WHEELS
             for n in (*TO_TERRAIN, *(("position",) if with_map else ()))]
+    # what the record reads (unconnected outputs; an engine records its connectors)
+    recorded = {c: [v for comp, v in _ssp_variables() if comp == c] for c in COMPONENTS}
+    outs += [v for v in recorded[CHASSIS] if v not in outs]
     ssp._component(elements, CHASSIS, "resources/RoverChassis.fmu", ins, outs, chassis,
                    scenario)
     wheel = {p.name: ssp._binding(p, soil.base[p.name]) for p in TABLE}
@@ -336,7 +350,8 @@ def system_description(scenario: str, soil: Soil, values: Mapping[str, float],
                    for name, value in soil.map_values().items()}
     for w in rover.WHEELS:
         ssp._component(elements, w, "resources/WheelTerrain.fmu",
-                       (*TO_TERRAIN, *(GROUND if with_map else ())), TO_CHASSIS, wheel,
+                       (*TO_TERRAIN, *(GROUND if with_map else ())),
+                       (*TO_CHASSIS, *(v for v in recorded[w] if v not in TO_CHASSIS)), wheel,
                        scenario)
         if with_map:
             ssp._component(elements, map_component(w), "resources/Terrain.fmu", ("position",),
