@@ -94,6 +94,11 @@ class Settings:
     speed_limit: float = 5.0  # rad/s, largest speed command
     move_weight: float = 1e-2  # weight of (command move / command scale)^2
     max_iterations: int = 20
+    speed_weight: float = 0.0
+    """track: weight of ((carriage speed - speed reference)/(speed reference*SLIP_SCALE))^2, a
+    relative speed error weighed like a slip error of the same size. 0 (the rig): slip only.
+    On a vehicle the slip of steady motion is set by the force balance, so a controller that
+    tracks slip alone leaves the speed free to drift; this term holds it."""
 
     def check(self) -> Settings:
         def need(ok: bool, name: str, value, valid: str) -> None:
@@ -115,6 +120,9 @@ class Settings:
         need(0 <= self.move_weight <= 1e6, "move_weight", self.move_weight, "[0, 1e6]")
         need(1 <= self.max_iterations <= 1000, "max_iterations", self.max_iterations,
              "[1, 1000]")
+        need(0 <= self.speed_weight <= 1e6, "speed_weight", self.speed_weight, "[0, 1e6]")
+        need(self.speed_weight == 0 or self.objective == "track", "speed_weight",
+             self.speed_weight, "0 with the efficiency objective")
         return self
 
 
@@ -255,6 +263,7 @@ class Controller:
         u_hat, x_hat = ca.MX.sym("u", n), ca.MX.sym("x", nx, n)
         x0, pt = ca.MX.sym("x_now", nx), ca.MX.sym("p_terrain", len(NAMES))
         reference, previous = ca.MX.sym("slip_reference", n), ca.MX.sym("previous_command")
+        speed_reference = ca.MX.sym("speed_reference")
         pr = ca.DM(self.p_rig)
         u = u_hat * self.command_scale
         xs = ca.diag(ca.DM(x_scale)) @ x_hat
@@ -272,8 +281,11 @@ class Controller:
         power = motor * omega
         moves = ca.diff(ca.vertcat(previous, u)) / self.command_scale
         if s.objective == "track":
-            residuals = ca.vertcat((slip - reference) / SLIP_SCALE,
-                                   math.sqrt(s.move_weight) * moves)
+            terms = [(slip - reference) / SLIP_SCALE, math.sqrt(s.move_weight) * moves]
+            if s.speed_weight > 0:  # built only when weighed: the rig's NLP stays as it was
+                terms.append(math.sqrt(s.speed_weight) * (speed - speed_reference)
+                             / (ca.fmax(ca.fabs(speed_reference), 1e-9) * SLIP_SCALE))
+            residuals = ca.vertcat(*terms)
             cost = ca.sumsqr(residuals)
         else:
             residuals = None
@@ -281,7 +293,7 @@ class Controller:
             cost = -100 * ca.sum1(efficiency) + s.move_weight * ca.sumsqr(moves)
         g = ca.vertcat(ca.vec(residual), motor, power)
         w = ca.vertcat(u_hat, ca.vec(x_hat))
-        p = ca.vertcat(x0, pt, reference, previous)
+        p = ca.vertcat(x0, pt, reference, previous, speed_reference)
         nlp = {"x": w, "p": p, "f": cost, "g": g}
         self.gauss_newton = None
         if residuals is not None:  # least squares: the Gauss-Newton Hessian 2*J'J
@@ -385,9 +397,12 @@ class Controller:
             xs.append(x)
         return np.array(xs).T
 
-    def solve(self, x_now, pt, reference, previous: float) -> Step:
+    def solve(self, x_now, pt, reference, previous: float,
+              speed_reference: float = 0.0) -> Step:
         """Solve the NLP at state ``x_now`` (MPC_STATES) with soil ``pt`` and the slip ``reference``
-        (scalar or one per interval); ``previous`` is the command applied until now."""
+        (scalar or one per interval); ``previous`` is the command applied until now;
+        ``speed_reference`` [m/s] the carriage speed the speed term holds (Settings.speed_weight
+        > 0)."""
         n = self.settings.horizon
         x_now = np.asarray(x_now, dtype=float)
         reference = np.broadcast_to(np.asarray(reference, dtype=float), (n,))
@@ -396,18 +411,28 @@ class Controller:
             xs = self.rollout(x_now, commands, pt)
             self.guess = np.concatenate([commands / self.command_scale,
                                          (xs.T / self.x_scale).ravel()])
-        args = {"x0": self.guess, "p": np.concatenate([x_now, pt, reference, [previous]]),
+        else:
+            self._align_turns(x_now)
+        args = {"x0": self.guess,
+                "p": np.concatenate([x_now, pt, reference, [previous, speed_reference]]),
                 "lbx": self.lbx, "ubx": self.ubx, "lbg": self.lbg, "ubg": self.ubg}
         if self.solver is None:  # the real-time iteration
             started = time.perf_counter()
-            w_next, violation = self.iteration(args["x0"], args["p"])
+            try:
+                w_next, violation = self.iteration(args["x0"], args["p"])
+                w, violation = np.array(w_next).ravel(), float(violation)
+                problem = None
+            except RuntimeError:  # csparse refuses a linearisation that is not finite
+                w, violation = self.guess, math.inf
+                problem = ("the linearisation is not finite (the plan left the contact "
+                           "model's domain, e.g. the wheel out of the soil)")
             elapsed = time.perf_counter() - started
-            w, violation = np.array(w_next).ravel(), float(violation)
             solved = bool(np.all(np.isfinite(w))) and violation <= RTI_VIOLATION
             if not solved:  # keep the shifted warm start: its first command is the plan's
                 w = self.guess
             status = "Solve_Succeeded" if solved else (
-                f"QP not solved: its limits violated by {violation:.3g}; the shifted plan kept")
+                f"QP not solved: {problem or f'its limits violated by {violation:.3g}'}; the "
+                "shifted plan kept")
             stats = {"iter_count": 1, "success": solved, "return_status": status}
         else:
             # primal warm start only: qrqp warm-started with the last multipliers cycled (200
@@ -423,6 +448,20 @@ class Controller:
         return Step(float(commands[0]), elapsed, int(stats.get("iter_count", -1)),
                     bool(stats.get("success", False)), str(stats.get("return_status", "")),
                     {"command": commands, "states": xs})
+
+    def _align_turns(self, x_now: np.ndarray) -> None:
+        """Move the warm start's wheel angles by the whole turns that ``x_now``'s angle was
+        wrapped by (:func:`wrap_angle`), so that they continue from it. Without this, the
+        guess's first interval starts 2*pi away from the state once per turn, and one
+        Gauss-Newton step (the real-time iteration) linearises the ripple over that jump:
+        a wild command (seen on the rover after 10.5 s)."""
+        n, nx = self.settings.horizon, len(MPC_STATES)
+        angle = MPC_STATES.index("wheel_angle")
+        scale = self.x_scale[angle]
+        first = self.guess[n + angle] * scale  # the guess's angle at the first interval's end
+        turns = round((first - x_now[angle]) / (2 * math.pi))
+        if turns:
+            self.guess[n + angle::nx] -= turns * 2 * math.pi / scale
 
     def _shift(self, w: np.ndarray, pt: np.ndarray) -> None:
         """Warm start for the next solve: the solution moved one interval on, its last
