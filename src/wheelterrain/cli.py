@@ -768,6 +768,11 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool,
               "libcosim, ecos, fmpy-ssp: Rover.ssp in those engines (fmpy-ssp: fmpy's own SSP "
               "runner; soft-patch adds four Terrain.fmu, the soil map's query points, which "
               "fmpy-ssp cannot start).")
+@click.option("--controller", type=click.Choice(["speed", "mpc"]), default="speed",
+              show_default=True,
+              help="speed: the four speed loops to the common rim speed; mpc: from 2 s on, the "
+              "slip NMPC (real-time iteration) per wheel commands its speed, holding the "
+              "steady level slip and speed (level and soft-patch, in process).")
 @click.option("--fmu-dir", default=None, type=click.Path(file_okay=False),
               help="Where the FMUs are (default: build/native if built, else build).")
 @click.option("--out", default="validation/output/rover", show_default=True,
@@ -776,7 +781,8 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool,
 @json_option("One object (the contract: scenario, gravity, engine, simulated_time_s, "
              "wall_time_s, real_time_factor, wheels, and per scenario its predictions)")
 def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...], step: float,
-          engine: str, fmu_dir: str | None, out: str, json_target: str | None) -> None:
+          engine: str, controller: str, fmu_dir: str | None, out: str,
+          json_target: str | None) -> None:
     """The Rashid rover on four wheels: one scenario, its figures, a plot and a CSV.
 
     \b
@@ -792,6 +798,9 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
       descent     20 deg downhill, the speed loops braking, beside the predicted limit
       pull-test   a resisting force rising slowly: the rover's pull-slip curve, beside the
                   sum of four single-wheel curves at the axle loads
+    --controller mpc: traction control, an NMPC per wheel (slip and speed held at the steady
+    level motion); the figures then include slip_rms and speed_rms_relative, which the speed
+    loops' run of the same scenario also reports.
     --set changes the terrain (soil, wheel, model) and the chassis (rover.*) parameters.
     Writes OUT/<scenario>-<gravity>.png and .csv, and OUT/Rover-<scenario>.ssp (the FMUs,
     their connections, the scenario's parameters, its slope and towing ramps included as the
@@ -805,6 +814,16 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
 
     _check_file_target(json_target)
     _check_out_dir(out)
+    if controller == "mpc":
+        if scenario not in rover_system.TRACKED_SCENARIOS:
+            _usage_error(f"--controller mpc runs {' and '.join(rover_system.TRACKED_SCENARIOS)}"
+                         f" (each wheel's prediction is a quarter rover on level ground), not "
+                         f"{scenario}")
+        if engine != "in-process":
+            _usage_error("--controller mpc runs against the in-process rover (--engine "
+                         "in-process)")
+        if not math.isclose(step, rover_system.STEP):
+            _usage_error(f"--controller mpc runs at the rover's step of {rover_system.STEP:g} s")
     rover_items = [a for a in assignments if a.strip().startswith("rover.")]
     try:
         chassis_values = parse_assignments(rover_items, find=rover_lookup)
@@ -824,8 +843,19 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
                      f"{folder}: build them (`wheelterrain build --flavor all`) or give "
                      "--fmu-dir")
 
-    runner = None
-    if engine == "fmus":
+    runner, control_figures = None, {}
+    if controller == "mpc":
+        from wheelterrain.control import rover_mpc
+
+        def runner(soil, values, stop, step, stop_when):
+            run = rover_mpc.run(soil, values, stop)
+            control_figures.update(
+                controller_solver=run.settings.solver, speed_weight=run.settings.speed_weight,
+                solve_time_median_s=float(np.median(run.solve_times)),
+                solve_time_p90_s=float(np.percentile(run.solve_times, 90)),
+                failed_solves=run.failures, solves=int(run.solve_times.size))
+            return run.result
+    elif engine == "fmus":
         def runner(soil, values, stop, step, stop_when):
             return rover_fmus.simulate(folder, soil, values, stop, step, stop_when)
     elif engine in ("libcosim", "ecos", "fmpy-ssp"):
@@ -836,13 +866,14 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
                                         engine=runner)
     except WheelTerrainError as err:
         _fail(err)
-    except (CosimulationError, FMUError) as err:
+    except (CosimulationError, FMUError, ValueError) as err:  # ValueError: an MPC setting
         click.echo(f"error: {err}", err=True)
         sys.exit(EXIT_USAGE)
-    figures = {**run["figures"], "preset": preset}
+    figures = {**run["figures"], "preset": preset, "controller": controller,
+               **control_figures}
     result = run["result"]
     out_dir = Path(out)
-    stem = f"{scenario}-{gravity}"
+    stem = f"{scenario}-{gravity}" + ("-mpc" if controller == "mpc" else "")
     plots.rover(result, figures, out_dir / f"{stem}.png")
     series = {"time": result.time, **{f"{w}.{k}": v for w, d in result.wheels.items()
                                       for k, v in d.items()},
@@ -872,7 +903,9 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
                    f"{w['mean_motor_power']:10.4f}")
     for key in ("stall_slope_deg", "predicted_stall_slope_deg", "predicted_stall_limit",
                 "slide_slope_deg", "predicted_descent_limit_deg", "predicted_descent_limit",
-                "stall_towing_force", "pull_curve_max_error_n"):
+                "stall_towing_force", "pull_curve_max_error_n", "slip_reference", "slip_rms",
+                "speed_reference", "speed_rms_relative", "solve_time_median_s",
+                "failed_solves"):
         if key in figures:
             value = figures[key]
             click.echo(f"  {key:30} {value:.4g}" if isinstance(value, float)

@@ -79,13 +79,20 @@ def _wheel_soils(xs: list, p: dict, pw: ca.MX, pg: ca.MX) -> ca.MX:
     return ca.horzcat(*columns)
 
 
+N_CMD = len(rover.WHEELS) * len(rover.WHEEL_COMMANDS)
+"""The wheels' commands (rover.WHEEL_COMMANDS per wheel, wheel-major): used with rover.drive 1
+(speed) or 2 (torque)."""
+
+
 def _system_step() -> ca.Function:
-    """``system(x, pw, pg, pr, slope, tow, h) -> (x_next, rec)``: one communication step of the
-    whole rover. ``x``: rover.STATES then four wheel angles; ``pw``: the wheels' terrain
+    """``system(x, pw, pg, pr, slope, tow, cmd, h) -> (x_next, rec)``: one communication step
+    of the whole rover. ``x``: rover.STATES then four wheel angles; ``pw``: the wheels' terrain
     parameters (their soil replaced by the map's); ``pg``: the terrain map's values
-    (ground.NAMES); ``pr``: rover parameters; ``rec``: RECORD per wheel (wheel-major), then
-    CHASSIS_RECORD, at the start of the step (the forces held over it)."""
+    (ground.NAMES); ``pr``: rover parameters; ``cmd``: the wheels' commands (N_CMD); ``rec``:
+    RECORD per wheel (wheel-major), then CHASSIS_RECORD, at the start of the step (the forces
+    held over it)."""
     x = ca.MX.sym("x", N_X)
+    cmd = ca.MX.sym("cmd", N_CMD)
     pw, pg = ca.MX.sym("pw", len(NAMES)), ca.MX.sym("pg", len(ground.NAMES))
     pr = ca.MX.sym("pr", len(rover.ROVER_NAMES))
     slope, tow, h = ca.MX.sym("slope"), ca.MX.sym("tow"), ca.MX.sym("h")
@@ -95,6 +102,8 @@ def _system_step() -> ca.Function:
     s = dict(zip(rover.STATES, xs, strict=True))
     u, wheels = _coupled_forces(xs, p, _wheel_soils(xs, p, pw, pg), angles)
     u.update(slope=slope, towing_force=tow)
+    u.update({f"{w}.{n}": cmd[k] for k, (w, n) in enumerate(
+        (w, n) for w in rover.WHEELS for n in rover.WHEEL_COMMANDS)})
     rec = [(traction, z, out["normal_force"], out["drawbar_pull"], out["torque"],
             rover.motor_torque(xs, u, p, w), s[f"{w}.wheel_speed"])
            for w, (traction, z, out) in zip(rover.WHEELS, wheels, strict=True)]
@@ -102,9 +111,9 @@ def _system_step() -> ca.Function:
     new_angles = [angles[k] + h * s[f"{w}.wheel_speed"] for k, w in enumerate(rover.WHEELS)]
     s["effective_slope"], s["effective_towing_force"] = rover.effective_inputs(xs, u, p)
     record = [v for wheel in rec for v in wheel] + [s[n] for n in CHASSIS_RECORD]
-    return ca.Function("rover_system", [x, pw, pg, pr, slope, tow, h],
+    return ca.Function("rover_system", [x, pw, pg, pr, slope, tow, cmd, h],
                        [ca.vertcat(*nxt, *new_angles), ca.vertcat(*record)],
-                       ["x", "pw", "pg", "pr", "slope", "tow", "h"], ["x_next", "rec"])
+                       ["x", "pw", "pg", "pr", "slope", "tow", "cmd", "h"], ["x_next", "rec"])
 
 
 N_REC = len(RECORD) * len(rover.WHEELS) + len(CHASSIS_RECORD)
@@ -120,9 +129,10 @@ def block_function(block: int = BLOCK) -> ca.Function:
     pw, pg = ca.MX.sym("pw", len(NAMES)), ca.MX.sym("pg", len(ground.NAMES))
     pr = ca.MX.sym("pr", len(rover.ROVER_NAMES))
     slope, tow, h = ca.MX.sym("slope"), ca.MX.sym("tow"), ca.MX.sym("h")
-    xs, recs = acc(x0, pw, pg, pr, slope, tow, h)
-    return ca.Function(f"rover_block{block}", [x0, pw, pg, pr, slope, tow, h],
-                       [xs[:, -1], recs], ["x", "pw", "pg", "pr", "slope", "tow", "h"],
+    cmd = ca.MX.sym("cmd", N_CMD)
+    xs, recs = acc(x0, pw, pg, pr, slope, tow, cmd, h)
+    return ca.Function(f"rover_block{block}", [x0, pw, pg, pr, slope, tow, cmd, h],
+                       [xs[:, -1], recs], ["x", "pw", "pg", "pr", "slope", "tow", "cmd", "h"],
                        ["x_end", "rec"])
 
 
@@ -179,11 +189,14 @@ class RoverResult:
 
 def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: float = STEP,
              block: int = BLOCK, stop_when: Callable[[dict], bool] | None = None,
-             slope: float = 0.0, towing: float = 0.0) -> RoverResult:
+             slope: float = 0.0, towing: float = 0.0,
+             control: Callable[[float, list], list] | None = None) -> RoverResult:
     """Run the rover in process from rest on the surface for ``stop`` s, its inputs ``slope``
     [rad] and ``towing`` [N] constant (a scenario's ramps are the chassis' input profile, rows
     ``rover.ramp_time`` ... ``rover.towing_rate`` of ``rover_values``); ``stop_when(last)``
-    (the last step's record by name) ends the run early."""
+    (the last step's record by name) ends the run early. ``control(t, x)`` (x: rover.STATES
+    then the wheel angles) gives the wheels' commands (N_CMD) held over the next ``block``
+    steps (default: none, 0)."""
     p = {**rover.defaults(), **rover_values}
     evaluate, engine = _evaluator(block)
     pr = [p[n] for n in rover.ROVER_NAMES]
@@ -197,7 +210,8 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
     t0 = time.perf_counter()
     for b in range(blocks):
         t = b * block * step
-        x, rec = evaluate(x, pw, pg, pr, slope, towing, step)
+        cmd = [0.0] * N_CMD if control is None else control(t, x)
+        x, rec = evaluate(x, pw, pg, pr, slope, towing, cmd, step)
         rec = np.asarray(rec, dtype=float).reshape(N_REC, block, order="F")
         problem = _outside(rec)
         if problem is not None:
@@ -328,7 +342,7 @@ def growth_rate(terrain: Mapping, p: Mapping[str, float], slope: float, slip: fl
             "state": x}
 
 
-def _steady_slip(terrain: Mapping, p: Mapping[str, float], slope: float) -> float | None:
+def steady_slip(terrain: Mapping, p: Mapping[str, float], slope: float) -> float | None:
     """The slip of steady motion on ``slope`` in [-0.999, STALL_SLIP], or None (none there:
     the wheels cannot hold the rover)."""
     from scipy.optimize import brentq
@@ -355,7 +369,7 @@ def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
     top = direction * math.radians(60)
 
     def verdict(slope: float) -> str | None:
-        i = _steady_slip(terrain, p, slope)
+        i = steady_slip(terrain, p, slope)
         if i is None:
             return "traction" if direction > 0 else "braking"
         return "stability" if growth_rate(terrain, p, slope, i)["rate"] > 0 else None
@@ -363,7 +377,7 @@ def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
     if verdict(0.0) is not None:
         return {"slope": 0.0, "limit": verdict(0.0), "slip": None}
     if verdict(top) is None:
-        return {"slope": top, "limit": None, "slip": _steady_slip(terrain, p, top)}
+        return {"slope": top, "limit": None, "slip": steady_slip(terrain, p, top)}
     lo, hi, why = 0.0, top, verdict(top)
     while abs(hi - lo) > tolerance:
         mid = (lo + hi) / 2
@@ -372,7 +386,7 @@ def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
             lo = mid
         else:
             hi, why = mid, v
-    return {"slope": lo, "limit": why, "slip": _steady_slip(terrain, p, lo)}
+    return {"slope": lo, "limit": why, "slip": steady_slip(terrain, p, lo)}
 
 
 STALL_SLIP = 0.95
@@ -497,6 +511,8 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
             out["stall_towing_force"] = float(res.inputs["towing_force"][k]) \
                 if hit.size else None
             out.update(pull_curve(res, quiet, p, k))
+    if name in TRACKED_SCENARIOS:
+        out.update(tracking(res, soil, p))
     if name == "descent":
         out["predicted_descent_limit_deg"] = math.degrees(pred["slope"])
         out["predicted_descent_limit"] = pred["limit"]
@@ -507,6 +523,34 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
 
 
 NO_RIPPLE = {"ripple.k_g": 0.0, "ripple.k_0": 0.0}
+TRACKED_SCENARIOS = ("level", "soft-patch")
+"""Scenarios on level ground, where the rover has a steady motion to hold (:func:`tracking`)."""
+TRACKING_FROM = 2.0  # s: the rover has sunk in and settled (a controller may take over here)
+
+
+def steady_level_motion(soil: Soil, p: Mapping[str, float]) -> tuple[float, float]:
+    """(slip, speed [m/s]) of the rover's steady motion on level ground on ``soil``'s base
+    soil, ripple-free (the self-propelled slip of the speed loops)."""
+    quiet = terrain_of(soil.base.with_values(NO_RIPPLE))
+    slip = steady_slip(quiet, p, 0.0)
+    if slip is None:
+        raise WheelTerrainError("the rover has no steady motion on level ground with this "
+                                "soil")
+    return slip, (1.0 - slip) * p["rover.rim_speed"]
+
+
+def tracking(res: RoverResult, soil: Soil, p: Mapping[str, float]) -> dict:
+    """How far a run strays from the steady level motion from TRACKING_FROM on: the RMS of
+    every wheel's slip error and of the relative speed error (a controller's score)."""
+    slip, speed = steady_level_motion(soil, p)
+    keep = res.time >= TRACKING_FROM
+    errors = np.concatenate([v["slip"][keep] - slip for v in res.wheels.values()])
+    relative = res.chassis["speed"][keep] / speed - 1.0
+    return {"slip_reference": slip, "speed_reference": speed,
+            "slip_rms": float(np.sqrt(np.mean(errors**2))) if errors.size else None,
+            "speed_rms_relative": float(np.sqrt(np.mean(relative**2)))
+            if relative.size else None,
+            "tracking_from_s": TRACKING_FROM}
 
 
 def _mean(values: np.ndarray, keep: np.ndarray) -> float | None:

@@ -254,7 +254,16 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
                 wall = time.perf_counter() - t0
                 data = np.array([out[f"{c}.{v}"] for c, v in names])
             elif engine == "fmpy-ssp":
-                out = ssp.simulate_with_fmpy(path, stop, step)
+                from fmpy.fmi1 import FMICallException
+
+                try:
+                    out = ssp.simulate_with_fmpy(path, stop, step)
+                except FMICallException as err:
+                    raise CosimulationError(
+                        f"fmpy's SSP runner ended with {err}: it stops at the first step an "
+                        "FMU refuses (a wheel leaving the contact model's domain, as at a "
+                        "stall) and returns nothing of the run; ecos, libcosim and our master "
+                        "run on to there and keep the records") from None
                 wall = time.perf_counter() - t0
                 steps = round(stop / step)
                 data = np.array([out[f"{c}.{v}"][:steps] for c, v in names])
