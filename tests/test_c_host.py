@@ -8,26 +8,22 @@ method called", exit status 134, after a clean run."""
 
 from __future__ import annotations
 
-import os
 import subprocess
-import sys
-import sysconfig
 from pathlib import Path
 
 import pytest
 from fmpy import extract, read_model_description
 
 from wheelterrain import compiled as native
+from wheelterrain.cosim import ssp
 from wheelterrain.fmu import build_native as nativebuild
 
 HERE = Path(__file__).resolve().parent
-LIBPYTHON = Path(sysconfig.get_config_var("LIBDIR") or "") / (
-    sysconfig.get_config_var("LDLIBRARY") or "")
 
 pytestmark = [
     pytest.mark.slow,
     pytest.mark.skipif(native.compiler() is None, reason="needs a C compiler"),
-    pytest.mark.skipif(not LIBPYTHON.name.endswith(".so") or not LIBPYTHON.is_file(),
+    pytest.mark.skipif(ssp.libpython() is None,
                        reason="needs a shared libpython to preload (this Python is static)"),
 ]
 
@@ -48,9 +44,7 @@ def run_in_c_host(host: Path, fmu: Path, folder: Path, steps: int, get: str,
     unzip = Path(extract(str(fmu), unzipdir=str(folder)))
     md = read_model_description(str(fmu))
     library = unzip / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
-    env = {**os.environ, "LD_PRELOAD": str(LIBPYTHON),
-           "PYTHONPATH": os.pathsep.join(p for p in sys.path if p and Path(p).is_dir()),
-           "FMI_HOST_RESOURCES": (unzip / "resources").as_uri()}
+    env = {**ssp.c_host_environment(), "FMI_HOST_RESOURCES": (unzip / "resources").as_uri()}
     return subprocess.run([str(host), str(library), md.guid, str(steps), "0.01", set_, "-", get],
                           capture_output=True, text=True, env=env, timeout=300, check=False)
 

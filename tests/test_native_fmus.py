@@ -866,6 +866,42 @@ def test_libcosim_runs_the_ssp_with_every_parameter_applied(flavours, tmp_path, 
         assert theirs == pytest.approx(ours.means[key], rel=1e-3), (key, theirs,
                                                                     ours.means[key])
 
+OMSIMULATOR = os.environ.get("OMSIMULATOR") or shutil.which("OMSimulator")
+
+
+@pytest.mark.skipif(OMSIMULATOR is None, reason="OMSimulator is not installed: no binary on "
+                    "PyPI or Debian; build it from its public sources "
+                    "(validation/build_omsimulator.sh) and put it on PATH or in $OMSIMULATOR")
+@pytest.mark.parametrize("flavour", ["native", "pythonfmu"])
+def test_omsimulator_runs_the_ssp_with_every_parameter_applied(flavours, tmp_path, flavour):
+    """OMSimulator (OpenModelica's co-simulation engine) imports the SSP file unchanged (the
+    system named as an identifier, its master in OMSimulator's annotation, components whose
+    names its importer cannot mix up with the parameters') and, with a preset whose switches
+    and soil values are off the FMU's start values, gives our master's means: every parameter
+    applied. It solves the rig-terrain loop at each communication point, as our master orders
+    rig then terrain: the same numbers to rounding. The pythonfmu flavour runs in it as in any
+    C host, with libpython preloaded."""
+    ps = presets.load("paper-table2-arc").with_values({"soil.phi": math.radians(32),
+                                                       "soil.k_phi": 600.0})
+    root = flavours["root"] / flavour
+    stop, step = 11.0, 1e-3
+    path = ssp.write(tmp_path / "C3.ssp", root, "C3", ps, 0.5, 62.0, 0.03, stop, step)
+    keys = ("drawbar_pull", "normal_force", "sinkage")
+    result = ssp.simulate_with_omsimulator(
+        path, stop, step, tuple(f"{ssp.RIG_COMPONENT}.sensor.{k}" for k in keys), OMSIMULATOR)
+    unz = {n: flavours["unzip"][(flavour, n)] for n in NAMES}
+    ours = cosim.run_case(root, ps, 0.5, 62.0, 0.03, "C3", stop=stop, step=step, unzipped=unz,
+                          settle=5.0)
+    start, end = ours.window
+    t = result["time"]
+    mask = (t >= start - step / 2) & (t < end - step / 2)
+    assert mask.sum() == round((end - start) / step)
+    for key in keys:
+        theirs = float(np.mean(result[f"{ssp.RIG_COMPONENT}.sensor.{key}"][mask]))
+        assert theirs == pytest.approx(ours.means[key], rel=1e-6), (key, theirs,
+                                                                    ours.means[key])
+
+
 C_HOST = r"""
 #include <dlfcn.h>
 #include <stdio.h>

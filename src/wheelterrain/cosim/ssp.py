@@ -10,7 +10,12 @@ ParameterBindings, all named after the case (ecos applies a named set at init:
 
 from __future__ import annotations
 
+import csv
 import os
+import subprocess
+import sys
+import sysconfig
+import tempfile
 import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
@@ -24,7 +29,8 @@ from wheelterrain.parameters import TABLE, ParameterSet
 
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
       "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
-      "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues"}
+      "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
+      "oms": "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"}
 COUPLED_STATES, FORCES = variables.COUPLED_STATES, variables.COUPLED_FORCES  # the connections
 RIG_OUTPUTS = variables.RIG_OUTPUTS  # every output of each FMU is a connector
 TERRAIN_OUTPUTS = tuple(v.name for v in variables.TERRAIN_IO if v.causality == "output")
@@ -90,9 +96,23 @@ def system_description(case: str, ps: ParameterSet, slip_paper: float, load: flo
     for n in FORCES:
         ET.SubElement(connections, _q("ssd", "Connection"), startElement=TERRAIN_COMPONENT,
                       startConnector=n, endElement=RIG_COMPONENT, endConnector=n)
+    master_annotation(system, step)
     ET.SubElement(root, _q("ssd", "DefaultExperiment"), startTime="0.0", stopTime=repr(stop))
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def master_annotation(system: ET.Element, step: float) -> None:
+    """The system's co-simulation master as OMSimulator's vendor annotation: a fixed-step
+    master at ``step``. OMSimulator takes a system's type only from this annotation and refuses
+    to import a system without one ("internal error" at NewSystem); other engines skip an
+    annotation of a type they do not know, as SSP asks of them."""
+    annotations = ET.SubElement(system, _q("ssd", "Annotations"))
+    annotation = ET.SubElement(annotations, _q("ssc", "Annotation"), type="org.openmodelica")
+    oms = ET.SubElement(annotation, _q("oms", "Annotations"))
+    info = ET.SubElement(oms, _q("oms", "SimulationInformation"))
+    ET.SubElement(info, _q("oms", "FixedStepMaster"), description="oms-ma", stepSize=repr(step),
+                  relativeTolerance="0.0001")
 
 
 def _binding(p, value) -> tuple[str, int | float]:
@@ -172,9 +192,80 @@ def simulate_with_libcosim(path: Path, stop: float, step: float,
         wanted.append((index, refs[variable]))
     steps = round(stop / step)
     out = np.empty((steps, len(variables)))
+    done = steps
     for k in range(steps):
-        execution.step()
+        if not execution.step():
+            # an FMU refused the step (fmi2Discard): libcosim has not advanced its time and
+            # would step again from it, which the FMUs that did step refuse, at every later
+            # step. The run ends here, as in our master.
+            done = k
+            break
         for j, (index, ref) in enumerate(wanted):
             out[k, j] = observer.last_real_values(index, [ref])[0]
-    return {"time": step * np.arange(1, steps + 1),
-            **{name: out[:, j] for j, name in enumerate(variables)}}
+    return {"time": step * np.arange(1, done + 1),
+            **{name: out[:done, j] for j, name in enumerate(variables)}}
+
+
+def libpython() -> Path | None:
+    """This Python's shared libpython, or None where it is built static."""
+    lib = Path(sysconfig.get_config_var("LIBDIR") or "") / (
+        sysconfig.get_config_var("LDLIBRARY") or "")
+    return lib if lib.name.endswith(".so") and lib.is_file() else None
+
+
+def c_host_environment() -> dict[str, str]:
+    """The environment of a C host (not Python) that runs pythonfmu FMUs: this Python's libpython
+    preloaded (pythonfmu's library does not link it: fmu_src/README.md) and this Python's
+    path, where the embedded interpreter finds wheelterrain, casadi and numpy."""
+    env = {**os.environ,
+           "PYTHONPATH": os.pathsep.join(p for p in sys.path if p and Path(p).is_dir())}
+    if libpython() is not None:
+        env["LD_PRELOAD"] = str(libpython())
+    return env
+
+
+def omsimulator() -> str | None:
+    """OMSimulator's command-line tool: $OMSIMULATOR, else OMSimulator on the PATH, else None
+    (it has no binary on PyPI or in Debian; validation/build_omsimulator.sh builds it)."""
+    import shutil
+
+    return os.environ.get("OMSIMULATOR") or shutil.which("OMSimulator")
+
+
+def simulate_with_omsimulator(path: Path, stop: float, step: float,
+                              variables: tuple[str, ...], executable: str = "OMSimulator",
+                              timeout: float = 600.0) -> dict[str, np.ndarray]:
+    """Run an SSP written by :func:`write` in OMSimulator (the OpenModelica co-simulation
+    engine, its command-line tool ``executable``): the FMUs as co-simulation, its fixed-step
+    master at ``step`` (the system's annotation, :func:`master_annotation`), the file's
+    parameter sets applied by its importer. Returns ``time`` and ``variables``
+    ("component.name") at every step (of the rows it writes twice at a time, the last).
+    Raises RuntimeError with its log when it fails or writes no result."""
+    steps = round(stop / step)
+    with tempfile.TemporaryDirectory(prefix="wheelterrain_oms_") as tmp:
+        result = Path(tmp) / "result.csv"
+        run = subprocess.run(
+            [executable, "--mode=cs", f"--stopTime={stop!r}", f"--stepSize={step!r}",
+             f"--intervals={steps}", f"--resultFile={result}", f"--tempDir={tmp}",
+             "--suppressPath=true", str(Path(path).resolve())],
+            cwd=tmp, capture_output=True, text=True, env=c_host_environment(),
+            timeout=timeout, check=False)
+        log = run.stdout + run.stderr
+        # an FMU's refusal (a wheel leaving the model's domain) is logged as an error and
+        # the run goes on, the refusing FMU's outputs frozen: the caller cuts the record there
+        if run.returncode != 0 or not result.is_file():
+            raise RuntimeError(f"OMSimulator failed (exit status {run.returncode}) on {path}:"
+                               f"\n{log[-3000:]}")
+        with result.open(newline="") as f:
+            header = next(csv.reader(f))
+        system = next(h for h in header if h != "time").split(".")[:2]  # model.system
+        columns = {".".join(h.split(".")[2:]): j for j, h in enumerate(header)
+                   if h.split(".")[:2] == system}
+        missing = [v for v in variables if v not in columns]
+        if missing:
+            raise RuntimeError(f"OMSimulator's result of {path} lacks {', '.join(missing)}")
+        data = np.loadtxt(result, delimiter=",", skiprows=1, ndmin=2,
+                          usecols=[header.index("time"), *(columns[v] for v in variables)])
+    t = data[:, 0]
+    data = data[np.append(t[1:] != t[:-1], True)]  # the last row written at each time
+    return {"time": data[:, 0], **{v: data[:, 1 + j] for j, v in enumerate(variables)}}
