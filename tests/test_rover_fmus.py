@@ -3,7 +3,6 @@ and a soil map along the path through Terrain.fmu."""
 
 from __future__ import annotations
 
-import importlib.util
 import shutil
 
 import numpy as np
@@ -14,7 +13,7 @@ from fmpy.validation import validate_fmu
 from wheelterrain import compiled as native
 from wheelterrain import presets
 from wheelterrain.cosim import rover as rover_system
-from wheelterrain.cosim import rover_fmus
+from wheelterrain.cosim import rover_fmus, ssp
 from wheelterrain.errors import CosimulationError
 from wheelterrain.fmu import build_native as nativebuild
 from wheelterrain.fmu import build_pythonfmu as fmubuild
@@ -69,15 +68,20 @@ def _means(res, start: float = 2.0) -> dict:
             for k, v in d.items() if k in ("normal_force", "sinkage", "slip", "drawbar_pull")}
 
 
-@pytest.mark.parametrize("engine", ["libcosim", "ecos", "fmpy-ssp"])
-def test_rover_ssp_runs_unchanged_in_other_engines_with_the_same_means(built, terrain,
-                                                                        in_process, engine):
-    """libcosim, ecos and fmpy's own SSP runner (fmpy.ssp) run Rover.ssp as written."""
-    module = {"libcosim": "libcosimpy", "ecos": "ecospy", "fmpy-ssp": "fmpy"}[engine]
-    if importlib.util.find_spec(module) is None:
-        pytest.skip(f"{module} is not installed")
+def _skip_unless_installed(engine: str) -> None:
+    missing = rover_fmus.ssp_engine_missing(engine)
+    if missing:
+        pytest.skip(missing)
     if engine == "ecos" and not shutil.which("ldconfig"):
         pytest.skip("ecos needs its runtime (libtbb)")
+
+
+@pytest.mark.parametrize("engine", ["libcosim", "ecos", "omsimulator", "fmpy-ssp"])
+def test_rover_ssp_runs_unchanged_in_other_engines_with_the_same_means(built, terrain,
+                                                                        in_process, engine):
+    """libcosim, ecos, OMSimulator and fmpy's own SSP runner (fmpy.ssp) run Rover.ssp as
+    written."""
+    _skip_unless_installed(engine)
     res = rover_fmus.simulate_ssp(engine, built / "native", "level",
                                   rover_system.Soil(terrain), {}, STOP)
     ours, theirs = _means(in_process), _means(res)
@@ -89,14 +93,12 @@ def test_rover_ssp_runs_unchanged_in_other_engines_with_the_same_means(built, te
         assert abs(theirs[key] - value) <= 1e-3 * scale, (key, theirs[key], value)
 
 
-@pytest.mark.parametrize("engine", ["libcosim", "ecos"])
+@pytest.mark.parametrize("engine", ["libcosim", "ecos", "omsimulator"])
 def test_a_ramp_in_the_chassis_profile_runs_alike_in_every_engine(built, terrain, engine):
     """The scenario's ramps are the chassis' input profile, so an SSP carries them: a towing
     force rising at 0.05 N/s and the slope at 0.1 deg/s after 1 s (the pull test's and the
     slope scenario's rates) give the in-process means in other engines."""
-    module = {"libcosim": "libcosimpy", "ecos": "ecospy"}[engine]
-    if importlib.util.find_spec(module) is None:
-        pytest.skip(f"{module} is not installed")
+    _skip_unless_installed(engine)
     values = {"rover.towing_rate": 0.05, "rover.ramp_time": 1.0,
               "rover.slope_rate_after": np.radians(0.1)}
     soil = rover_system.Soil(terrain)
@@ -144,17 +146,13 @@ def test_a_soil_map_runs_through_terrain_fmus_as_in_process(built, terrain, in_p
     assert change > 1e-4  # m: the looser soil lets the front wheels sink deeper
 
 
-@pytest.mark.parametrize("engine", ["libcosim", "ecos"])
+@pytest.mark.parametrize("engine", ["libcosim", "ecos", "omsimulator"])
 def test_a_soil_map_in_rover_ssp_gives_the_same_means_in_other_engines(built, terrain,
                                                                        in_process, engine):
-    """Rover.ssp with four Terrain.fmu (the soil map's query points) runs unchanged in libcosim
-    and ecos, with the in-process means within 1e-3 (those engines see the soil two steps
-    late)."""
-    module = {"libcosim": "libcosimpy", "ecos": "ecospy"}[engine]
-    if importlib.util.find_spec(module) is None:
-        pytest.skip(f"{module} is not installed")
-    if engine == "ecos" and not shutil.which("ldconfig"):
-        pytest.skip("ecos needs its runtime (libtbb)")
+    """Rover.ssp with four Terrain.fmu (the soil map's query points) runs unchanged in libcosim,
+    ecos and OMSimulator, with the in-process means within 1e-3 (libcosim and ecos see the
+    soil two steps late)."""
+    _skip_unless_installed(engine)
     soil = _patched(terrain, in_process)
     ours = _means(rover_system.simulate(soil, {}, STOP))
     theirs = _means(rover_fmus.simulate_ssp(engine, built / "native", "soft-patch", soil, {},
@@ -172,11 +170,7 @@ def test_halving_the_step_shrinks_what_a_one_step_late_engine_differs_by(built, 
     first (Gauss-Seidel). At 1 ms the level means differ by ~1e-4 relative; at 0.5 ms by
     less (measured: libcosim 1.3e-4 -> 6.7e-5, ecos 6.8e-5 -> 4.9e-5; at 2 ms the bounce
     grows there, 3 %)."""
-    module = {"libcosim": "libcosimpy", "ecos": "ecospy"}[engine]
-    if importlib.util.find_spec(module) is None:
-        pytest.skip(f"{module} is not installed")
-    if engine == "ecos" and not shutil.which("ldconfig"):
-        pytest.skip("ecos needs its runtime (libtbb)")
+    _skip_unless_installed(engine)
     soil = rover_system.Soil(terrain)
     worst = {}
     for h in (1e-3, 5e-4):
@@ -187,6 +181,34 @@ def test_halving_the_step_shrinks_what_a_one_step_late_engine_differs_by(built, 
                        if "pull" not in k)
     assert worst[1e-3] <= 1e-3
     assert worst[5e-4] < worst[1e-3]
+
+
+@pytest.mark.parametrize("engine", ["libcosim", "ecos", "omsimulator"])
+def test_an_engine_s_run_ends_where_a_wheel_leaves_the_model_s_domain(built, terrain, engine,
+                                                                      tmp_path):
+    """A steep descent the wheels cannot brake: a wheel's slip passes -1 at 2.86 s and its
+    WheelTerrain refuses the step (fmi2Discard). libcosim then stepped again from the same time,
+    which the FMUs that had stepped refused, at every step to the end (a slope run logged
+    84 MB of errors); now the run ends there. ecos and OMSimulator go on with the refusing
+    FMU's outputs frozen; the record is cut there. Every engine's record ends within a few
+    steps of the in-process one's, with the reason."""
+    _skip_unless_installed(engine)
+    values = {"rover.ramp_time": 1.0, "rover.slope_rate_after": np.radians(-5.0),
+              "rover.slope_bound": np.radians(20.0)}
+    soil = rover_system.Soil(terrain)
+    ours = rover_system.simulate(soil, values, 6.0)
+    theirs = rover_fmus.simulate_ssp(engine, built / "native", "ramp", soil, values, 6.0)
+    assert ours.left_domain
+    assert theirs.left_domain
+    assert 2.0 < ours.time[-1] < 4.0
+    assert abs(theirs.time[-1] - ours.time[-1]) <= 5e-3, (theirs.time[-1], ours.time[-1])
+    for w in rover.WHEELS:
+        assert np.all(np.abs(theirs.wheels[w]["slip"]) <= 1.0)
+    if engine == "libcosim":  # the engine itself stops (before, it ran on to 6 s)
+        path = rover_fmus.write_ssp(tmp_path / "Rover.ssp", built / "native", "ramp", soil,
+                                    values, 6.0)
+        raw = ssp.simulate_with_libcosim(path, 6.0, 1e-3, ("front_left.slip",))
+        assert raw["time"][-1] < 3.0
 
 
 def test_fmpy_ssp_runner_refuses_a_soil_map_with_the_reason(built, terrain, in_process):

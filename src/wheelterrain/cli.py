@@ -17,6 +17,7 @@ import click
 import numpy as np
 
 from wheelterrain import __version__, model, presets
+from wheelterrain.cosim import SSP_ENGINES
 from wheelterrain.errors import (
     CalibrationError,
     CosimulationError,
@@ -760,14 +761,14 @@ def mpc(scenario: str, plant: str, preset: str, solver: str, compiled: bool,
 @set_option
 @click.option("--step", default=1e-3, show_default=True, type=click.FloatRange(1e-4, 1e-2),
               help="Communication step [s] (halve it to check convergence).")
-@click.option("--engine", type=click.Choice(["in-process", "fmus", "libcosim", "ecos",
-                                             "fmpy-ssp"]),
+@click.option("--engine", type=click.Choice(["in-process", "fmus", *SSP_ENGINES]),
               default="in-process", show_default=True,
               help="in-process: the chassis and contact Functions stepped together, compiled; "
               "fmus: RoverChassis.fmu + four WheelTerrain.fmu through fmpy, our master; "
-              "libcosim, ecos, fmpy-ssp: Rover.ssp in those engines (fmpy-ssp: fmpy's own SSP "
-              "runner; soft-patch adds four Terrain.fmu, the soil map's query points, which "
-              "fmpy-ssp cannot start).")
+              "libcosim, ecos, omsimulator, fmpy-ssp: Rover.ssp in those engines (omsimulator: "
+              "OpenModelica's OMSimulator, its command-line tool on the PATH or in "
+              "$OMSIMULATOR; fmpy-ssp: fmpy's own SSP runner; soft-patch adds four "
+              "Terrain.fmu, the soil map's query points, which fmpy-ssp cannot start).")
 @click.option("--controller", type=click.Choice(["speed", "mpc"]), default="speed",
               show_default=True,
               help="speed: the four speed loops to the common rim speed; mpc: from 2 s on, the "
@@ -842,6 +843,8 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
         _usage_error(f"--engine {engine} needs {', '.join(f'{n}.fmu' for n in needed)} in "
                      f"{folder}: build them (`wheelterrain build --flavor all`) or give "
                      "--fmu-dir")
+    if engine in SSP_ENGINES and (missing := rover_fmus.ssp_engine_missing(engine)):
+        _usage_error(f"--engine {engine}: {missing}")
 
     runner, control_figures = None, {}
     if controller == "mpc":
@@ -858,7 +861,7 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     elif engine == "fmus":
         def runner(soil, values, stop, step, stop_when):
             return rover_fmus.simulate(folder, soil, values, stop, step, stop_when)
-    elif engine in ("libcosim", "ecos", "fmpy-ssp"):
+    elif engine in SSP_ENGINES:
         def runner(soil, values, stop, step, stop_when):
             return rover_fmus.simulate_ssp(engine, folder, scenario, soil, values, stop, step)
     try:
@@ -883,7 +886,7 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     ssp_path = None
     if built:
         ssp_path = rover_fmus.write_ssp(out_dir / f"Rover-{scenario}.ssp", folder, scenario,
-                                        soil, run["values"], run["stop"])
+                                        soil, run["values"], run["stop"], step)
     figures["ssp"] = str(ssp_path) if ssp_path else None
     if _emit_json(json_target, figures):
         return

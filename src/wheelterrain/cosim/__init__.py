@@ -1,2 +1,8 @@
 """Co-simulation with the FMUs: the C1-C4 master and the paper comparison (:mod:`.master`),
 SSP files (:mod:`.ssp`) and parallel parameter sweeps (:mod:`.sweep`)."""
+
+# The SSP engines a Rover.ssp or a C1-C4 SSP runs in, each with the Python module that drives
+# it (OMSimulator: its command-line tool). Here, not in rover_fmus, so the command line can
+# list them without importing fmpy.
+SSP_ENGINES = {"libcosim": "libcosimpy", "ecos": "ecospy", "omsimulator": None,
+               "fmpy-ssp": "fmpy"}

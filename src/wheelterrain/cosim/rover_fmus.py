@@ -28,6 +28,7 @@ wheel): at the rover's speed, 0.1 mm of travel.
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import os
 import tempfile
 import time
@@ -38,8 +39,8 @@ from xml.etree import ElementTree as ET
 
 import numpy as np
 
+from wheelterrain.cosim import SSP_ENGINES, ssp
 from wheelterrain.cosim import rover as rover_system
-from wheelterrain.cosim import ssp
 from wheelterrain.cosim.rover import (
     CHASSIS_RECORD,
     RECORD,
@@ -57,6 +58,18 @@ from wheelterrain.parameters import GROUND_TABLE, ROVER_TABLE, TABLE, ParameterS
 
 CHASSIS = "chassis"
 COMPONENTS = (CHASSIS, *rover.WHEELS)
+
+
+def ssp_engine_missing(engine: str) -> str | None:
+    """Why ``engine`` (one of SSP_ENGINES) cannot run on this machine, or None."""
+    module = SSP_ENGINES[engine]
+    if module is None:
+        return None if ssp.omsimulator() else (
+            "OMSimulator is not installed: build it from its public sources "
+            "(validation/build_omsimulator.sh) and put it on the PATH or in $OMSIMULATOR")
+    if importlib.util.find_spec(module) is None:
+        return f"{module} is not installed (pip install {module})"
+    return None
 TO_TERRAIN = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")
 TO_CHASSIS = rover.WHEEL_FORCES
 
@@ -236,7 +249,7 @@ def _ssp_variables() -> list[tuple[str, str]]:
 def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
                  values: Mapping[str, float], stop: float, step: float = STEP,
                  stop_when=None) -> RoverResult:
-    """The scenario's Rover.ssp in ``engine`` ("ecos", "libcosim" or "fmpy-ssp": fmpy's own SSP
+    """The scenario's Rover.ssp in ``engine`` (one of SSP_ENGINES; fmpy-ssp: fmpy's own SSP
     runner), to ``stop`` (the run is not ended early: ``stop_when`` is not an SSP's)."""
     if engine == "fmpy-ssp" and soil.patch:
         raise CosimulationError(
@@ -245,7 +258,7 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
             "...): a soil map cannot run there (ecos, libcosim and our master run it)")
     names = _ssp_variables()
     with tempfile.TemporaryDirectory(prefix="wheelterrain_rover_") as tmp:
-        path = write_ssp(Path(tmp) / "Rover.ssp", fmu_dir, scenario, soil, values, stop)
+        path = write_ssp(Path(tmp) / "Rover.ssp", fmu_dir, scenario, soil, values, stop, step)
         t0 = time.perf_counter()
         with _stdout_to_stderr():  # the engines' own log lines: not on standard output
             if engine == "libcosim":
@@ -266,6 +279,19 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
                         "run on to there and keep the records") from None
                 wall = time.perf_counter() - t0
                 steps = round(stop / step)
+                data = np.array([out[f"{c}.{v}"][:steps] for c, v in names])
+            elif engine == "omsimulator":
+                executable = ssp.omsimulator()
+                if executable is None:
+                    raise CosimulationError(ssp_engine_missing(engine))
+                try:
+                    out = ssp.simulate_with_omsimulator(path, stop, step,
+                                                        tuple(f"{c}.{v}" for c, v in names),
+                                                        executable)
+                except RuntimeError as err:
+                    raise CosimulationError(str(err)) from None
+                wall = time.perf_counter() - t0
+                steps = round(stop / step)  # its rows: t = 0, step, ..., as our records
                 data = np.array([out[f"{c}.{v}"][:steps] for c, v in names])
             elif engine == "ecos":
                 csv_path = Path(tmp) / "ecos.csv"
@@ -289,6 +315,9 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
     if problem is not None:
         k, why = problem
         data, left = data[:, :k], f"at t = {k * step:.3f} s {why}"
+    elif data.shape[1] < round(stop / step):  # the engine stopped at a refused step
+        left = (f"at t = {data.shape[1] * step:.3f} s an FMU refused the step ({engine} "
+                "stops there)")
     return from_records(data, step, wall, engine, left)
 
 
@@ -331,7 +360,7 @@ def fmu_names(with_map: bool) -> tuple[str, ...]:
 
 
 def system_description(scenario: str, soil: Soil, values: Mapping[str, float],
-                       stop: float) -> bytes:
+                       stop: float, step: float = STEP) -> bytes:
     q = ssp._q
     for prefix, uri in ssp.NS.items():
         ET.register_namespace(prefix, uri)
@@ -369,13 +398,14 @@ def system_description(scenario: str, soil: Soil, values: Mapping[str, float],
     for a, av, b, bv in connections(with_map):
         ET.SubElement(conns, q("ssd", "Connection"), startElement=a, startConnector=av,
                       endElement=b, endConnector=bv)
+    ssp.master_annotation(system, step)
     ET.SubElement(root, q("ssd", "DefaultExperiment"), startTime="0.0", stopTime=repr(stop))
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
 def write_ssp(path: Path, fmu_dir: Path, scenario: str, soil: Soil,
-              values: Mapping[str, float], stop: float) -> Path:
+              values: Mapping[str, float], stop: float, step: float = STEP) -> Path:
     """Rover.ssp for ``scenario`` (module doc), written atomically."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -385,7 +415,7 @@ def write_ssp(path: Path, fmu_dir: Path, scenario: str, soil: Soil,
     try:
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr("SystemStructure.ssd", system_description(scenario, soil, values,
-                                                                 stop))
+                                                                 stop, step))
             for name in fmu_names(bool(soil.patch)):
                 z.write(Path(fmu_dir) / f"{name}.fmu", f"resources/{name}.fmu")
         os.replace(partial, path)
