@@ -7,8 +7,9 @@ second, every master measured in the same run on the level scenario.
 
 Masters: in process (the chassis and contact Functions stepped together, compiled C, blocks of
 steps per call); our master through fmpy on the native FMUs (FMU_DIR/native) and on the
-pythonfmu ones (FMU_DIR); libcosim, ecos and fmpy's own SSP runner on Rover.ssp with the
-native FMUs (where installed).
+pythonfmu ones (FMU_DIR); libcosim, ecos, OMSimulator (its command-line tool: start-up and
+its CSV of every variable included) and fmpy's own SSP runner on Rover.ssp with the native FMUs
+(where installed).
 Each figure is the median over repeats of one run's real-time factor (simulated time over wall
 time, start-up excluded: each engine's own loop is timed). The baseline measured in the same
 run is one call of the core contact Function from Python per simulated step, four wheels: what
@@ -25,7 +26,6 @@ Chrono's published SCM benchmark runs a four-wheel vehicle at 2-3x real time.
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import statistics
 import sys
@@ -33,8 +33,8 @@ import time
 from pathlib import Path
 
 from wheelterrain import presets
+from wheelterrain.cosim import SSP_ENGINES, rover_fmus
 from wheelterrain.cosim import rover as rover_system
-from wheelterrain.cosim import rover_fmus
 from wheelterrain.model import contact
 
 
@@ -78,9 +78,8 @@ def main() -> None:
     if (native / "RoverChassis.fmu").is_file():
         masters["wheelterrain master (fmpy), native FMUs"] = lambda: rover_fmus.simulate(
             native, soil, {}, args.seconds)
-        for engine, module in (("libcosim", "libcosimpy"), ("ecos", "ecospy"),
-                               ("fmpy-ssp", "fmpy")):
-            if importlib.util.find_spec(module) is not None:
+        for engine in SSP_ENGINES:
+            if rover_fmus.ssp_engine_missing(engine) is None:
                 masters[f"{engine}, native FMUs"] = (
                     lambda engine=engine: rover_fmus.simulate_ssp(
                         engine, native, "level", soil, {}, args.seconds))
