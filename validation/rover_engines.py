@@ -3,7 +3,7 @@
     wheelterrain build --flavor all
     python validation/rover_engines.py [--gravity earth moon] [--scenario level slope ...]
                                        [--engines in-process fmus ecos libcosim ...]
-                                       [--fmu-dir build/native] [--json FILE]
+                                       [--fmu-dir build/native] [--step 0.001] [--json FILE]
 
 Each scenario of `wheelterrain rover` runs in process (the reference), through our master on the
 FMUs (`fmus`), and as Rover-S.ssp in ecos, libcosim, OMSimulator (where built: $OMSIMULATOR or
@@ -64,14 +64,15 @@ def worst_difference(ref: dict, other: dict) -> tuple[float, str]:
     return worst, where
 
 
-def compare(scenario: str, gravity: str, engines: tuple[str, ...], fmu_dir: Path) -> dict:
+def compare(scenario: str, gravity: str, engines: tuple[str, ...], fmu_dir: Path,
+            step: float = rover_system.STEP) -> dict:
     terrain = presets.load(presets.DEFAULT_PRESET)
     runs = {}
     for engine in engines:
         print(f"  {scenario:10} {gravity:5} {engine:10} ...", end="", flush=True,
               file=sys.stderr)
         try:
-            run = rover_system.run_scenario(scenario, terrain, gravity,
+            run = rover_system.run_scenario(scenario, terrain, gravity, step=step,
                                             engine=runner(engine, fmu_dir, scenario))
         except CosimulationError as err:
             runs[engine] = {"refused": str(err)}
@@ -112,6 +113,9 @@ def main() -> None:
                     choices=list(rover_system.scenarios()))
     ap.add_argument("--engines", nargs="+", default=list(ENGINES), choices=ENGINES)
     ap.add_argument("--fmu-dir", default=Path("build/native"), type=Path)
+    ap.add_argument("--step", type=float, default=rover_system.STEP,
+                    help="communication step [s] of every engine (halve it to see the "
+                    "one-step-late engines converge)")
     ap.add_argument("--json", type=Path, help="also write the table as JSON here")
     args = ap.parse_args()
     if "in-process" not in args.engines:
@@ -130,7 +134,7 @@ def main() -> None:
     for gravity in args.gravity:
         for scenario in args.scenario:
             table[f"{scenario}/{gravity}"] = compare(scenario, gravity, tuple(engines),
-                                                     args.fmu_dir)
+                                                     args.fmu_dir, args.step)
     print(f"{'scenario':18} {'engine':10} {'window [s]':>16} {'worst rel. diff':>16}  "
           f"{'(mean)':28} event")
     for name, rows in table.items():
