@@ -33,7 +33,7 @@ import time
 from pathlib import Path
 
 from wheelterrain import presets
-from wheelterrain.cosim import SSP_ENGINES, rover_fmus
+from wheelterrain.cosim import SSP_ENGINES, rover_fmus, ssp
 from wheelterrain.cosim import rover as rover_system
 from wheelterrain.model import contact
 
@@ -79,7 +79,7 @@ def main() -> None:
         masters["wheelterrain master (fmpy), native FMUs"] = lambda: rover_fmus.simulate(
             native, soil, {}, args.seconds)
         for engine in SSP_ENGINES:
-            if rover_fmus.ssp_engine_missing(engine) is None:
+            if ssp.engine_missing(engine) is None:
                 masters[f"{engine}, native FMUs"] = (
                     lambda engine=engine: rover_fmus.simulate_ssp(
                         engine, native, "level", soil, {}, args.seconds))

@@ -855,10 +855,8 @@ def test_other_engines_run_the_ssp_with_every_parameter_applied(flavours, tmp_pa
             import libcosimpy  # noqa: F401
         except (ImportError, OSError) as err:
             pytest.skip(f"libcosim (PyPI libcosimpy) cannot be loaded: {err}")
-    elif ssp.omsimulator() is None:
-        pytest.skip("OMSimulator is not installed: no binary on PyPI or Debian; build it from "
-                    "its public sources (validation/build_omsimulator.sh) and put it on the "
-                    "PATH or in $OMSIMULATOR")
+    elif ssp.engine_missing(engine):
+        pytest.skip(ssp.engine_missing(engine))
     ps = presets.load("paper-table2-arc").with_values({"soil.phi": math.radians(32),
                                                        "soil.k_phi": 600.0})
     root = flavours["root"] / flavour

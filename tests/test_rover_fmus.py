@@ -69,7 +69,7 @@ def _means(res, start: float = 2.0) -> dict:
 
 
 def _skip_unless_installed(engine: str) -> None:
-    missing = rover_fmus.ssp_engine_missing(engine)
+    missing = ssp.engine_missing(engine)
     if missing:
         pytest.skip(missing)
     if engine == "ecos" and not shutil.which("ldconfig"):

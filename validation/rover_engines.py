@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from wheelterrain import presets
-from wheelterrain.cosim import SSP_ENGINES, rover_fmus
+from wheelterrain.cosim import SSP_ENGINES, rover_fmus, ssp
 from wheelterrain.cosim import rover as rover_system
 from wheelterrain.errors import CosimulationError
 
@@ -122,7 +122,7 @@ def main() -> None:
         args.engines.insert(0, "in-process")
     engines = []
     for e in args.engines:
-        missing = rover_fmus.ssp_engine_missing(e) if e in SSP_ENGINES else None
+        missing = ssp.engine_missing(e) if e in SSP_ENGINES else None
         if missing:
             print(f"{e}: left out: {missing}", file=sys.stderr)
             continue

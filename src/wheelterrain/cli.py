@@ -831,7 +831,7 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     except WheelTerrainError as err:
         _fail(err)
     ps = _load(preset, tuple(a for a in assignments if a not in rover_items))
-    from wheelterrain.cosim import rover_fmus
+    from wheelterrain.cosim import rover_fmus, ssp
 
     soil = rover_system.scenario_soil(scenario, ps)
     needed = rover_fmus.fmu_names(bool(soil.patch))
@@ -843,7 +843,7 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
         _usage_error(f"--engine {engine} needs {', '.join(f'{n}.fmu' for n in needed)} in "
                      f"{folder}: build them (`wheelterrain build --flavor all`) or give "
                      "--fmu-dir")
-    if engine in SSP_ENGINES and (missing := rover_fmus.ssp_engine_missing(engine)):
+    if engine in SSP_ENGINES and (missing := ssp.engine_missing(engine)):
         _usage_error(f"--engine {engine}: {missing}")
 
     runner, control_figures = None, {}

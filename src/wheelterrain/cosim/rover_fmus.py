@@ -28,7 +28,6 @@ wheel): at the rover's speed, 0.1 mm of travel.
 from __future__ import annotations
 
 import contextlib
-import importlib.util
 import os
 import tempfile
 import time
@@ -39,8 +38,8 @@ from xml.etree import ElementTree as ET
 
 import numpy as np
 
-from wheelterrain.cosim import SSP_ENGINES, ssp
 from wheelterrain.cosim import rover as rover_system
+from wheelterrain.cosim import ssp
 from wheelterrain.cosim.rover import (
     CHASSIS_RECORD,
     RECORD,
@@ -58,18 +57,6 @@ from wheelterrain.parameters import GROUND_TABLE, ROVER_TABLE, TABLE, ParameterS
 
 CHASSIS = "chassis"
 COMPONENTS = (CHASSIS, *rover.WHEELS)
-
-
-def ssp_engine_missing(engine: str) -> str | None:
-    """Why ``engine`` (one of SSP_ENGINES) cannot run on this machine, or None."""
-    module = SSP_ENGINES[engine]
-    if module is None:
-        return None if ssp.omsimulator() else (
-            "OMSimulator is not installed: build it from its public sources "
-            "(validation/build_omsimulator.sh) and put it on the PATH or in $OMSIMULATOR")
-    if importlib.util.find_spec(module) is None:
-        return f"{module} is not installed (pip install {module})"
-    return None
 TO_TERRAIN = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")
 TO_CHASSIS = rover.WHEEL_FORCES
 
@@ -257,15 +244,15 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
             "outside the declared ranges of the wheels' ground.* inputs (soil.k_phi >= 10, "
             "...): a soil map cannot run there (ecos, libcosim and our master run it)")
     names = _ssp_variables()
+    dotted = tuple(f"{c}.{v}" for c, v in names)  # "component.variable", as engines name them
     with tempfile.TemporaryDirectory(prefix="wheelterrain_rover_") as tmp:
         path = write_ssp(Path(tmp) / "Rover.ssp", fmu_dir, scenario, soil, values, stop, step)
         t0 = time.perf_counter()
         with _stdout_to_stderr():  # the engines' own log lines: not on standard output
             if engine == "libcosim":
-                out = ssp.simulate_with_libcosim(path, stop, step,
-                                                 tuple(f"{c}.{v}" for c, v in names))
+                out = ssp.simulate_with_libcosim(path, stop, step, dotted)
                 wall = time.perf_counter() - t0
-                data = np.array([out[f"{c}.{v}"] for c, v in names])
+                data = np.array([out[n] for n in dotted])
             elif engine == "fmpy-ssp":
                 from fmpy.fmi1 import FMICallException
 
@@ -279,20 +266,18 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
                         "run on to there and keep the records") from None
                 wall = time.perf_counter() - t0
                 steps = round(stop / step)
-                data = np.array([out[f"{c}.{v}"][:steps] for c, v in names])
+                data = np.array([out[n][:steps] for n in dotted])
             elif engine == "omsimulator":
                 executable = ssp.omsimulator()
                 if executable is None:
-                    raise CosimulationError(ssp_engine_missing(engine))
+                    raise CosimulationError(ssp.engine_missing(engine))
                 try:
-                    out = ssp.simulate_with_omsimulator(path, stop, step,
-                                                        tuple(f"{c}.{v}" for c, v in names),
-                                                        executable)
+                    out = ssp.simulate_with_omsimulator(path, stop, step, dotted, executable)
                 except RuntimeError as err:
                     raise CosimulationError(str(err)) from None
                 wall = time.perf_counter() - t0
                 steps = round(stop / step)  # its rows: t = 0, step, ..., as our records
-                data = np.array([out[f"{c}.{v}"][:steps] for c, v in names])
+                data = np.array([out[n][:steps] for n in dotted])
             elif engine == "ecos":
                 csv_path = Path(tmp) / "ecos.csv"
                 ids = tuple(f"{c}::{v}" for c, v in names)

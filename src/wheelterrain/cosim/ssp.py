@@ -11,7 +11,9 @@ ParameterBindings, all named after the case (ecos applies a named set at init:
 from __future__ import annotations
 
 import csv
+import importlib.util
 import os
+import shutil
 import subprocess
 import sys
 import sysconfig
@@ -22,6 +24,7 @@ from xml.etree import ElementTree as ET
 
 import numpy as np
 
+from wheelterrain.cosim import SSP_ENGINES
 from wheelterrain.cosim.master import rig_parameters
 from wheelterrain.fmu import variables
 from wheelterrain.model import rig
@@ -219,17 +222,29 @@ def c_host_environment() -> dict[str, str]:
     path, where the embedded interpreter finds wheelterrain, casadi and numpy."""
     env = {**os.environ,
            "PYTHONPATH": os.pathsep.join(p for p in sys.path if p and Path(p).is_dir())}
-    if libpython() is not None:
-        env["LD_PRELOAD"] = str(libpython())
+    lib = libpython()
+    if lib is not None:
+        env["LD_PRELOAD"] = str(lib)
     return env
 
 
 def omsimulator() -> str | None:
     """OMSimulator's command-line tool: $OMSIMULATOR, else OMSimulator on the PATH, else None
     (it has no binary on PyPI or in Debian; validation/build_omsimulator.sh builds it)."""
-    import shutil
-
     return os.environ.get("OMSIMULATOR") or shutil.which("OMSimulator")
+
+
+def engine_missing(engine: str) -> str | None:
+    """Why ``engine`` (one of SSP_ENGINES) cannot run on this machine, or None."""
+    module = SSP_ENGINES[engine]
+    if module is None:
+        return None if omsimulator() else (
+            "OMSimulator is not installed: no binary on PyPI or in Debian; build it from its "
+            "public sources (validation/build_omsimulator.sh) and put it on the PATH or in "
+            "$OMSIMULATOR")
+    if importlib.util.find_spec(module) is None:
+        return f"{module} is not installed (pip install {module})"
+    return None
 
 
 def simulate_with_omsimulator(path: Path, stop: float, step: float,
