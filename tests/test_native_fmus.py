@@ -4,7 +4,6 @@ independent master (ecos) and a plain C host."""
 
 from __future__ import annotations
 
-import csv
 import math
 import os
 import re
@@ -815,19 +814,16 @@ def test_ecos_runs_the_ssp_and_gives_the_fmpy_means(flavours, tmp_path):
     keys = ("drawbar_pull", "normal_force", "sinkage")
     ssp.simulate_with_ecos(path, "C3", stop, step, out,
                            tuple(f"{ssp.RIG_COMPONENT}::sensor.{k}" for k in keys))
-    with out.open() as f:
-        rows = list(csv.reader(f))
-    header = [h.strip() for h in rows[0]]
-    data = np.array([[float(x) for x in r] for r in rows[1:]])
+    names = ("time", *(f"{ssp.RIG_COMPONENT}::sensor.{k}" for k in keys))
+    data = dict(zip(names, ssp.read_csv_columns(out, names), strict=True))
     unz = {n: flavours["unzip"][("native", n)] for n in NAMES}
     ours = cosim.run_case(root, ps, 0.5, 62.0, 0.03, "C3", stop=stop, step=step, unzipped=unz,
                           settle=5.0)
     start, end = ours.window
-    t = data[:, header.index("time")]
+    t = data["time"]
     mask = (t >= start - step / 2) & (t < end - step / 2)
     for key in keys:
-        col = header.index(f"{ssp.RIG_COMPONENT}::sensor.{key}[REAL]")
-        theirs = float(np.mean(data[mask, col]))
+        theirs = float(np.mean(data[f"{ssp.RIG_COMPONENT}::sensor.{key}"][mask]))
         # ecos couples by Jacobi (forces lag the rig by one step): O(step) apart
         assert theirs == pytest.approx(ours.means[key], rel=1e-3), key
 
@@ -880,6 +876,18 @@ def test_other_engines_run_the_ssp_with_every_parameter_applied(flavours, tmp_pa
         theirs = float(np.mean(result[f"{ssp.RIG_COMPONENT}.sensor.{key}"][mask]))
         assert theirs == pytest.approx(ours.means[key], rel=ENGINE_TOLERANCE[engine]), (
             key, theirs, ours.means[key])
+
+
+def test_an_omsimulator_run_that_overruns_its_time_is_refused_with_the_reason(tmp_path):
+    """OMSimulator's command-line tool runs to the stop time whatever happens; a run that
+    overruns the time allowed ends in an error that says so, not in a traceback. A stand-in
+    for the tool that only waits shows it (no OMSimulator needed)."""
+    tool = tmp_path / "OMSimulator"
+    tool.write_text("#!/bin/sh\nsleep 30\n")
+    tool.chmod(0o755)
+    with pytest.raises(RuntimeError, match=r"did not finish 2000 steps .* in 0.5 s"):
+        ssp.simulate_with_omsimulator(tmp_path / "Rover.ssp", 2.0, 1e-3, ("a.b",), str(tool),
+                                      timeout=0.5)
 
 
 C_HOST = r"""

@@ -281,18 +281,17 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
             elif engine == "ecos":
                 csv_path = Path(tmp) / "ecos.csv"
                 ids = tuple(f"{c}::{v}" for c, v in names)
-                ssp.simulate_with_ecos(path, scenario, stop, step, csv_path, ids)
+
+                def inside(get) -> bool:  # ecos goes on past a refusal: end where ours end
+                    now = np.array([[get(i)] for i in ids])
+                    return rover_system._outside(_chassis_slips(now, values)) is None
+
+                ssp.simulate_with_ecos(path, scenario, stop, step, csv_path, ids, inside)
                 wall = time.perf_counter() - t0
-                data = _read_ecos(csv_path, ids)
+                data = ssp.read_csv_columns(csv_path, ids)
             else:
                 raise ValueError(f"unknown engine {engine!r}")
-    # the slip from the chassis' own speeds (a terrain that refused a step keeps its last
-    # outputs, its slip among them, in an engine that goes on past a refusal)
-    radius = chassis_values(values)["rover.slip_radius"]
-    wheels, chassis = rover_system.named_record(data)
-    for k, w in enumerate(rover.WHEELS):
-        traction, _, _ = functions.slips(wheels[w]["wheel_speed"], chassis["speed"], radius)
-        data[k * len(RECORD) + RECORD.index("slip")] = np.asarray(traction).ravel()
+    data = _chassis_slips(data, values)
     # the records end where the model's domain ends, as in our masters (those engines go on
     # past a refused step, with the refusing FMU's outputs frozen: not results)
     problem = rover_system._outside(data)
@@ -304,6 +303,18 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
         left = (f"at t = {data.shape[1] * step:.3f} s an FMU refused the step ({engine} "
                 "stops there)")
     return from_records(data, step, wall, engine, left)
+
+
+def _chassis_slips(data: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
+    """The record rows with each wheel's slip from the chassis' own speeds (a terrain that
+    refused a step keeps its last outputs, its slip among them, in an engine that goes on
+    past a refusal)."""
+    radius = chassis_values(values)["rover.slip_radius"]
+    wheels, chassis = rover_system.named_record(data)
+    for k, w in enumerate(rover.WHEELS):
+        traction, _, _ = functions.slips(wheels[w]["wheel_speed"], chassis["speed"], radius)
+        data[k * len(RECORD) + RECORD.index("slip")] = np.asarray(traction).ravel()
+    return data
 
 
 @contextlib.contextmanager
@@ -321,16 +332,6 @@ def _stdout_to_stderr():
         sys.stdout.flush()
         os.dup2(saved, 1)
         os.close(saved)
-
-
-def _read_ecos(path: Path, ids: tuple[str, ...]) -> np.ndarray:
-    import csv
-
-    with path.open(newline="") as f:
-        rows = list(csv.reader(f))
-    header = [h.strip().split("[")[0] for h in rows[0]]
-    table = np.array(rows[1:], dtype=float)
-    return np.array([table[:, header.index(i)] for i in ids])
 
 
 # --- Rover.ssp --------------------------------------------------------------------------------

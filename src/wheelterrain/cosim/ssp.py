@@ -19,6 +19,7 @@ import sys
 import sysconfig
 import tempfile
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
@@ -157,9 +158,15 @@ def simulate_with_fmpy(path: Path, stop: float, step: float):
 
 
 def simulate_with_ecos(path: Path, case: str, stop: float, step: float, csv: Path,
-                       variables: tuple[str, ...]) -> None:
+                       variables: tuple[str, ...],
+                       go_on: Callable[[Callable[[str], float]], bool] | None = None,
+                       every: float = 1.0) -> None:
     """Run an SSP written by :func:`write` in ecos (ecospy), applying the case's parameter set,
-    and write ``variables`` ("component::name") at every step to ``csv``."""
+    and write ``variables`` ("component::name") at every step to ``csv``. ``go_on``, where
+    given, is asked every ``every`` s of simulated time, with a getter of any variable's present
+    value, whether to go on: ecos itself goes on past a step an FMU refuses (its outputs
+    frozen), to ``stop``, which on a long run that ended early is most of the time and a CSV of
+    gigabytes."""
     from ecospy import EcosSimulation
 
     sim = EcosSimulation(step_size=step, ssp_path=str(path))
@@ -167,10 +174,30 @@ def simulate_with_ecos(path: Path, case: str, stop: float, step: float, csv: Pat
         sim.add_csv_writer(str(csv), identifiers=list(variables), decimation_factor=1)
         if not sim.init(0.0, case):
             raise RuntimeError(f"ecos could not initialise {path} with parameter set {case}")
-        sim.step_until(stop)
+        steps, chunk = round(stop / step), max(1, round(every / step))
+        done = 0
+        while done < steps:
+            n = min(chunk, steps - done)
+            sim.step(n)
+            done += n
+            if go_on is not None and not go_on(sim.get_real):
+                break
         sim.terminate()
     finally:
         sim.free()
+
+
+def read_csv_columns(path: Path, names: tuple[str, ...]) -> np.ndarray:
+    """The columns ``names`` (headers without their "[unit]") of an engine's CSV result, one row
+    per name, read without holding the text in memory (a long run's CSV has millions of rows)."""
+    with Path(path).open(newline="") as f:
+        header = [h.strip().split("[")[0] for h in next(csv.reader(f))]
+    missing = [n for n in names if n not in header]
+    if missing:
+        raise RuntimeError(f"{path} lacks the columns {', '.join(missing)}")
+    table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2,
+                       usecols=[header.index(n) for n in names])
+    return table.T
 
 
 def simulate_with_libcosim(path: Path, stop: float, step: float,
@@ -259,12 +286,19 @@ def simulate_with_omsimulator(path: Path, stop: float, step: float,
     steps = round(stop / step)
     with tempfile.TemporaryDirectory(prefix="wheelterrain_oms_") as tmp:
         result = Path(tmp) / "result.csv"
-        run = subprocess.run(
-            [executable, "--mode=cs", f"--stopTime={stop!r}", f"--stepSize={step!r}",
-             f"--intervals={steps}", f"--resultFile={result}", f"--tempDir={tmp}",
-             "--suppressPath=true", str(Path(path).resolve())],
-            cwd=tmp, capture_output=True, text=True, env=c_host_environment(),
-            timeout=timeout, check=False)
+        try:
+            run = subprocess.run(
+                [executable, "--mode=cs", f"--stopTime={stop!r}", f"--stepSize={step!r}",
+                 f"--intervals={steps}", f"--resultFile={result}", f"--tempDir={tmp}",
+                 "--suppressPath=true", str(Path(path).resolve())],
+                cwd=tmp, capture_output=True, text=True, env=c_host_environment(),
+                timeout=timeout, check=False)
+        except subprocess.TimeoutExpired:
+            raise RuntimeError(
+                f"OMSimulator did not finish {steps} steps of {path} in {timeout:g} s: its "
+                "command-line tool runs every run to the stop time (a run that ended early "
+                "goes on with the refusing FMU's outputs frozen) and writes every variable "
+                "at every step; a larger step or a shorter stop fits") from None
         log = run.stdout + run.stderr
         # an FMU's refusal (a wheel leaving the model's domain) is logged as an error and
         # the run goes on, the refusing FMU's outputs frozen: the caller cuts the record there
