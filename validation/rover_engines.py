@@ -65,7 +65,7 @@ def worst_difference(ref: dict, other: dict) -> tuple[float, str]:
 
 
 def compare(scenario: str, gravity: str, engines: tuple[str, ...], fmu_dir: Path,
-            step: float = rover_system.STEP) -> dict:
+            step: float | None = None) -> dict:
     terrain = presets.load(presets.DEFAULT_PRESET)
     runs = {}
     for engine in engines:
@@ -97,7 +97,8 @@ def compare(scenario: str, gravity: str, engines: tuple[str, ...], fmu_dir: Path
         worst, where = worst_difference(window_means(ref["result"], start, end),
                                         window_means(run["result"], start, end))
         row = {"window_s": [start, end], "worst_relative_difference": worst,
-               "worst_mean": where, "simulated_time_s": run["figures"]["simulated_time_s"],
+               "worst_mean": where, "step_s": run["figures"]["step_s"],
+               "simulated_time_s": run["figures"]["simulated_time_s"],
                "left_domain": run["figures"]["left_domain"]}
         if event:
             row[event[0]] = run["figures"].get(event[0])
@@ -113,8 +114,9 @@ def main() -> None:
                     choices=list(rover_system.scenarios()))
     ap.add_argument("--engines", nargs="+", default=list(ENGINES), choices=ENGINES)
     ap.add_argument("--fmu-dir", default=Path("build/native"), type=Path)
-    ap.add_argument("--step", type=float, default=rover_system.STEP,
-                    help="communication step [s] of every engine (halve it to see the "
+    ap.add_argument("--step", type=float, default=None,
+                    help="communication step [s] of every engine (default: each scenario's, "
+                    "1 ms, 0.25 ms for the Moon's stall runs; halve it to see the "
                     "one-step-late engines converge)")
     ap.add_argument("--json", type=Path, help="also write the table as JSON here")
     args = ap.parse_args()
@@ -135,13 +137,13 @@ def main() -> None:
         for scenario in args.scenario:
             table[f"{scenario}/{gravity}"] = compare(scenario, gravity, tuple(engines),
                                                      args.fmu_dir, args.step)
-    print(f"{'scenario':18} {'engine':10} {'window [s]':>16} {'worst rel. diff':>16}  "
-          f"{'(mean)':28} event")
+    print(f"{'scenario':18} {'engine':11} {'step [ms]':>9} {'window [s]':>16} "
+          f"{'worst rel. diff':>16}  {'(mean)':28} event")
     for name, rows in table.items():
         event = EVENTS.get(name.split("/")[0])
         for engine, row in rows.items():
             if "refused" in row:
-                print(f"{name:18} {engine:10} refused: {row['refused'][:90]}")
+                print(f"{name:18} {engine:11} refused: {row['refused'][:90]}")
                 continue
             w = row["window_s"]
             ev = ""
@@ -149,7 +151,7 @@ def main() -> None:
                 v = row[event[0]]
                 ev = f"{event[0]} = {v:.3f} {event[1]}" if v is not None and math.isfinite(v) \
                     else f"{event[0]}: none"
-            print(f"{name:18} {engine:10} {w[0]:7.1f}-{w[1]:7.1f}  "
+            print(f"{name:18} {engine:11} {row['step_s'] * 1e3:9g} {w[0]:7.1f}-{w[1]:7.1f}  "
                   f"{row['worst_relative_difference']:16.2e}  {row['worst_mean']:28} {ev}")
     if args.json:
         args.json.write_text(json.dumps(table, indent=1) + "\n")

@@ -34,6 +34,14 @@ from wheelterrain.parameters import NAMES, ParameterSet
 
 STEP = 1e-3  # s: communication step. Engines that pass the forces one step late (Jacobi:
 # libcosim, ecos) need it: at 2 ms the delayed soil damper makes the bounce grow there.
+FINE_STEP = 2.5e-4
+"""s: the step of the Moon's stall runs (slope, pull-test, descent). Each ends where the
+steady motion loses its stability (the bounce's damping, or the traction); a force handed
+over one step late (a delayed soil spring acts as a negative damper) brings that end earlier
+by an amount first order in the step. On the Moon, where the grouser ripple is near the
+1.5 Hz bounce, the one-step-late engines' mean slip differs from the in-process one by
+1.2-2.5e-3 at 1 ms, 0.6-1.1e-3 at 0.5 ms and 1.9-5.9e-4 at this step, halving with the step
+(validation/rover_engines.py [--step], README); on Earth 1 ms is enough (at most 8.2e-4)."""
 BLOCK = 100  # steps per call of the mapped system step
 RECORD = ("slip", "sinkage", "normal_force", "drawbar_pull", "torque", "motor_torque",
           "wheel_speed")
@@ -408,6 +416,7 @@ class Scenario:
     stop: float
     profile: dict  # the chassis' input profile (rover.ramp_time ... rover.towing_rate)
     settle: float  # s: averaging starts here
+    step: float = STEP  # s: the communication step of every engine (FINE_STEP's note)
 
 
 SLOW_RAMP = 0.002  # deg/s: the slope's rate near the predicted limit
@@ -421,6 +430,7 @@ def scenarios(gravity: str = "earth", knee_deg: float = 15.0,
     lag the slope). Each scenario's inputs are the chassis' input profile, so its Rover.ssp
     carries it whole."""
     deg = math.pi / 180
+    stall_step = FINE_STEP if gravity == "moon" else STEP
     return {
         "level": Scenario("level", "steady traverse on level ground at the commanded rim speed",
                           40.0, {}, 20.0),
@@ -429,7 +439,7 @@ def scenarios(gravity: str = "earth", knee_deg: float = 15.0,
                           knee_deg / FAST_RAMP + 6.0 / SLOW_RAMP,
                           {"rover.slope_rate": FAST_RAMP * deg,
                            "rover.ramp_time": knee_deg / FAST_RAMP,
-                           "rover.slope_rate_after": SLOW_RAMP * deg}, 0.0),
+                           "rover.slope_rate_after": SLOW_RAMP * deg}, 0.0, stall_step),
         "soft-patch": Scenario("soft-patch", f"level; a looser soil (k_phi' x{SOFT['soil.k_phi']}, "
                                f"phi x{SOFT['soil.phi']}) from {PATCH_START} m to "
                                f"{PATCH_START + PATCH_LENGTH} m under the front, then the rear "
@@ -437,11 +447,11 @@ def scenarios(gravity: str = "earth", knee_deg: float = 15.0,
         "descent": Scenario("descent", "20 deg downhill (settled on level ground for 10 s, "
                             "then 1 deg/s), the speed loops braking", 60.0,
                             {"rover.ramp_time": 10.0, "rover.slope_rate_after": -deg,
-                             "rover.slope_bound": 20 * deg}, 40.0),
+                             "rover.slope_bound": 20 * deg}, 40.0, stall_step),
         "pull-test": Scenario("pull-test", "level, wheels at the commanded speed, a resisting "
                               "force rising slowly (0.05 % of the weight per second) until the "
                               "rover stalls: its pull-slip curve", 3600.0,
-                              {"rover.towing_rate": 5e-4 * weight}, 0.0),
+                              {"rover.towing_rate": 5e-4 * weight}, 0.0, stall_step),
     }
 
 
@@ -462,10 +472,11 @@ def scenario_soil(name: str, terrain: ParameterSet) -> Soil:
 
 
 def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
-                 rover_values: Mapping[str, float] | None = None, step: float = STEP,
-                 engine: Callable | None = None) -> dict:
+                 rover_values: Mapping[str, float] | None = None,
+                 step: float | None = None, engine: Callable | None = None) -> dict:
     """One scenario: the contract's figures (``wheelterrain rover --json``) and the series.
-    ``terrain``: the wheels' terrain parameters (the soft patch scales its soil). ``engine``:
+    ``terrain``: the wheels' terrain parameters (the soft patch scales its soil). ``step``:
+    the communication step (default: the scenario's, :data:`FINE_STEP`). ``engine``:
     ``engine(soil, values, stop, step, stop_when) -> RoverResult`` runs it
     (default: :func:`simulate`, in process)."""
     if name not in scenarios():
@@ -480,6 +491,7 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
         pred = limit_slope(quiet, p, 1 if name == "slope" else -1)
     knee = max(math.degrees(pred["slope"]) - 1.0, 0.0) if name == "slope" else 15.0
     sc = scenarios(gravity, knee, p["rover.mass"] * p["rover.gravity"])[name]
+    step = sc.step if step is None else step
     soil = scenario_soil(name, terrain)
     stalled = (lambda last: last["front_left.slip"] >= STALL_SLIP) \
         if name in STALL_SCENARIOS else None
@@ -490,7 +502,7 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
            "left_domain": res.left_domain,
            "simulated_time_s": float(res.time[-1] + step), "wall_time_s": res.wall_time,
            "real_time_factor": float((res.time[-1] + step) / max(res.wall_time, 1e-12)),
-           "averaged_from_s": sc.settle,
+           "averaged_from_s": sc.settle, "step_s": step,
            "wheels": [{"name": w, "mean_slip": _mean(v["slip"], keep),
                        "mean_sinkage": _mean(v["sinkage"], keep),
                        "mean_normal_force": _mean(v["normal_force"], keep),
@@ -519,7 +531,7 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
         out["slide_slope_deg"] = (math.degrees(res.inputs["slope"][-1])
                                   if res.left_domain else None)
     return {"figures": out, "result": res, "values": {**values, **sc.profile},
-            "stop": sc.stop}
+            "stop": sc.stop, "step": step}
 
 
 NO_RIPPLE = {"ripple.k_g": 0.0, "ripple.k_0": 0.0}
