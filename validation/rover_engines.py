@@ -24,8 +24,6 @@ import math
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from wheelterrain import presets
 from wheelterrain.cosim import SSP_ENGINES, rover_fmus, ssp
 from wheelterrain.cosim import rover as rover_system
@@ -34,7 +32,6 @@ from wheelterrain.errors import CosimulationError
 ENGINES = ("in-process", "fmus", *SSP_ENGINES)
 EVENTS = {"slope": ("stall_slope_deg", "deg"), "pull-test": ("stall_towing_force", "N"),
           "descent": ("slide_slope_deg", "deg")}
-KEYS = ("slip", "sinkage", "normal_force", "drawbar_pull")
 
 
 def runner(engine: str, fmu_dir: Path, scenario: str):
@@ -45,23 +42,6 @@ def runner(engine: str, fmu_dir: Path, scenario: str):
             fmu_dir, soil, values, stop, step, stop_when)
     return lambda soil, values, stop, step, stop_when: rover_fmus.simulate_ssp(
         engine, fmu_dir, scenario, soil, values, stop, step)
-
-
-def window_means(res, start: float, end: float) -> dict[str, float]:
-    keep = (res.time >= start) & (res.time <= end)
-    return {f"{w}.{k}": float(np.mean(d[k][keep])) for w, d in res.wheels.items() for k in KEYS}
-
-
-def worst_difference(ref: dict, other: dict) -> tuple[float, str]:
-    """Largest relative difference of the means, the pull on its wheel's normal force."""
-    worst, where = 0.0, ""
-    for key, value in ref.items():
-        wheel = key.split(".")[0]
-        scale = abs(ref[f"{wheel}.normal_force"]) if "pull" in key else abs(value)
-        d = abs(other[key] - value) / scale
-        if d > worst:
-            worst, where = d, key
-    return worst, where
 
 
 def compare(scenario: str, gravity: str, engines: tuple[str, ...], fmu_dir: Path,
@@ -90,14 +70,9 @@ def compare(scenario: str, gravity: str, engines: tuple[str, ...], fmu_dir: Path
         if "refused" in run:
             rows[engine] = {"refused": run["refused"]}
             continue
-        end = min(float(ref["result"].time[-1]), float(run["result"].time[-1]))
-        # a run that ends before the scenario's settling time (a descent that slides) is
-        # compared from the end of the drop into the soil on
-        start = settle if settle < end else rover_system.TRACKING_FROM
-        worst, where = worst_difference(window_means(ref["result"], start, end),
-                                        window_means(run["result"], start, end))
-        row = {"window_s": [start, end], "worst_relative_difference": worst,
-               "worst_mean": where, "step_s": run["figures"]["step_s"],
+        d = rover_system.difference(ref["result"], run["result"], settle)
+        row = {"window_s": list(d["window"]), "worst_relative_difference": d["worst"],
+               "worst_mean": d["where"], "step_s": run["figures"]["step_s"],
                "simulated_time_s": run["figures"]["simulated_time_s"],
                "left_domain": run["figures"]["left_domain"]}
         if event:

@@ -605,6 +605,36 @@ def pull_curve(res: RoverResult, terrain: Mapping, p: Mapping[str, float], end: 
             "pull_curve_max_error_n": max(errors) if errors else None}
 
 
+COMPARED = ("slip", "sinkage", "normal_force", "drawbar_pull")
+"""The per-wheel means two engines' runs of a scenario are compared on."""
+
+
+def difference(ref: RoverResult, other: RoverResult, settle: float) -> dict:
+    """How far ``other``'s run of a scenario is from ``ref``'s: the largest relative difference
+    of the per-wheel means of COMPARED (the pull, which averages near 0 on level ground, on its
+    wheel's normal force) over the window both runs cover, from the scenario's ``settle`` time
+    (from TRACKING_FROM where a run ends before it: a descent that slides) to where the
+    shorter run ends (a stall ends a run, and an engine may stall a little earlier or later).
+    Returns ``worst``, ``where`` (wheel.quantity) and ``window`` [s]."""
+    end = min(float(ref.time[-1]), float(other.time[-1]))
+    start = settle if settle < end else TRACKING_FROM
+
+    def means(res: RoverResult) -> dict[str, float]:
+        keep = (res.time >= start) & (res.time <= end)
+        return {f"{w}.{k}": float(np.mean(d[k][keep])) for w, d in res.wheels.items()
+                for k in COMPARED}
+
+    a, b = means(ref), means(other)
+    worst, where = 0.0, ""
+    for key, value in a.items():
+        wheel = key.split(".")[0]
+        scale = abs(a[f"{wheel}.normal_force"]) if "pull" in key else abs(value)
+        d = abs(b[key] - value) / scale
+        if d > worst:
+            worst, where = d, key
+    return {"worst": worst, "where": where, "window": (start, end)}
+
+
 def record_units() -> dict[str, str]:
     """Units of the series a rover run writes (CSV headers)."""
     per_wheel = {"slip": "1", "sinkage": "m", "normal_force": "N", "drawbar_pull": "N",
