@@ -214,12 +214,16 @@ def simulate_with_libcosim(path: Path, stop: float, step: float,
     execution = CosimExecution.from_ssp_file(str(path), step_size=nanoseconds)
     observer = CosimObserver.create_last_value()
     execution.add_observer(observer)
-    wanted = []
-    for name in variables:
+    # the variables by component, read with one call per component and step
+    wanted: dict[int, tuple[list[int], list[int]]] = {}
+    for j, name in enumerate(variables):
         component, variable = name.split(".", 1)
         index = execution.slave_index_from_instance_name(component)
+        if index not in wanted:
+            wanted[index] = ([], [])
         refs = {v.name.decode(): v.reference for v in execution.slave_variables(index)}
-        wanted.append((index, refs[variable]))
+        wanted[index][0].append(j)
+        wanted[index][1].append(refs[variable])
     steps = round(stop / step)
     out = np.empty((steps, len(variables)))
     done = steps
@@ -230,8 +234,8 @@ def simulate_with_libcosim(path: Path, stop: float, step: float,
             # step. The run ends here, as in our master.
             done = k
             break
-        for j, (index, ref) in enumerate(wanted):
-            out[k, j] = observer.last_real_values(index, [ref])[0]
+        for index, (columns, refs) in wanted.items():
+            out[k, columns] = observer.last_real_values(index, refs)
     return {"time": step * np.arange(1, done + 1),
             **{name: out[:done, j] for j, name in enumerate(variables)}}
 
