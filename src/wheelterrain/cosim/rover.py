@@ -476,7 +476,8 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
                  step: float | None = None, engine: Callable | None = None) -> dict:
     """One scenario: the contract's figures (``wheelterrain rover --json``) and the series.
     ``terrain``: the wheels' terrain parameters (the soft patch scales its soil). ``step``:
-    the communication step (default: the scenario's, :data:`FINE_STEP`). ``engine``:
+    the communication step (default: the scenario's own, ``Scenario.step``: 1 ms, or
+    :data:`FINE_STEP` for the Moon's stall runs). ``engine``:
     ``engine(soil, values, stop, step, stop_when) -> RoverResult`` runs it
     (default: :func:`simulate`, in process)."""
     if name not in scenarios():

@@ -237,7 +237,8 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
                  values: Mapping[str, float], stop: float, step: float = STEP,
                  stop_when=None) -> RoverResult:
     """The scenario's Rover.ssp in ``engine`` (one of SSP_ENGINES; fmpy-ssp: fmpy's own SSP
-    runner), to ``stop`` (the run is not ended early: ``stop_when`` is not an SSP's)."""
+    runner), to ``stop`` or to where a wheel leaves the model's domain (``stop_when`` is not an
+    SSP's and is not applied)."""
     if engine == "fmpy-ssp" and soil.patch:
         raise CosimulationError(
             "fmpy's SSP runner sets every connected input to 0 before the first step, and 0 is "

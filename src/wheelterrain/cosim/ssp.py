@@ -216,14 +216,16 @@ def simulate_with_libcosim(path: Path, stop: float, step: float,
     execution.add_observer(observer)
     # the variables by component, read with one call per component and step
     wanted: dict[int, tuple[list[int], list[int]]] = {}
+    references: dict[int, dict[str, int]] = {}
     for j, name in enumerate(variables):
         component, variable = name.split(".", 1)
         index = execution.slave_index_from_instance_name(component)
         if index not in wanted:
             wanted[index] = ([], [])
-        refs = {v.name.decode(): v.reference for v in execution.slave_variables(index)}
+            references[index] = {v.name.decode(): v.reference
+                                 for v in execution.slave_variables(index)}
         wanted[index][0].append(j)
-        wanted[index][1].append(refs[variable])
+        wanted[index][1].append(references[index][variable])
     steps = round(stop / step)
     out = np.empty((steps, len(variables)))
     done = steps
@@ -311,14 +313,11 @@ def simulate_with_omsimulator(path: Path, stop: float, step: float,
                                f"\n{log[-3000:]}")
         with result.open(newline="") as f:
             header = next(csv.reader(f))
-        system = next(h for h in header if h != "time").split(".")[:2]  # model.system
-        columns = {".".join(h.split(".")[2:]): j for j, h in enumerate(header)
-                   if h.split(".")[:2] == system}
-        missing = [v for v in variables if v not in columns]
-        if missing:
-            raise RuntimeError(f"OMSimulator's result of {path} lacks {', '.join(missing)}")
-        data = np.loadtxt(result, delimiter=",", skiprows=1, ndmin=2,
-                          usecols=[header.index("time"), *(columns[v] for v in variables)])
-    t = data[:, 0]
-    data = data[np.append(t[1:] != t[:-1], True)]  # the last row written at each time
-    return {"time": data[:, 0], **{v: data[:, 1 + j] for j, v in enumerate(variables)}}
+        system = ".".join(next(h for h in header if h != "time").split(".")[:2])  # model.system
+        try:
+            data = read_csv_columns(result, ("time", *(f"{system}.{v}" for v in variables)))
+        except RuntimeError as err:
+            raise RuntimeError(f"OMSimulator's result of {path}: {err}") from None
+    t = data[0]
+    data = data[:, np.append(t[1:] != t[:-1], True)]  # the last row written at each time
+    return {"time": data[0], **{v: data[1 + j] for j, v in enumerate(variables)}}
