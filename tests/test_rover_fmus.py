@@ -230,10 +230,9 @@ def test_a_whole_moon_stall_scenario_agrees_in_the_one_step_late_engines(built, 
     0.01 deg."""
     _skip_unless_installed(engine)
     ref = rover_system.run_scenario("descent", terrain, "moon")
-    run = rover_system.run_scenario(
-        "descent", terrain, "moon",
-        engine=lambda soil, values, stop, step, stop_when: rover_fmus.simulate_ssp(
-            engine, built / "native", "descent", soil, values, stop, step))
+    run = rover_system.run_scenario("descent", terrain, "moon",
+                                    engine=rover_fmus.runner(engine, built / "native",
+                                                             "descent"))
     assert run["figures"]["step_s"] == ref["figures"]["step_s"] == rover_system.FINE_STEP
     d = rover_system.difference(ref["result"], run["result"],
                                 rover_system.scenarios("moon")["descent"].settle)

@@ -34,16 +34,6 @@ EVENTS = {"slope": ("stall_slope_deg", "deg"), "pull-test": ("stall_towing_force
           "descent": ("slide_slope_deg", "deg")}
 
 
-def runner(engine: str, fmu_dir: Path, scenario: str):
-    if engine == "in-process":
-        return None
-    if engine == "fmus":
-        return lambda soil, values, stop, step, stop_when: rover_fmus.simulate(
-            fmu_dir, soil, values, stop, step, stop_when)
-    return lambda soil, values, stop, step, stop_when: rover_fmus.simulate_ssp(
-        engine, fmu_dir, scenario, soil, values, stop, step)
-
-
 def compare(scenario: str, gravity: str, engines: tuple[str, ...], fmu_dir: Path,
             step: float | None = None) -> dict:
     terrain = presets.load(presets.DEFAULT_PRESET)
@@ -53,7 +43,7 @@ def compare(scenario: str, gravity: str, engines: tuple[str, ...], fmu_dir: Path
               file=sys.stderr)
         try:
             run = rover_system.run_scenario(scenario, terrain, gravity, step=step,
-                                            engine=runner(engine, fmu_dir, scenario))
+                                            engine=rover_fmus.runner(engine, fmu_dir, scenario))
         except CosimulationError as err:
             runs[engine] = {"refused": str(err)}
             print(" refused", file=sys.stderr)

@@ -850,7 +850,7 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     if engine in SSP_ENGINES and (missing := ssp.engine_missing(engine)):
         _usage_error(f"--engine {engine}: {missing}")
 
-    runner, control_figures = None, {}
+    control_figures = {}
     if controller == "mpc":
         from wheelterrain.control import rover_mpc
 
@@ -862,12 +862,8 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
                 solve_time_p90_s=float(np.percentile(run.solve_times, 90)),
                 failed_solves=run.failures, solves=int(run.solve_times.size))
             return run.result
-    elif engine == "fmus":
-        def runner(soil, values, stop, step, stop_when):
-            return rover_fmus.simulate(folder, soil, values, stop, step, stop_when)
-    elif engine in SSP_ENGINES:
-        def runner(soil, values, stop, step, stop_when):
-            return rover_fmus.simulate_ssp(engine, folder, scenario, soil, values, stop, step)
+    else:
+        runner = rover_fmus.runner(engine, folder, scenario)
     try:
         run = rover_system.run_scenario(scenario, ps, gravity, chassis_values, step=step,
                                         engine=runner)

@@ -306,6 +306,19 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
     return from_records(data, step, wall, engine, left)
 
 
+def runner(engine: str, fmu_dir: Path, scenario: str) -> Callable | None:
+    """What :func:`rover_system.run_scenario` takes as its ``engine`` for ``engine``:
+    "in-process" None (its own), "fmus" our master on the FMUs in ``fmu_dir``, an SSP engine
+    the scenario's Rover.ssp in it."""
+    if engine == "in-process":
+        return None
+    if engine == "fmus":
+        return lambda soil, values, stop, step, stop_when: simulate(
+            fmu_dir, soil, values, stop, step, stop_when)
+    return lambda soil, values, stop, step, stop_when: simulate_ssp(
+        engine, fmu_dir, scenario, soil, values, stop, step)
+
+
 def _chassis_slips(data: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
     """The record rows with each wheel's slip from the chassis' own speeds (a terrain that
     refused a step keeps its last outputs, its slip among them, in an engine that goes on
