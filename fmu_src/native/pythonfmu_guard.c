@@ -13,7 +13,16 @@
  *   - value references: each must name a variable of the called type; outputs cannot be set;
  *   - Real and Integer values against the declared ranges (fmi2Error, as the native flavour);
  *     a value refused at set time makes fmi2ExitInitializationMode refuse too;
- *   - serialized FMU states carry this model's GUID; another model's are refused.
+ *   - doStep: a finite step h > 0 from the end of the last step (fmi2Error otherwise);
+ *     fmi2Terminated only where a refusal is final (the state models' own state);
+ *   - outputs: a non-finite value is never served as fmi2OK (fmi2Warning, with the reason);
+ *   - messages: pythonfmu logs through the guard, which passes warnings, discards and errors
+ *     to the host whatever its logging flag (FMI's status rules), other messages when on;
+ *   - FMU states: the guard owns them (a pointer it did not make is refused); serialized
+ *     states carry this model's GUID, their length and a checksum, so another model's, a
+ *     truncated or an overwritten state is refused before pythonfmu reads it;
+ *   - process exit: a host that exits without freeing its instances (a C host whose
+ *     interpreter pythonfmu started) gets them freed before CasADi's static destructors run.
  * Compiled with the generated guard_vars.h (GUARD_NAME, GUARD_GUID, GUARD_VARS: the same
  * variable table as the modelDescription).
  */
@@ -37,6 +46,8 @@ typedef struct {
     int has_range;
     double min, max;
     const char *unit;
+    const char *undefined; /* an output the model leaves undefined (NaN) at some points: its
+                              description, which says where; else NULL */
 } GuardVar;
 
 #include "guard_vars.h" /* GUARD_NAME, GUARD_GUID, GUARD_N_VARS, GUARD_VARS */
@@ -52,16 +63,36 @@ enum {
 #define M_GETTABLE (M_INITIALIZATION | M_STEP_COMPLETE | M_TERMINATED)
 
 #define STATE_TAG "wheelterrain pythonfmu state "
-#define STATE_HEADER 128 /* the tag and the GUID, zero-padded */
+#define STATE_ID 128 /* the tag and the GUID, zero-padded */
+/* A serialized state: the id, then the body's length and an FNV-1a checksum of what follows
+   them (the guard's time and terminated flag, then pythonfmu's bytes), all little-endian. */
+#define STATE_HEADER (STATE_ID + 8 + 8 + 8 + 8)
 
-typedef struct {
+typedef struct Guard {
     fmi2Component real;
     int mode;
-    fmi2CallbackFunctions cb;
+    fmi2CallbackFunctions cb;     /* the host's */
+    fmi2CallbackFunctions py_cb;  /* what pythonfmu gets: its messages pass through the guard */
+    int logging_on;               /* the host's debug logging flag */
     char name[128];
     unsigned char invalid[GUARD_N_VARS];
     double refused[GUARD_N_VARS]; /* the refused value, for the message */
+    double time;                  /* the end of the last step (the next one starts there) */
+    int terminated;               /* a final refusal: fmi2Terminated */
+    char reason[512];             /* the last error or discard pythonfmu logged */
+    struct Guard *next;           /* the live instances of this library */
 } Guard;
+
+/* A state the guard made: pythonfmu's, plus what the guard itself keeps. */
+typedef struct GuardState {
+    fmi2FMUstate real;
+    double time;
+    int terminated;
+    struct GuardState *next; /* every state this library made and has not freed */
+} GuardState;
+
+static Guard *live_instances;
+static GuardState *live_states;
 
 /* ---- pythonfmu's library -------------------------------------------------------------- */
 
@@ -154,25 +185,61 @@ static const char *load_library(void) {
 
 /* ---- logging ------------------------------------------------------------------------- */
 
-/* An error through the host's logger (always: errors reach the host whatever the logging
-   flag), the text's '%' doubled (the logger's message is a format string). */
-static void log_error(const fmi2CallbackFunctions *cb, const char *name, const char *fmt, ...) {
-    char text[1024], escaped[2048];
+/* A message that goes with the status returned through the host's logger (always: a warning
+   or an error reaches the host whatever the logging flag), the text's '%' doubled (the
+   logger's message is a format string). */
+static void pass_text(const fmi2CallbackFunctions *cb, const char *name, fmi2Status status,
+                      const char *category, const char *text) {
+    char escaped[2048];
     size_t j = 0;
-    va_list ap;
     if (cb == NULL || cb->logger == NULL) return;
-    va_start(ap, fmt);
-    vsnprintf(text, sizeof text, fmt, ap);
-    va_end(ap);
     for (size_t i = 0; text[i] != '\0' && j + 2 < sizeof escaped; i++) {
         if (text[i] == '%') escaped[j++] = '%';
         escaped[j++] = text[i];
     }
     escaped[j] = '\0';
-    cb->logger(cb->componentEnvironment, name, fmi2Error, "logStatusError", escaped);
+    cb->logger(cb->componentEnvironment, name, status, category, escaped);
+}
+
+static void vlog_status(const fmi2CallbackFunctions *cb, const char *name, fmi2Status status,
+                        const char *fmt, va_list ap) {
+    char text[1024];
+    vsnprintf(text, sizeof text, fmt, ap);
+    pass_text(cb, name, status, status == fmi2Warning ? "logStatusWarning" : "logStatusError",
+              text);
+}
+
+static void log_error(const fmi2CallbackFunctions *cb, const char *name, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    vlog_status(cb, name, fmi2Error, fmt, ap);
+    va_end(ap);
+}
+
+static void log_warning(const fmi2CallbackFunctions *cb, const char *name, const char *fmt,
+                        ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    vlog_status(cb, name, fmi2Warning, fmt, ap);
+    va_end(ap);
 }
 
 #define GUARD_ERROR(g, ...) log_error(&(g)->cb, (g)->name, __VA_ARGS__)
+#define GUARD_WARNING(g, ...) log_warning(&(g)->cb, (g)->name, __VA_ARGS__)
+
+/* pythonfmu's messages, on their way to the host: pythonfmu logs everything to the guard (its
+   logging is kept on), the guard passes a warning, discard or error always and any other
+   message when the host turned logging on; it keeps the last error or discard (the reason a
+   step was refused) for its own messages. */
+static void relay(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
+                  fmi2String category, fmi2String message, ...) {
+    Guard *g = (Guard *)env;
+    if (g == NULL || message == NULL) return;
+    if (status == fmi2Error || status == fmi2Discard || status == fmi2Fatal)
+        snprintf(g->reason, sizeof g->reason, "%s", message);
+    if (status == fmi2OK && !g->logging_on) return;
+    pass_text(&g->cb, name, status, category, message); /* pythonfmu's text, '%' doubled */
+}
 
 static const char *mode_name(int mode) {
     switch (mode) {
@@ -262,9 +329,28 @@ static int decode_uri(const char *uri, char *out, size_t size) {
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 const char *fmi2GetVersion(void) { return fmi2Version; }
 
+/* At process exit, free the instances the host did not free, while the interpreter pythonfmu
+   started and CasADi are whole. Registered at the first instantiation, after pythonfmu's
+   library and (through Python) CasADi were loaded, so it runs before their static destructors
+   (exit runs handlers in the reverse order of registration); a host that exits without
+   fmi2FreeInstance aborted there ("pure virtual method called"). A Python host has finalised
+   its interpreter before: the instances are then left as they are. */
+static void free_at_exit(void) {
+    int (*initialized)(void) = NULL;
+    *(void **)&initialized = dlsym(RTLD_DEFAULT, "Py_IsInitialized");
+    if (initialized == NULL || !initialized()) return;
+    while (live_instances != NULL) {
+        Guard *g = live_instances;
+        live_instances = g->next;
+        F.free_instance(g->real);
+        free(g);
+    }
+}
+
 fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
                               fmi2String resources, const fmi2CallbackFunctions *callbacks,
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
+    static int exit_handler;
     char uri[4096];
     const char *problem;
     Guard *g;
@@ -285,6 +371,13 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
                   "file URI (file:///...), got '%s'", GUARD_NAME, resources ? resources : "");
         return NULL;
     }
+    if (strstr(uri, "%20") != NULL) {
+        log_error(callbacks, name, "fmi2Instantiate: %s cannot run from %s: the folder's name "
+                  "contains the text '%%20', which pythonfmu 0.7 reads as a space; unzip the "
+                  "FMU into a folder whose path has no '%%20' (or use the native flavour)",
+                  GUARD_NAME, uri + 7);
+        return NULL;
+    }
     if ((problem = load_library()) != NULL) {
         log_error(callbacks, name, "fmi2Instantiate: %s: %s", GUARD_NAME, problem);
         return NULL;
@@ -292,19 +385,33 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
     g = (Guard *)calloc(1, sizeof(Guard));
     if (g == NULL) return NULL;
     g->cb = *callbacks;
+    g->py_cb = *callbacks;
+    g->py_cb.logger = relay;
+    g->py_cb.componentEnvironment = g;
+    g->logging_on = loggingOn;
     snprintf(g->name, sizeof g->name, "%s", name);
-    g->real = F.instantiate(name, type, guid, uri, callbacks, visible, loggingOn);
+    /* pythonfmu's logging stays on: the guard decides what reaches the host (relay) */
+    g->real = F.instantiate(name, type, guid, uri, &g->py_cb, visible, fmi2True);
     if (g->real == NULL) {
         free(g);
         return NULL;
     }
     g->mode = M_INSTANTIATED;
+    g->next = live_instances;
+    live_instances = g;
+    if (!exit_handler) exit_handler = atexit(free_at_exit) == 0;
     return g;
 }
 
 void fmi2FreeInstance(fmi2Component c) {
     Guard *g = (Guard *)c;
     if (g == NULL) return;
+    for (Guard **p = &live_instances; *p != NULL; p = &(*p)->next) {
+        if (*p == g) {
+            *p = g->next;
+            break;
+        }
+    }
     F.free_instance(g->real);
     free(g);
 }
@@ -312,16 +419,25 @@ void fmi2FreeInstance(fmi2Component c) {
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n,
                                const fmi2String categories[]) {
     Guard *g = legal(c, "fmi2SetDebugLogging", M_ANY);
-    return g ? F.set_debug_logging(g->real, on, n, categories) : fmi2Error;
+    if (g == NULL) return fmi2Error;
+    g->logging_on = on;
+    /* logging off for the host: pythonfmu still logs every category to the guard (relay) */
+    return on ? F.set_debug_logging(g->real, on, n, categories)
+              : F.set_debug_logging(g->real, fmi2True, 0, NULL);
 }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
                                fmi2Real tolerance, fmi2Real startTime,
                                fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
     Guard *g = legal(c, "fmi2SetupExperiment", M_INSTANTIATED);
-    return g ? F.setup_experiment(g->real, toleranceDefined, tolerance, startTime,
-                                  stopTimeDefined, stopTime)
-             : fmi2Error;
+    if (g == NULL) return fmi2Error;
+    if (!isfinite(startTime)) {
+        GUARD_ERROR(g, "fmi2SetupExperiment: start time %g must be finite", startTime);
+        return fmi2Error;
+    }
+    g->time = startTime;
+    return F.setup_experiment(g->real, toleranceDefined, tolerance, startTime, stopTimeDefined,
+                              stopTime);
 }
 
 /* ``status`` of a call that moves the instance to ``mode`` when it succeeds. */
@@ -360,7 +476,11 @@ fmi2Status fmi2Reset(fmi2Component c) {
     fmi2Status status;
     if (g == NULL) return fmi2Error;
     status = moved(g, F.reset(g->real), M_INSTANTIATED);
-    if (status <= fmi2Warning) memset(g->invalid, 0, sizeof g->invalid);
+    if (status <= fmi2Warning) {
+        memset(g->invalid, 0, sizeof g->invalid);
+        g->time = 0.0;
+        g->terminated = 0;
+    }
     return status;
 }
 
@@ -370,10 +490,37 @@ fmi2Status fmi2Reset(fmi2Component c) {
         if (g == NULL || !references_ok(g, #NAME, vr, n, GTYPE, 0)) return fmi2Error;        \
         return F.FIELD(g->real, vr, n, value);                                               \
     }
-GETTER(fmi2GetReal, fmi2Real, G_REAL, get_real)
 GETTER(fmi2GetInteger, fmi2Integer, G_INTEGER, get_integer)
 GETTER(fmi2GetBoolean, fmi2Boolean, G_BOOLEAN, get_boolean)
 #undef GETTER
+
+/* Real values: a value that is not finite is never served as fmi2OK. An output the model
+   leaves undefined at this point (e.g. the paper's slip with the carriage at rest) is NaN with
+   fmi2Warning and its description (logged by the slave); any other is NaN only where the model has had no valid
+   operating point yet (every evaluation so far refused; pythonfmu keeps the last valid
+   outputs once there is one): fmi2Warning, saying so and why. */
+fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
+                       fmi2Real value[]) {
+    Guard *g = legal(c, "fmi2GetReal", M_GETTABLE);
+    fmi2Status status;
+    if (g == NULL || !references_ok(g, "fmi2GetReal", vr, n, G_REAL, 0)) return fmi2Error;
+    status = F.get_real(g->real, vr, n, value);
+    if (status > fmi2Warning) return status;
+    for (size_t i = 0; i < n; i++) {
+        const GuardVar *v = &GUARD_VARS[vr[i]];
+        if (isfinite(value[i])) continue;
+        if (v->undefined != NULL && isnan(value[i])) {
+            /* the slave logged why (its getter's warning, relayed to the host) */
+        } else {
+            GUARD_WARNING(g, "%s: fmi2GetReal: %s has no value (%g): no valid operating point "
+                          "yet, every evaluation so far was refused%s%s", GUARD_NAME, v->name,
+                          value[i], g->reason[0] ? "; the last reason: " : "", g->reason);
+        }
+        status = fmi2Warning;
+        break;
+    }
+    return status;
+}
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t n,
                          fmi2String value[]) {
@@ -422,26 +569,124 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 
 /* ---- FMU state ------------------------------------------------------------------------- */
 
+/* ``state`` if this library made it and has not freed it (found by its address alone: a
+   pointer of another model's library, or a freed one, is never read); else NULL. */
+static GuardState *own_state(fmi2FMUstate state) {
+    for (GuardState *s = live_states; s != NULL; s = s->next)
+        if ((void *)s == state) return s;
+    return NULL;
+}
+
+static GuardState *new_state(void) {
+    GuardState *s = (GuardState *)calloc(1, sizeof(GuardState));
+    if (s == NULL) return NULL;
+    s->next = live_states;
+    live_states = s;
+    return s;
+}
+
+static void drop_state(GuardState *s) {
+    for (GuardState **p = &live_states; *p != NULL; p = &(*p)->next) {
+        if (*p == s) {
+            *p = s->next;
+            break;
+        }
+    }
+    free(s);
+}
+
+/* The guard's state of ``state`` for ``function``, or NULL (logged): another model's state, a
+   freed one, or not a state at all. */
+static GuardState *known_state(Guard *g, const char *function, fmi2FMUstate state) {
+    GuardState *s = own_state(state);
+    if (s == NULL)
+        GUARD_ERROR(g, "%s: this FMU state was not made by %s's fmi2GetFMUstate or "
+                    "fmi2DeSerializeFMUstate, or has been freed (another model's state?)",
+                    function, GUARD_NAME);
+    return s;
+}
+
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
     Guard *g = legal(c, "fmi2GetFMUstate", M_ANY);
-    return g ? F.get_state(g->real, state) : fmi2Error;
+    GuardState *s;
+    fmi2Status status;
+    if (g == NULL || state == NULL) return fmi2Error;
+    if (*state != NULL) { /* update a state made before */
+        if ((s = known_state(g, "fmi2GetFMUstate", *state)) == NULL) return fmi2Error;
+    } else if ((s = new_state()) == NULL) {
+        GUARD_ERROR(g, "fmi2GetFMUstate: out of memory");
+        return fmi2Error;
+    }
+    status = F.get_state(g->real, &s->real);
+    if (status > fmi2Warning) {
+        if (*state == NULL) drop_state(s);
+        return status;
+    }
+    s->time = g->time;
+    s->terminated = g->terminated;
+    *state = s;
+    return status;
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
     Guard *g = legal(c, "fmi2SetFMUstate", M_ANY);
-    return g ? F.set_state(g->real, state) : fmi2Error;
+    GuardState *s;
+    fmi2Status status;
+    if (g == NULL || (s = known_state(g, "fmi2SetFMUstate", state)) == NULL) return fmi2Error;
+    status = F.set_state(g->real, s->real);
+    if (status <= fmi2Warning) {
+        g->time = s->time;
+        g->terminated = s->terminated;
+    }
+    return status;
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state) {
     Guard *g = legal(c, "fmi2FreeFMUstate", M_ANY);
-    return g ? F.free_state(g->real, state) : fmi2Error;
+    GuardState *s;
+    fmi2Status status;
+    if (g == NULL || state == NULL) return fmi2Error;
+    if (*state == NULL) return fmi2OK; /* nothing to free */
+    if ((s = known_state(g, "fmi2FreeFMUstate", *state)) == NULL) return fmi2Error;
+    status = F.free_state(g->real, &s->real);
+    drop_state(s);
+    *state = NULL;
+    return status;
+}
+
+static void put_u64(fmi2Byte *p, unsigned long long x) {
+    for (int k = 0; k < 8; k++) p[k] = (fmi2Byte)((x >> (8 * k)) & 0xffu);
+}
+
+static unsigned long long get_u64(const fmi2Byte *p) {
+    unsigned long long x = 0;
+    for (int k = 0; k < 8; k++) x |= (unsigned long long)(unsigned char)p[k] << (8 * k);
+    return x;
+}
+
+/* FNV-1a, 64 bits: a checksum that finds a changed or truncated byte (not a defence against
+   forgery: a host that rewrites a state on purpose owns the result). */
+static unsigned long long checksum(const fmi2Byte *p, size_t n) {
+    unsigned long long h = 14695981039346656037ull;
+    for (size_t i = 0; i < n; i++) {
+        h ^= (unsigned char)p[i];
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+static void state_id(char id[STATE_ID]) {
+    memset(id, 0, STATE_ID);
+    snprintf(id, STATE_ID, "%s%s", STATE_TAG, GUARD_GUID);
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t *size) {
     Guard *g = legal(c, "fmi2SerializedFMUstateSize", M_ANY);
+    GuardState *s;
     fmi2Status status;
-    if (g == NULL) return fmi2Error;
-    status = F.state_size(g->real, state, size);
+    if (g == NULL || size == NULL) return fmi2Error;
+    if ((s = known_state(g, "fmi2SerializedFMUstateSize", state)) == NULL) return fmi2Error;
+    status = F.state_size(g->real, s->real, size);
     if (status <= fmi2Warning) *size += STATE_HEADER;
     return status;
 }
@@ -449,31 +694,73 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[],
                                  size_t size) {
     Guard *g = legal(c, "fmi2SerializeFMUstate", M_ANY);
-    if (g == NULL) return fmi2Error;
-    if (size < STATE_HEADER) {
-        GUARD_ERROR(g, "fmi2SerializeFMUstate: %u bytes is too small (see "
-                    "fmi2SerializedFMUstateSize)", (unsigned)size);
+    GuardState *s;
+    size_t body;
+    fmi2Status status;
+    if (g == NULL || (s = known_state(g, "fmi2SerializeFMUstate", state)) == NULL)
+        return fmi2Error;
+    if (F.state_size(g->real, s->real, &body) > fmi2Warning) return fmi2Error;
+    if (bytes == NULL || size < body + STATE_HEADER) {
+        GUARD_ERROR(g, "fmi2SerializeFMUstate: %u bytes given for a state of %u bytes (see "
+                    "fmi2SerializedFMUstateSize)", (unsigned)size,
+                    (unsigned)(body + STATE_HEADER));
         return fmi2Error;
     }
-    memset(bytes, 0, STATE_HEADER);
-    snprintf(bytes, STATE_HEADER, "%s%s", STATE_TAG, GUARD_GUID);
-    return F.serialize(g->real, state, bytes + STATE_HEADER, size - STATE_HEADER);
+    state_id(bytes);
+    put_u64(bytes + STATE_ID, (unsigned long long)body);
+    memcpy(bytes + STATE_ID + 16, &s->time, 8);
+    put_u64(bytes + STATE_ID + 24, (unsigned long long)s->terminated);
+    status = F.serialize(g->real, s->real, bytes + STATE_HEADER, body);
+    put_u64(bytes + STATE_ID + 8, checksum(bytes + STATE_ID + 16, 16 + body));
+    return status;
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size,
                                    fmi2FMUstate *state) {
     Guard *g = legal(c, "fmi2DeSerializeFMUstate", M_ANY);
-    char expected[STATE_HEADER];
-    if (g == NULL) return fmi2Error;
-    memset(expected, 0, sizeof expected);
-    snprintf(expected, sizeof expected, "%s%s", STATE_TAG, GUARD_GUID);
-    if (size < STATE_HEADER || memcmp(bytes, expected, STATE_HEADER) != 0) {
+    char expected[STATE_ID];
+    GuardState *s, *reused = NULL;
+    unsigned long long body;
+    fmi2Status status;
+    if (g == NULL || state == NULL) return fmi2Error;
+    state_id(expected);
+    if (bytes == NULL || size < STATE_HEADER || memcmp(bytes, expected, STATE_ID) != 0) {
         GUARD_ERROR(g, "fmi2DeSerializeFMUstate: these %u bytes are not a state of %s (GUID "
                     "%s): another model's, another build's, or not a state", (unsigned)size,
                     GUARD_NAME, GUARD_GUID);
         return fmi2Error;
     }
-    return F.deserialize(g->real, bytes + STATE_HEADER, size - STATE_HEADER, state);
+    body = get_u64(bytes + STATE_ID);
+    if (body > size - STATE_HEADER) {
+        GUARD_ERROR(g, "fmi2DeSerializeFMUstate: the state of %s is %llu bytes long and %u "
+                    "were given: truncated", GUARD_NAME, body + STATE_HEADER, (unsigned)size);
+        return fmi2Error;
+    }
+    if (get_u64(bytes + STATE_ID + 8) != checksum(bytes + STATE_ID + 16, 16 + (size_t)body)) {
+        GUARD_ERROR(g, "fmi2DeSerializeFMUstate: the state's bytes do not match its checksum "
+                    "(changed since fmi2SerializeFMUstate wrote them)");
+        return fmi2Error;
+    }
+    if (*state != NULL && (reused = known_state(g, "fmi2DeSerializeFMUstate", *state)) == NULL)
+        return fmi2Error;
+    if ((s = reused ? reused : new_state()) == NULL) {
+        GUARD_ERROR(g, "fmi2DeSerializeFMUstate: out of memory");
+        return fmi2Error;
+    }
+    if (reused && s->real != NULL) {
+        F.free_state(g->real, &s->real);
+        s->real = NULL;
+    }
+    status = F.deserialize(g->real, bytes + STATE_HEADER, (size_t)body, &s->real);
+    if (status > fmi2Warning) {
+        drop_state(s);
+        if (reused) *state = NULL;
+        return status;
+    }
+    memcpy(&s->time, bytes + STATE_ID + 16, 8);
+    s->terminated = get_u64(bytes + STATE_ID + 24) != 0;
+    *state = s;
+    return status;
 }
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference unknown[],
@@ -508,9 +795,34 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
     return fmi2Error;
 }
 
+/* A step the host asks for wrongly is an error of the host (fmi2Error); a step the model
+   refuses is fmi2Discard, and final (fmi2Terminated) only where it comes from the model's own
+   state with every value valid: a state model's, as the native flavour. */
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetPrior) {
     Guard *g = legal(c, "fmi2DoStep", M_STEP_COMPLETE);
-    return g ? F.do_step(g->real, t, h, noSetPrior) : fmi2Error;
+    fmi2Status status;
+    int invalid = 0;
+    if (g == NULL) return fmi2Error;
+    if (!(h > 0.0) || !isfinite(h) || !isfinite(t)) {
+        GUARD_ERROR(g, "fmi2DoStep: communication step %g at t = %g must be finite and > 0", h,
+                    t);
+        return fmi2Error;
+    }
+    if (fabs(t - g->time) > 1e-9 * fmax(1.0, fabs(t))) {
+        GUARD_ERROR(g, "fmi2DoStep: the step starts at t = %.17g but the last one ended at "
+                    "t = %.17g; steps must continue from the last step's end", t, g->time);
+        return fmi2Error;
+    }
+    g->reason[0] = '\0';
+    status = F.do_step(g->real, t, h, noSetPrior);
+    if (status <= fmi2Warning) {
+        g->time = t + h;
+        g->terminated = 0;
+    } else if (status == fmi2Discard) {
+        for (int k = 0; k < GUARD_N_VARS; k++) invalid |= g->invalid[k];
+        g->terminated = GUARD_STATE_REFUSALS_ARE_FINAL && !invalid;
+    }
+    return status;
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c) {
@@ -519,15 +831,31 @@ fmi2Status fmi2CancelStep(fmi2Component c) {
     return fmi2Error;
 }
 
-/* The status queries, legal in every mode, forwarded as they are. */
+/* The status queries, legal in every mode: fmi2Terminated and fmi2LastSuccessfulTime from the
+   guard (pythonfmu answered Terminated true after any refused step, even one the next step
+   recovers from), the rest forwarded as they are. */
 #define STATUS_QUERY(NAME, TYPE, FIELD)                                                      \
     fmi2Status NAME(fmi2Component c, const fmi2StatusKind s, TYPE *value) {                  \
         Guard *g = legal(c, #NAME, M_ANY);                                                   \
         return g ? F.FIELD(g->real, s, value) : fmi2Error;                                   \
     }
 STATUS_QUERY(fmi2GetStatus, fmi2Status, get_status)
-STATUS_QUERY(fmi2GetRealStatus, fmi2Real, get_real_status)
 STATUS_QUERY(fmi2GetIntegerStatus, fmi2Integer, get_integer_status)
-STATUS_QUERY(fmi2GetBooleanStatus, fmi2Boolean, get_boolean_status)
 STATUS_QUERY(fmi2GetStringStatus, fmi2String, get_string_status)
 #undef STATUS_QUERY
+
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
+    Guard *g = legal(c, "fmi2GetRealStatus", M_ANY);
+    if (g == NULL || value == NULL) return fmi2Error;
+    if (s != fmi2LastSuccessfulTime) return F.get_real_status(g->real, s, value);
+    *value = g->time;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
+    Guard *g = legal(c, "fmi2GetBooleanStatus", M_ANY);
+    if (g == NULL || value == NULL) return fmi2Error;
+    if (s != fmi2Terminated) return F.get_boolean_status(g->real, s, value);
+    *value = g->terminated ? fmi2True : fmi2False;
+    return fmi2OK;
+}

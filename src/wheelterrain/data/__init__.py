@@ -16,10 +16,12 @@ the same bytes.
 
 from __future__ import annotations
 
-from importlib import resources
-from importlib.abc import Traversable
+from pathlib import Path
+
+from wheelterrain import package_folder
 
 
-def path(name: str) -> Traversable:
-    """The shipped data file ``name`` (works from an installed wheel as from a checkout)."""
-    return resources.files(__package__).joinpath(name)
+def path(name: str) -> Path:
+    """The shipped data file ``name`` (works from an installed wheel, a checkout, and the copy
+    bundled in a pythonfmu FMU's resources)."""
+    return package_folder(__path__) / name

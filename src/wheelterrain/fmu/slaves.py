@@ -60,6 +60,43 @@ def compiled_or_vm(fn, resources: str | None = None):
 
 
 # --------------------------------------------------------------------------------------------
+# Several instances in one process, each with its own unzipped resources
+#
+# pythonfmu puts an instance's resources/ first on sys.path, so the bundled wheelterrain is
+# imported from the first instance's unzip folder and stays imported. A host that extracts each
+# FMU to a temporary folder and deletes it after the run (fmpy.simulate_fmu, libcosim, ecos)
+# leaves the package pointing at a folder that is gone: the next instance could neither read
+# the presets nor import a module not yet loaded. So every instance puts its own bundled copy
+# first in the __path__ of each loaded wheelterrain package (a package's __path__ may list
+# several folders; one that is gone is dropped), and the package reads its data from the first
+# folder there that exists (wheelterrain.package_folder).
+
+
+def follow_resources(resources: str | None) -> None:
+    """Make this instance's bundled package (``resources``/wheelterrain) the first place the
+    imported wheelterrain package loads modules and data from. Only where the package itself
+    was imported from an FMU's resources (a Python host with its own wheelterrain keeps it)."""
+    import wheelterrain
+
+    if not resources:
+        return
+    own = Path(resources) / "wheelterrain"
+    if not own.is_dir():
+        return
+    if not all(not Path(entry).is_dir() or (Path(entry).parent / "slavemodule.txt").is_file()
+               for entry in wheelterrain.__path__):
+        return  # the host's own installed or checked-out package: it stays
+    for name, module in list(sys.modules.items()):
+        path = getattr(module, "__path__", None)
+        if path is None or not (name == "wheelterrain" or name.startswith("wheelterrain.")):
+            continue
+        folder = own.joinpath(*name.split(".")[1:])
+        entries = [str(folder), *(entry for entry in path
+                                  if entry != str(folder) and Path(entry).is_dir())]
+        module.__path__[:] = entries  # type: ignore[index]
+
+
+# --------------------------------------------------------------------------------------------
 # Instance lifetime: CasADi objects must be gone before the interpreter is finalised
 #
 # In a C host, pythonfmu finalises the interpreter it started from a static destructor of its
@@ -320,8 +357,9 @@ class TerrainCore(_Core):
     model_name = "WheelTerrain"
 
     def __init__(self, slave) -> None:
-        dynamic, quasi = fmu_model.terrain_functions()
         resources = getattr(slave, "resources", None)
+        follow_resources(resources)
+        dynamic, quasi = fmu_model.terrain_functions()
         self.dynamic, self.evaluator = compiled_or_vm(dynamic, resources)
         self.quasi_static, _ = compiled_or_vm(quasi, resources)
         super().__init__(slave, terrain_variables())
@@ -406,6 +444,7 @@ class StateCore(_Core):
     model_name = ""
 
     def __init__(self, slave) -> None:
+        follow_resources(getattr(slave, "resources", None))
         self.model = fmu_model.STATE_MODELS[self.model_name]
         super().__init__(slave, VARIABLES[self.model_name]())
         self.state = tuple(self.model.initial(self.params()))

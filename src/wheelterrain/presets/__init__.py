@@ -9,9 +9,9 @@ path to such a file, so fitted presets can live outside the package.
 from __future__ import annotations
 
 import json
-from importlib import resources
 from pathlib import Path
 
+from wheelterrain import package_folder
 from wheelterrain.errors import ParameterError
 from wheelterrain.parameters import ParameterSet, parse_assignments
 
@@ -22,7 +22,7 @@ in-sample error (``wheelterrain validate``; README, first table)."""
 
 def available() -> list[str]:
     """Names of the presets shipped with the package."""
-    files = resources.files(__package__).iterdir()
+    files = package_folder(__path__).iterdir()
     return sorted(f.name[: -len(".json")] for f in files if f.name.endswith(".json"))
 
 
@@ -35,7 +35,7 @@ def read(name_or_path: str) -> dict:
         except (OSError, UnicodeDecodeError) as err:
             raise ParameterError("--preset", name_or_path, f"cannot be read: {err}") from None
     elif name_or_path in available():
-        text = resources.files(__package__).joinpath(f"{name_or_path}.json").read_text("utf-8")
+        text = (package_folder(__path__) / f"{name_or_path}.json").read_text("utf-8")
     else:
         raise ParameterError(
             "--preset", name_or_path,
