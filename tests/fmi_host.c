@@ -15,6 +15,9 @@
  * GET  "vr,..." Real values printed after every step, with t, as %.17g.
  * FMI_HOST_RESOURCES, if set, is the resource location passed to instantiate (a file: URI;
  * pythonfmu FMUs need it); else "".
+ * FMI_HOST_EXIT (FMI 2) "terminate": return from main after fmi2Terminate without
+ * fmi2FreeInstance; "none": without either (as hosts that leave cleanup to the process exit);
+ * else both.
  * Exit status 0 if every call returned fmi2OK, else 1 (the failing call is printed).
  */
 #include <stdarg.h>
@@ -173,6 +176,11 @@ static int run3(Library lib, const char *token, int steps, double h, int n_set,
 }
 
 int main(int argc, char **argv) {
+    const char *exit_mode = getenv("FMI_HOST_EXIT");
+    int leave_at_exit = exit_mode == NULL              ? 0
+                        : strcmp(exit_mode, "terminate") == 0 ? 1
+                        : strcmp(exit_mode, "none") == 0      ? 2
+                                                              : 0;
     fmi2ValueReference set_vr[MAX_VARS], ramp_vr[MAX_VARS], get_vr[MAX_VARS];
     double set_value[MAX_VARS], ramp_start[MAX_VARS], ramp_slope[MAX_VARS], unused[MAX_VARS];
     double out[MAX_VARS], t = 0.0, h;
@@ -253,7 +261,9 @@ int main(int argc, char **argv) {
             print_row(t, n_get, out);
         }
         if (timed) printf("%.9g %.17g\n", (now() - started) / steps, checksum);
+        if (leave_at_exit == 2) return 0; /* neither fmi2Terminate nor fmi2FreeInstance */
         CHECK(terminate(c));
+        if (leave_at_exit == 1) return 0; /* terminated, never freed */
         free_instance(c);
     }
     return 0;

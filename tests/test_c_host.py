@@ -38,13 +38,15 @@ def host(tmp_path_factory) -> Path:
 
 
 def run_in_c_host(host: Path, fmu: Path, folder: Path, steps: int, get: str,
-                  set_: str = "-") -> subprocess.CompletedProcess:
+                  set_: str = "-", at_exit: str = "free") -> subprocess.CompletedProcess:
     """Unzip ``fmu`` into ``folder`` and run it in the C host; the embedded interpreter finds
-    numpy and casadi on this Python's path."""
+    numpy and casadi on this Python's path. ``at_exit``: what the host calls before it returns
+    from main (FMI_HOST_EXIT of tests/fmi_host.c)."""
     unzip = Path(extract(str(fmu), unzipdir=str(folder)))
     md = read_model_description(str(fmu))
     library = unzip / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
-    env = {**ssp.c_host_environment(), "FMI_HOST_RESOURCES": (unzip / "resources").as_uri()}
+    env = {**ssp.c_host_environment(), "FMI_HOST_RESOURCES": (unzip / "resources").as_uri(),
+           "FMI_HOST_EXIT": at_exit}
     return subprocess.run([str(host), str(library), md.guid, str(steps), "0.01", set_, "-", get],
                           capture_output=True, text=True, env=env, timeout=300, check=False)
 
@@ -78,3 +80,20 @@ def test_a_percent_encoded_non_ascii_resource_uri_runs_in_a_c_host(fmu_dir, host
     assert "%C3%BC" in (folder / "resources").as_uri()  # the URI the host passed
     assert run.returncode == 0, (run.returncode, run.stderr[-2000:])
     assert len(run.stdout.splitlines()) == 5
+
+
+@pytest.mark.parametrize("at_exit", ["terminate", "none"])
+@pytest.mark.parametrize("name", ["WheelTerrain", "RoverChassis"])
+def test_a_host_that_exits_without_freeing_exits_with_status_0(fmu_dir, host, tmp_path, name,
+                                                               at_exit):
+    """A C host returning from main without fmi2FreeInstance (or without terminate and free)
+    aborted: "pure virtual method called", exit status 134, 5 of 5 (CasADi objects released at
+    the interpreter's finalisation, after CasADi's static destructors). The guard library
+    frees the instances left at exit, before those destructors run."""
+    fmu = fmu_dir / f"{name}.fmu"
+    output = {"WheelTerrain": "normal_force", "RoverChassis": "position"}[name]
+    for attempt in range(2):
+        run = run_in_c_host(host, fmu, tmp_path / f"run{attempt}", 5, str(vr(fmu, output)),
+                            at_exit=at_exit)
+        assert run.returncode == 0, (run.returncode, run.stderr[-2000:])
+        assert len(run.stdout.splitlines()) == 5
