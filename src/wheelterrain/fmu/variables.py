@@ -218,6 +218,16 @@ _WHEEL_WORDS = {"from WheelTerrain": "from this wheel's WheelTerrain",
                 "rig.drive = 2 (torque-command)": "rover.drive = 2 (torque-command)"}
 
 
+def _static_wheel_loads() -> dict[str, float]:
+    """Each wheel's load [N] of the default rover at rest on level ground: the start of its
+    normal_force input, so that RoverChassis alone (a checker, `fmpy simulate`, a host that
+    runs an FMU with its start values) stands on its wheels instead of falling out of its heave
+    range (with 0 it fell, at 0.46 s)."""
+    from wheelterrain.model import rover
+
+    return rover.static_axle_loads(rover.defaults())
+
+
 def _wheel_var(wheel: str, v: Var) -> Var:
     """The rig's variable ``v`` as ``wheel``'s (prefixed name, the rover's words)."""
     text = v.description
@@ -232,7 +242,7 @@ def _wheel_var(wheel: str, v: Var) -> Var:
         text = ("Torque of this wheel's motor (its speed loop's, or the torque command, within "
                 "+-rover.motor_torque_limit): over the last step in co-simulation, at the "
                 "current state and commands in model exchange")
-    start = 0.0 if v.name == "normal_force" else v.start
+    start = _static_wheel_loads()[wheel] if v.name == "normal_force" else v.start
     depends = None if v.depends_on is None else tuple(f"{wheel}.{d}" for d in v.depends_on)
     return replace(v, name=f"{wheel}.{v.name}", description=f"{wheel}: {text}", start=start,
                    min=None if v.name == "sinkage" else v.min,
