@@ -9,8 +9,8 @@
  * FMI 2.0. With "time" (FMI 2) nothing is printed per step: the host prints the wall time per
  * step (set, doStep, get) and a checksum of the outputs (benchmarks/fmus.py).
  * SET  "vr=value,..." Real values set before initialisation ("-" for none); "bvr=1" sets
- *      a Boolean (e.g. WheelTerrain's quasi_static), "ivr=0" an Integer or, in FMI 3, an
- *      Enumeration (e.g. model.contact_form);
+ *      a Boolean (e.g. WheelTerrain's quasi_static), "ivr=0" an Integer (FMI 3: Int32, e.g.
+ *      model.contact_form);
  * RAMP "vr=start+slope,..." Real inputs set to start + slope*t before every step ("-");
  * GET  "vr,..." Real values printed after every step, with t, as %.17g.
  * FMI_HOST_RESOURCES, if set, is the resource location passed to instantiate (a file: URI;
@@ -132,7 +132,7 @@ static int run3(Library lib, const char *token, int steps, double h, int n_set,
         (fmi3ExitInitializationModeTYPE *)symbol(lib, "fmi3ExitInitializationMode");
     fmi3SetFloat64TYPE *set_real = (fmi3SetFloat64TYPE *)symbol(lib, "fmi3SetFloat64");
     fmi3SetBooleanTYPE *set_boolean = (fmi3SetBooleanTYPE *)symbol(lib, "fmi3SetBoolean");
-    fmi3SetInt64TYPE *set_integer = (fmi3SetInt64TYPE *)symbol(lib, "fmi3SetInt64");
+    fmi3SetInt32TYPE *set_integer = (fmi3SetInt32TYPE *)symbol(lib, "fmi3SetInt32");
     fmi3GetFloat64TYPE *get_real = (fmi3GetFloat64TYPE *)symbol(lib, "fmi3GetFloat64");
     fmi3DoStepTYPE *do_step = (fmi3DoStepTYPE *)symbol(lib, "fmi3DoStep");
     fmi3TerminateTYPE *terminate = (fmi3TerminateTYPE *)symbol(lib, "fmi3Terminate");
@@ -154,7 +154,7 @@ static int run3(Library lib, const char *token, int steps, double h, int n_set,
     CHECK(enter(c, fmi3False, 0.0, 0.0, fmi3False, 0.0));
     for (int i = 0; i < n_set; i++) {
         fmi3Boolean on = set_value[i] != 0.0;
-        fmi3Int64 whole = (fmi3Int64)set_value[i];
+        fmi3Int32 whole = (fmi3Int32)set_value[i];
         if (kind[i] == SET_BOOLEAN) CHECK(set_boolean(c, &set_vr[i], 1, &on, 1));
         else if (kind[i] == SET_INTEGER) CHECK(set_integer(c, &set_vr[i], 1, &whole, 1));
         else CHECK(set_real(c, &set_vr[i], 1, &set_value[i], 1));

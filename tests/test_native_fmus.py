@@ -1181,3 +1181,59 @@ def test_rover_chassis_alone_runs_its_default_experiment_on_its_wheels(flavours,
     result = simulate_fmu(str(path), fmi_type=interface)
     assert result["time"][-1] == pytest.approx(float(stop))
     assert np.max(np.abs(result["heave"])) < 1e-9  # the loads carry the weight exactly
+
+
+def test_native_outputs_with_no_valid_point_yet_say_so_with_logging_off(flavours):
+    """The native flavour served its start values with fmi2Warning and a message calling them
+    "the last valid operating point" where there had been none, and the warning reached the
+    host only with logging on."""
+    import ctypes
+
+    t = Instance(flavours["root"] / "native" / "WheelTerrain.fmu",
+                 flavours["unzip"][("native", "WheelTerrain")], "nv", log=True)
+    try:
+        t.fmu.setDebugLogging(False, [])
+        t.fmu.setupExperiment(startTime=0.0)
+        t.fmu.enterInitializationMode()
+        t.set({"carriage_speed": 100.0})
+        refs = t.refs(["normal_force", "drawbar_pull"])
+        out = (ctypes.c_double * 2)()
+        status = t.fmu.fmi2GetReal(t.fmu.component, (ctypes.c_uint * 2)(*refs), 2, out)
+        assert status == 1  # fmi2Warning
+        said = [m for s, m in t.log if s == 1]
+        assert any("no valid operating point yet" in m and "traction slip" in m
+                   for m in said), t.log
+        assert not any("last valid operating point" in m for m in said)
+    finally:
+        t.fmu.freeInstance()
+
+
+def test_fmi3_messages_name_fmi3_functions_and_int64_has_no_variables(flavours):
+    """FMI 3 messages named fmi3GetDerivatives (no such function) and reported Int32 calls
+    as Int64; fmi3GetInt64 on an Int32 variable returned fmi3OK."""
+    import ctypes
+
+    path = flavours["root"] / "native" / "fmi3" / "WheelTerrain.fmu"
+    t = Instance(path, flavours["unzip"][("fmi3", "WheelTerrain")], "f3", log=True,
+                 interface="me").start({})
+    try:
+        raw = t.fmu.raw
+        integer = next(v.valueReference for v in t.md.modelVariables if v.type == "Int32")
+        calls = [
+            lambda: raw.fmi3GetContinuousStateDerivatives(raw.component,
+                                                          (ctypes.c_double * 3)(), 3),
+            lambda: raw.fmi3GetInt64(raw.component, (ctypes.c_uint * 1)(integer), 1,
+                                     (ctypes.c_int64 * 1)(), 1),
+            lambda: raw.fmi3GetInt32(raw.component, (ctypes.c_uint * 1)(10**6), 1,
+                                     (ctypes.c_int32 * 1)(), 1),
+        ]
+        for call in calls:
+            with pytest.raises(FMICallException) as info:
+                call()
+            assert info.value.status == 3  # fmi3Error
+        said = " | ".join(m for _, m in t.log)
+        assert "fmi3GetContinuousStateDerivatives" in said, said
+        assert "fmi3GetDerivatives" not in said
+        assert "fmi3GetInt32: no variable" in said, said
+    finally:
+        t.fmu.raw.freeInstance()

@@ -90,6 +90,8 @@ typedef struct {
     double time;
     int terminated; /* a refusal the model cannot leave: fmi2Terminated, until a reset or an
                        earlier FMU state */
+    int has_point;  /* the model has been evaluated at a valid operating point (the outputs
+                       are its results, not their start values) */
     char operating_message[MAX_MESSAGE];
 } Block;
 
@@ -130,11 +132,12 @@ static const char *CATEGORIES[] = {"logStatusWarning", "logStatusDiscard", "logS
 static void log_message(Instance *c, fmi2Status status, int category, const char *fmt, ...) {
     char text[MAX_MESSAGE * 2];
     va_list ap;
-    int is_error = status == fmi2Error || status == fmi2Fatal || status == fmi2Discard;
+    int with_status = status != fmi2OK;
     if (c == NULL || c->cb.logger == NULL) return;
-    /* errors (and discards) always reach the host; other messages when logging is on and their
-       category is enabled */
-    if (!is_error && !(c->logging_on && (c->log_categories & (1 << category)))) return;
+    /* the message of a status returned (a warning, discard or error: every call of this file
+       with a status other than OK returns it) always reaches the host, as FMI's status rules
+       ask; other messages when logging is on and their category is enabled */
+    if (!with_status && !(c->logging_on && (c->log_categories & (1 << category)))) return;
     va_start(ap, fmt);
     vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
@@ -217,6 +220,7 @@ static void refresh(Instance *c) {
         LOG_ERROR(c, "%s: %s", MODEL_NAME, c->b.operating_message);
         return;
     }
+    c->b.has_point = 1;
     for (int k = 0; k < N_CONTINUOUS; k++) c->b.v[DER_VRS[k]] = dx[k];
 }
 
@@ -411,11 +415,14 @@ static fmi2Status get_values(Instance *c, const char *function, const fmi2ValueR
                   c->b.operating_error ? c->b.operating_message : "an invalid value");
         return fmi2Error;
     }
-    /* outputs while the current inputs are refused are those of the last valid point: served,
-       but not as OK (fmi2Warning, with the reason when logging is on) */
+    /* outputs while the current inputs are refused are those of the last valid point, or,
+       where there has been none, their start values: served, but not as OK (fmi2Warning, with
+       which of the two and the reason) */
     if (stale && (c->b.operating_error || any_invalid(c, 0))) {
-        log_message(c, fmi2Warning, 0, "%s: %s: outputs are those of the last valid operating "
-                    "point; the current one is refused: %s", MODEL_NAME, function,
+        log_message(c, fmi2Warning, 0, "%s: %s: %s; the current one is refused: %s", MODEL_NAME,
+                    function, c->b.has_point ? "outputs are those of the last valid operating "
+                    "point" : "no valid operating point yet: the outputs are their start "
+                    "values, not results of the model",
                     c->b.operating_error ? c->b.operating_message : "an invalid value");
         return fmi2Warning;
     }

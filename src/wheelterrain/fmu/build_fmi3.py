@@ -75,6 +75,9 @@ def description(fmi2: ET.Element) -> ET.Element:
                   description="Simulation time", unit="s")
     for sv in scalars:
         typed = sv[0]
+        if typed.tag not in ("Real", "Integer", "Boolean"):  # pragma: no cover - a table guard
+            raise ValueError(f"{sv.get('name')}: fmi3_native.c serves Float64, Int32 and "
+                             f"Boolean variables only, not {_TYPE[typed.tag]}")
         element = ET.SubElement(variables, _TYPE[typed.tag])
         _copy(sv, element, _VARIABLE_ATTRIBUTES)
         _copy(typed, element, _TYPED_ATTRIBUTES)
