@@ -812,8 +812,15 @@ def test_ecos_runs_the_ssp_and_gives_the_fmpy_means(flavours, tmp_path):
     path = ssp.write(tmp_path / "C3.ssp", root, "C3", ps, 0.5, 62.0, 0.03, stop, step)
     out = tmp_path / "ecos.csv"
     keys = ("drawbar_pull", "normal_force", "sinkage")
-    ssp.simulate_with_ecos(path, "C3", stop, step, out,
+    import glob
+    import tempfile
+
+    left = set(glob.glob(f"{tempfile.gettempdir()}/ecos_ssp_*"))
+    # no set named: the runner names the one the file binds (ecos applies no other)
+    ssp.simulate_with_ecos(path, None, stop, step, out,
                            tuple(f"{ssp.RIG_COMPONENT}::sensor.{k}" for k in keys))
+    # ecos's unzip folders (each run left one, ~1 MB) are removed with the run
+    assert set(glob.glob(f"{tempfile.gettempdir()}/ecos_ssp_*")) == left
     names = ("time", *(f"{ssp.RIG_COMPONENT}::sensor.{k}" for k in keys))
     data = dict(zip(names, ssp.read_csv_columns(out, names), strict=True))
     unz = {n: flavours["unzip"][("native", n)] for n in NAMES}
@@ -826,6 +833,49 @@ def test_ecos_runs_the_ssp_and_gives_the_fmpy_means(flavours, tmp_path):
         theirs = float(np.mean(data[f"{ssp.RIG_COMPONENT}::sensor.{key}"][mask]))
         # ecos couples by Jacobi (forces lag the rig by one step): O(step) apart
         assert theirs == pytest.approx(ours.means[key], rel=1e-3), key
+    with pytest.raises(RuntimeError, match="binds the parameter sets"):
+        ssp.simulate_with_ecos(path, "C2", stop, step, out, ("time",))
+
+
+LIBCOSIM_WITHOUT_A_STEP = """
+import sys
+from libcosimpy.CosimExecution import CosimExecution
+execution = CosimExecution.from_ssp_file(sys.argv[1])
+print("stepped", all(execution.step() for _ in range(20)))
+"""
+
+
+def test_the_ssp_carries_its_step_and_stop_where_engines_read_them(flavours, tmp_path):
+    """libcosimpy crashed (SIGSEGV) on our SSP unless its step was given in code: the step is
+    now in the Open Simulation Platform's annotation of DefaultExperiment, which libcosim
+    reads. Both C1-C4 and rover files carry it, and the stop time, and name one parameter
+    set; the rover file is written with the umask's mode (it was 0600)."""
+    from xml.etree import ElementTree as ET
+
+    from wheelterrain.cosim import rover as rover_system
+    from wheelterrain.cosim import rover_fmus
+    from wheelterrain.cosim.master import file_mode
+
+    pytest.importorskip("libcosimpy")
+    root = flavours["root"] / "native"
+    ps = presets.load(presets.DEFAULT_PRESET)
+    c3 = ssp.write(tmp_path / "C3.ssp", root, "C3", ps, 0.5, 62.0, 0.03, 2.0, 2e-3)
+    soil = rover_system.Soil(ps)
+    rover = rover_fmus.write_ssp(tmp_path / "Rover-level.ssp", root, "level", soil, {}, 3.0,
+                                 5e-4)
+    for path, stop, step in ((c3, 2.0, 2e-3), (rover, 3.0, 5e-4)):
+        with zipfile.ZipFile(path) as z:
+            ssd = ET.fromstring(z.read("SystemStructure.ssd"))
+        experiment = ssd.find(f"{{{ssp.NS['ssd']}}}DefaultExperiment")
+        assert float(experiment.get("stopTime")) == stop
+        fixed = experiment.find(f".//{{{ssp.NS['osp']}}}FixedStepAlgorithm")
+        assert float(fixed.get("baseStepSize")) == step
+        assert len(ssp.parameter_set_names(path)) == 1
+    assert (rover.stat().st_mode & 0o777) == file_mode()
+    run = subprocess.run([sys.executable, "-c", LIBCOSIM_WITHOUT_A_STEP, str(c3)],
+                         capture_output=True, text=True, timeout=300, check=False)
+    assert run.returncode == 0, (run.returncode, run.stderr[-2000:])
+    assert "stepped True" in run.stdout
 
 
 

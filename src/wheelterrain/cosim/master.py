@@ -511,6 +511,12 @@ def _umask() -> int:
     return mask
 
 
+def file_mode() -> int:
+    """The mode a new file gets from the user's umask (what open() gives): for a result
+    written through a temporary file, which is created 0600."""
+    return 0o666 & ~_umask()
+
+
 def write_atomic(path: Path, text: str) -> None:
     """Write ``text`` to ``path`` through a temporary file: never a half-written result.
 
@@ -527,7 +533,7 @@ def write_atomic(path: Path, text: str) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
     try:
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp's 0600 -> the user's normal permissions
+        os.chmod(tmp, file_mode())  # mkstemp's 0600 -> the user's normal permissions
         with os.fdopen(fd, "w") as f:
             f.write(text)
         os.replace(tmp, path)

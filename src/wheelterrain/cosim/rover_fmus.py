@@ -40,6 +40,7 @@ import numpy as np
 
 from wheelterrain.cosim import rover as rover_system
 from wheelterrain.cosim import ssp
+from wheelterrain.cosim.master import file_mode
 from wheelterrain.cosim.rover import (
     CHASSIS_RECORD,
     RECORD,
@@ -399,7 +400,7 @@ def system_description(scenario: str, soil: Soil, values: Mapping[str, float],
         ET.SubElement(conns, q("ssd", "Connection"), startElement=a, startConnector=av,
                       endElement=b, endConnector=bv)
     ssp.master_annotation(system, step)
-    ET.SubElement(root, q("ssd", "DefaultExperiment"), startTime="0.0", stopTime=repr(stop))
+    ssp.default_experiment(root, stop, step)
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
@@ -413,6 +414,7 @@ def write_ssp(path: Path, fmu_dir: Path, scenario: str, soil: Soil,
                                      delete=False) as tmp:
         partial = Path(tmp.name)
     try:
+        os.chmod(partial, file_mode())  # the temporary file's 0600 -> the umask's mode
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr("SystemStructure.ssd", system_description(scenario, soil, values,
                                                                  stop, step))

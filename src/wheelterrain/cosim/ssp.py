@@ -34,7 +34,8 @@ from wheelterrain.parameters import TABLE, ParameterSet
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
       "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
       "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
-      "oms": "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"}
+      "oms": "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd",
+      "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations"}
 COUPLED_STATES, FORCES = variables.COUPLED_STATES, variables.COUPLED_FORCES  # the connections
 RIG_OUTPUTS = variables.RIG_OUTPUTS  # every output of each FMU is a connector
 TERRAIN_OUTPUTS = tuple(v.name for v in variables.TERRAIN_IO if v.causality == "output")
@@ -101,7 +102,7 @@ def system_description(case: str, ps: ParameterSet, slip_paper: float, load: flo
         ET.SubElement(connections, _q("ssd", "Connection"), startElement=TERRAIN_COMPONENT,
                       startConnector=n, endElement=RIG_COMPONENT, endConnector=n)
     master_annotation(system, step)
-    ET.SubElement(root, _q("ssd", "DefaultExperiment"), startTime="0.0", stopTime=repr(stop))
+    default_experiment(root, stop, step)
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
@@ -117,6 +118,31 @@ def master_annotation(system: ET.Element, step: float) -> None:
     info = ET.SubElement(oms, _q("oms", "SimulationInformation"))
     ET.SubElement(info, _q("oms", "FixedStepMaster"), description="oms-ma", stepSize=repr(step),
                   relativeTolerance="0.0001")
+
+
+def default_experiment(root: ET.Element, stop: float, step: float) -> None:
+    """SSP's DefaultExperiment (start 0, ``stop``), with the step where the engines read one:
+    libcosim takes its fixed-step algorithm from the Open Simulation Platform's annotation
+    there (without it, and without a step given in code, libcosimpy crashed: SIGSEGV);
+    OMSimulator reads the stop time from DefaultExperiment and the step from the system's
+    annotation (:func:`master_annotation`). ecos reads neither: its runner and command line
+    are given both (:func:`simulate_with_ecos`; ``ecos simulate --stopTime --stepSize``)."""
+    experiment = ET.SubElement(root, _q("ssd", "DefaultExperiment"), startTime="0.0",
+                               stopTime=repr(stop))
+    annotations = ET.SubElement(experiment, _q("ssd", "Annotations"))
+    annotation = ET.SubElement(annotations, _q("ssc", "Annotation"),
+                               type="com.opensimulationplatform")
+    algorithm = ET.SubElement(annotation, _q("osp", "Algorithm"))
+    ET.SubElement(algorithm, _q("osp", "FixedStepAlgorithm"), baseStepSize=repr(step))
+
+
+def parameter_set_names(path: Path) -> list[str]:
+    """The names of the parameter sets the components of the SSP at ``path`` bind, in the
+    order met (one per C1-C4 or rover file: the case's or the scenario's)."""
+    with zipfile.ZipFile(path) as z:
+        root = ET.fromstring(z.read("SystemStructure.ssd"))
+    names = [pset.get("name") for pset in root.iter(_q("ssv", "ParameterSet"))]
+    return list(dict.fromkeys(n for n in names if n))
 
 
 def _binding(p, value) -> tuple[str, int | float]:
@@ -157,7 +183,7 @@ def simulate_with_fmpy(path: Path, stop: float, step: float):
     return simulate_ssp(str(path), stop_time=stop, step_size=step, parameter_set=merged)
 
 
-def simulate_with_ecos(path: Path, case: str, stop: float, step: float, csv: Path,
+def simulate_with_ecos(path: Path, case: str | None, stop: float, step: float, csv: Path,
                        variables: tuple[str, ...],
                        go_on: Callable[[Callable[[str], float]], bool] | None = None,
                        every: float = 1.0) -> None:
@@ -166,10 +192,37 @@ def simulate_with_ecos(path: Path, case: str, stop: float, step: float, csv: Pat
     given, is asked every ``every`` s of simulated time, with a getter of any variable's present
     value, whether to go on: ecos itself goes on past a step an FMU refuses (its outputs
     frozen), to ``stop``, which on a long run that ended early is most of the time and a CSV of
-    gigabytes."""
+    gigabytes.
+
+    ecos applies an SSP's parameter bindings only when their set is named at initialisation
+    (with no name it runs every FMU at its start values: C2-C4 ran as C1, silently). ``case``
+    None takes the one set the file binds; a name the file does not bind is refused. On
+    ecos's command line: ``ecos simulate --path C2.ssp --parameterSet C2 --stopTime ...
+    --stepSize ...``."""
     from ecospy import EcosSimulation
 
-    sim = EcosSimulation(step_size=step, ssp_path=str(path))
+    names = parameter_set_names(path)
+    if case is None and len(names) == 1:
+        case = names[0]
+    if case not in names:
+        raise RuntimeError(f"{path} binds the parameter sets {names}, not {case!r}: ecos would "
+                           "run its FMUs at their start values")
+    # ecos unzips the SSP and its FMUs into folders of its own (ecos_ssp_<uuid>, ~1 MB each)
+    # under the temporary directory and leaves them there: give it one of ours, removed after
+    with tempfile.TemporaryDirectory(prefix="wheelterrain_ecos_") as scratch:
+        saved = os.environ.get("TMPDIR")
+        os.environ["TMPDIR"] = scratch  # read by ecos when it unzips, in the constructor
+        try:
+            sim = EcosSimulation(step_size=step, ssp_path=str(path))
+        finally:
+            if saved is None:
+                os.environ.pop("TMPDIR", None)
+            else:
+                os.environ["TMPDIR"] = saved
+        _run_ecos(sim, path, case, stop, step, csv, variables, go_on, every)
+
+
+def _run_ecos(sim, path, case, stop, step, csv, variables, go_on, every) -> None:
     try:
         sim.add_csv_writer(str(csv), identifiers=list(variables), decimation_factor=1)
         if not sim.init(0.0, case):
