@@ -6,7 +6,9 @@ import math
 
 import pytest
 
+from wheelterrain import compiled as native
 from wheelterrain import presets
+from wheelterrain.fmu import build_native as nativebuild
 from wheelterrain.fmu import build_pythonfmu as fmubuild
 from wheelterrain.parameters import ParameterSet
 
@@ -18,10 +20,31 @@ def table2() -> ParameterSet:
 
 @pytest.fixture(scope="session")
 def fmu_dir(tmp_path_factory):
-    """Both pythonfmu FMUs, built once for every test that only runs them."""
+    """Every pythonfmu FMU, built once per test run for every test that only runs them."""
     out = tmp_path_factory.mktemp("fmus")
     fmubuild.build(out)
     return out
+
+
+@pytest.fixture(scope="session")
+def native_dir(tmp_path_factory):
+    """Every native FMU (FMI 2 here, FMI 3 in fmi3/; win64 binaries where MinGW-w64 is
+    installed), built once per test run for every test that only runs them."""
+    if native.compiler() is None:
+        pytest.skip("the native FMUs need a C compiler")
+    out = tmp_path_factory.mktemp("native")
+    nativebuild.build(out)
+    return out
+
+
+@pytest.fixture(scope="session")
+def built_root(tmp_path_factory, fmu_dir, native_dir):
+    """A folder with both flavours as pythonfmu/ and native/ (native/fmi3/ inside), built once
+    per test run (links to :func:`fmu_dir` and :func:`native_dir`): tests only read it."""
+    root = tmp_path_factory.mktemp("flavours")
+    (root / "pythonfmu").symlink_to(fmu_dir, target_is_directory=True)
+    (root / "native").symlink_to(native_dir, target_is_directory=True)
+    return root
 
 
 def classical_set(R: float, b: float, c: float, phi_deg: float, kc: float, kphi: float, n: float,

@@ -163,3 +163,47 @@ def test_sweep_of_a_file_that_is_not_an_fmu_is_one_line(tmp_path, name):
     assert name in errors[0]
     assert "Traceback" not in result.output
     assert not (tmp_path / "out").exists()  # a refused run leaves no empty folder
+
+
+@pytest.mark.parametrize("command", [
+    ["reproduce"],
+    ["mpc", "--plant", "fmu"],
+    ["rover", "--scenario", "level", "--engine", "fmus"],
+    ["rover", "--scenario", "level", "--engine", "libcosim"],
+    ["rover", "--scenario", "level", "--engine", "ecos"],
+], ids=["reproduce", "mpc", "rover-fmus", "rover-libcosim", "rover-ecos"])
+def test_a_folder_of_files_that_are_not_fmus_is_one_line(tmp_path, command):
+    """--fmu-dir holding files named like the FMUs that are not FMUs: ecos crashed
+    (SIGSEGV, an empty output folder), the others ended in tracebacks (BadZipFile,
+    AssertionError). Every FMU is read before any engine loads it."""
+    for name in ("WheelTerrain", "SingleWheelRig", "RoverChassis", "Terrain"):
+        (tmp_path / f"{name}.fmu").write_text("not an FMU")
+    result = CliRunner().invoke(main, [*command, "--fmu-dir", str(tmp_path),
+                                       "--out", str(tmp_path / "out")])
+    assert result.exit_code == 2, result.output
+    assert "is not an FMU fmpy can read" in result.output
+    assert "Traceback" not in result.output
+
+
+def test_build_into_a_folder_it_cannot_make_is_one_line(tmp_path):
+    """`build --out` where the folder cannot be made ended in a traceback (OSError)."""
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    result = CliRunner().invoke(main, ["build", "--out", str(blocker / "fmus")])
+    _one_line_exit_2(result, "cannot write the FMUs to")
+
+
+def test_ctrl_c_exits_130_with_one_line(tmp_path):
+    """Ctrl-C exited 1, a code the CLI documents for nothing; the shell's convention is 130."""
+    import signal
+    import time
+
+    run = subprocess.Popen([sys.executable, "-m", "wheelterrain.cli", "validate"],
+                           cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True)
+    time.sleep(4.0)  # inside the run (it takes ~20 s)
+    run.send_signal(signal.SIGINT)
+    out, err = run.communicate(timeout=60)
+    assert run.returncode == 130, (run.returncode, err[-2000:])
+    assert "interrupted" in err
+    assert "Traceback" not in err

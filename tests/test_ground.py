@@ -8,10 +8,7 @@ import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from wheelterrain import compiled as native
 from wheelterrain import presets
-from wheelterrain.fmu import build_native as nativebuild
-from wheelterrain.fmu import build_pythonfmu as fmubuild
 from wheelterrain.fmu import functions as fmu_model
 from wheelterrain.fmu import variables
 from wheelterrain.fmu.instance import Instance
@@ -21,13 +18,8 @@ FLAVOURS = ["pythonfmu", "native", "native/fmi3"]
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    if native.compiler() is None:
-        pytest.skip("needs a C compiler")
-    root = tmp_path_factory.mktemp("ground")
-    fmubuild.build(root / "pythonfmu", ("Terrain", "WheelTerrain"))
-    nativebuild.build(root / "native", ("Terrain", "WheelTerrain"))
-    return root
+def built(built_root):
+    return built_root  # both flavours, built once per test run (conftest.py)
 
 
 def _map(**changes) -> dict:

@@ -26,7 +26,6 @@ from wheelterrain.cosim import master as cosim
 from wheelterrain.cosim import ssp
 from wheelterrain.errors import CosimulationError
 from wheelterrain.fmu import build_native as nativebuild
-from wheelterrain.fmu import build_pythonfmu as fmubuild
 from wheelterrain.fmu import variables
 from wheelterrain.fmu.instance import Instance
 from wheelterrain.parameters import TABLE
@@ -36,10 +35,8 @@ NAMES = ("WheelTerrain", "SingleWheelRig", "RoverChassis", "Terrain")
 
 
 @pytest.fixture(scope="module")
-def flavours(tmp_path_factory):
-    root = tmp_path_factory.mktemp("flavours")
-    fmubuild.build(root / "pythonfmu")
-    nativebuild.build(root / "native")
+def flavours(built_root):
+    root = built_root
     unzip = {(f, n): extract(str(root / f / f"{n}.fmu")) for f in ("pythonfmu", "native")
              for n in NAMES}
     unzip.update({("fmi3", n): extract(str(root / "native" / "fmi3" / f"{n}.fmu"))

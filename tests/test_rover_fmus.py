@@ -15,8 +15,6 @@ from wheelterrain import presets
 from wheelterrain.cosim import rover as rover_system
 from wheelterrain.cosim import rover_fmus, ssp
 from wheelterrain.errors import CosimulationError
-from wheelterrain.fmu import build_native as nativebuild
-from wheelterrain.fmu import build_pythonfmu as fmubuild
 from wheelterrain.model import rover
 
 pytestmark = pytest.mark.skipif(native.compiler() is None, reason="needs a C compiler")
@@ -24,12 +22,8 @@ STOP = 4.0  # s: the drop into the soil and the settling, about 4000 steps
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    root = tmp_path_factory.mktemp("rover_fmus")
-    models = ("RoverChassis", "WheelTerrain", "Terrain")
-    fmubuild.build(root / "pythonfmu", models)
-    nativebuild.build(root / "native", models)
-    return root
+def built(built_root):
+    return built_root  # both flavours, built once per test run (conftest.py)
 
 
 @pytest.fixture(scope="module")

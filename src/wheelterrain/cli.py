@@ -36,7 +36,8 @@ OUTPUT_ERRORS = {errno.ENOSPC, errno.EPIPE, errno.EIO, getattr(errno, "EDQUOT", 
 """Errors of writing output (a full disk or quota, a closed pipe): one line, not a traceback."""
 
 EPILOG = """\b
-Exit codes: 0 ok, 2 bad usage or parameter, 3 infeasible operating point, 4 numerical failure.
+Exit codes: 0 ok, 2 bad usage or parameter, 3 infeasible operating point, 4 numerical failure,
+130 interrupted (Ctrl-C).
 Parameter names are those of `wheelterrain params`; they are also the FMU parameter names."""
 
 
@@ -347,6 +348,10 @@ def build(out: str, flavor: str) -> None:
             click.echo(f"wrote {path}{_platforms(path)}")
     except BuildError as err:
         click.echo(f"error: {err}", err=True)
+        sys.exit(EXIT_USAGE)
+    except OSError as err:  # e.g. --out in a read-only folder
+        click.echo(f"error: cannot write the FMUs to {out}: {err.strerror or err}"
+                   f"{f' ({err.filename})' if err.filename else ''}", err=True)
         sys.exit(EXIT_USAGE)
 
 
@@ -842,11 +847,17 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     folder = Path(fmu_dir) if fmu_dir else next(
         (d for d in (Path("build/native"), Path("build"))
          if all((d / f"{n}.fmu").is_file() for n in needed)), Path("build/native"))
-    built = all((folder / f"{n}.fmu").is_file() for n in needed)
-    if engine != "in-process" and not built:
-        _usage_error(f"--engine {engine} needs {', '.join(f'{n}.fmu' for n in needed)} in "
-                     f"{folder}: build them (`wheelterrain build --flavor all`) or give "
-                     "--fmu-dir")
+    from wheelterrain.cosim.master import fmu_paths
+
+    try:
+        fmu_paths(folder, needed)  # each an FMU of its model, before an engine loads it
+        built = True
+    except (FileNotFoundError, FMUError) as err:
+        built = False
+        if engine != "in-process":
+            _usage_error(f"--engine {engine} needs {', '.join(f'{n}.fmu' for n in needed)} "
+                         f"in {folder} ({err}): build them (`wheelterrain build --flavor "
+                         "all`) or give --fmu-dir")
     if engine in SSP_ENGINES and (missing := ssp.engine_missing(engine)):
         _usage_error(f"--engine {engine}: {missing}")
 
@@ -995,9 +1006,12 @@ def entry() -> None:
 
     try:
         code = main(standalone_mode=False)
-    except click.exceptions.Abort:
-        click.echo("aborted", err=True)
-        sys.exit(1)
+    except click.exceptions.Abort:  # Ctrl-C (click turns KeyboardInterrupt into Abort)
+        click.echo("interrupted", err=True)
+        sys.exit(130)  # the shell's code for SIGINT (128 + 2)
+    except KeyboardInterrupt:
+        click.echo("interrupted", err=True)
+        sys.exit(130)
     except click.ClickException as err:
         err.show()
         sys.exit(err.exit_code)

@@ -29,8 +29,8 @@ from pathlib import Path
 import numpy as np
 
 from wheelterrain import data
-from wheelterrain.errors import CosimulationError
-from wheelterrain.fmu.instance import Instance
+from wheelterrain.errors import CosimulationError, FMUError
+from wheelterrain.fmu.instance import Instance, read_description
 from wheelterrain.fmu.variables import COUPLED_FORCES, COUPLED_STATES, RIG_IO, TERRAIN_IO
 from wheelterrain.model import rig
 from wheelterrain.model.slip import reference_radius
@@ -345,12 +345,20 @@ def flavour_of(md) -> str:
     return "pythonfmu" if (md.generationTool or "").startswith("PythonFMU") else "native"
 
 
-def fmu_paths(fmu_dir: Path) -> dict[str, Path]:
-    """The two FMUs in ``fmu_dir``; FileNotFoundError saying how to build them if missing."""
-    paths = {name: Path(fmu_dir) / f"{name}.fmu" for name in ("WheelTerrain", "SingleWheelRig")}
-    for path in paths.values():
+def fmu_paths(fmu_dir: Path, names: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig")
+              ) -> dict[str, Path]:
+    """The FMUs ``names`` in ``fmu_dir``, each checked before any engine loads it: a missing
+    one is FileNotFoundError saying how to build it; a file that is not an FMU, or is another
+    model's, is FMUError naming it (an engine given such a file crashed: ecos with SIGSEGV)."""
+    paths = {name: Path(fmu_dir) / f"{name}.fmu" for name in names}
+    for name, path in paths.items():
         if not path.is_file():
             raise FileNotFoundError(f"{path} not found: run `wheelterrain build --out {fmu_dir}`")
+        md = read_description(path)
+        model = (md.coSimulation or md.modelExchange).modelIdentifier
+        if model != name:
+            raise FMUError(f"{path} is the FMU of {model}, not {name}: `wheelterrain build` "
+                           f"writes {name}.fmu")
     return paths
 
 
@@ -364,8 +372,6 @@ def choose_fmus(fmu_dir: Path | None, interface: str = "cs",
     fastest built flavour, BUILD/native (generated C, no Python at run time) when both its FMUs
     exist and are no older than BUILD's pythonfmu pair, else BUILD (model exchange: native
     only). FileNotFoundError, saying how to build them, when there is none."""
-    from fmpy import read_model_description
-
     if fmu_dir is None:
         native, python = Path(build) / "native", Path(build)
 
@@ -378,7 +384,7 @@ def choose_fmus(fmu_dir: Path | None, interface: str = "cs",
         usable = t_native is not None and (t_python is None or t_native >= t_python - 1.0)
         fmu_dir = native if usable or interface == "me" else python
     paths = fmu_paths(fmu_dir)
-    md = read_model_description(str(paths["WheelTerrain"]))
+    md = read_description(paths["WheelTerrain"])
     flavour = ("pythonfmu flavour (Python inside the FMUs; `wheelterrain build --flavor all` "
                "adds the faster native ones)" if flavour_of(md) == "pythonfmu"
                else "native flavour (generated C, no Python at run time)")
