@@ -13,7 +13,7 @@ from click.testing import CliRunner
 from wheelterrain import model, presets
 from wheelterrain.cli import main
 from wheelterrain.model import solve
-from wheelterrain.parameters import NAMES
+from wheelterrain.parameters import NAMES, ROWS
 
 STEADY_KEYS = {"sinkage", "drawbar_pull", "normal_force", "torque", "slip", "slip_paper",
                "entry_angle", "exit_angle"}
@@ -27,7 +27,11 @@ def test_params_json_lists_every_parameter_with_the_contract_fields():
     result = run("params", "--preset", "paper-table2", "--json")
     assert result.exit_code == 0, result.output
     rows = json.loads(result.output)
-    assert [r["name"] for r in rows] == list(NAMES)
+    # the wheel and soil first, then the rig's, the rover's and the terrain map's rows
+    assert [r["name"] for r in rows] == [*NAMES, *(p.name for p in ROWS if p.name not in NAMES)]
+    assert {r["fmu"] for r in rows} == {"WheelTerrain", "SingleWheelRig", "RoverChassis",
+                                        "Terrain"}
+    assert any(r["name"] == "rover.gravity" for r in rows)
     for row in rows:
         assert {"name", "unit", "value", "min", "max", "description", "source"} <= set(row)
         assert row["min"] <= row["value"] <= row["max"]

@@ -203,7 +203,14 @@ def test_ctrl_c_exits_130_with_one_line(tmp_path):
                            text=True)
     time.sleep(4.0)  # inside the run (it takes ~20 s)
     run.send_signal(signal.SIGINT)
-    out, err = run.communicate(timeout=60)
+    _, err = run.communicate(timeout=60)
     assert run.returncode == 130, (run.returncode, err[-2000:])
     assert "interrupted" in err
     assert "Traceback" not in err
+
+
+def test_setting_the_rovers_gravity_is_refused_not_ignored():
+    """`--set rover.gravity=1.62` ran at --gravity's 9.81 m/s2, silently."""
+    result = CliRunner().invoke(main, ["rover", "--scenario", "level",
+                                       "--set", "rover.gravity=1.62"])
+    _one_line_exit_2(result, "the gravity is --gravity's (earth 9.81, moon 1.62 m/s2)")

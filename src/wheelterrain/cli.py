@@ -29,7 +29,7 @@ from wheelterrain.errors import (
     WheelTerrainError,
 )
 from wheelterrain.model import slip as slips
-from wheelterrain.parameters import DEG, TABLE, parse_assignments, rover_lookup
+from wheelterrain.parameters import DEG, ROWS, TABLE, parse_assignments, rover_lookup
 
 EXIT_USAGE, EXIT_INFEASIBLE, EXIT_NUMERICAL = 2, 3, 4
 OUTPUT_ERRORS = {errno.ENOSPC, errno.EPIPE, errno.EIO, getattr(errno, "EDQUOT", errno.ENOSPC)}
@@ -202,14 +202,19 @@ set_option = click.option(
 def params(preset: str, assignments: tuple[str, ...], json_target: str | None) -> None:
     """List every parameter: name, unit, value, valid range, description, source.
 
-    The value column is the preset's (after any --set). JSON rows carry name, unit, value, default,
-    min, max, kind, description and source.
+    First the wheel and soil (WheelTerrain.fmu; the value column is the preset's, after any
+    --set), then the other FMUs' rows at their defaults: the single-wheel rig (rig.*,
+    SingleWheelRig.fmu), the rover's chassis (rover.*, RoverChassis.fmu; `wheelterrain rover
+    --set` changes them) and the terrain map (patch.*, Terrain.fmu). JSON rows carry name,
+    unit, value, default, min, max, kind, description, source and fmu.
     """
     _check_file_target(json_target)
     ps = _load(preset, assignments)
     doc = presets.read(preset)
     fitted = doc.get("provenance", {}).get("fitted", {})
-    rows = [p.as_dict(ps[p.name]) for p in TABLE]
+    terrain = {p.name for p in TABLE}
+    others = [p for p in ROWS if p.name not in terrain]
+    rows = [p.as_dict(ps[p.name]) for p in TABLE] + [p.as_dict() for p in others]
     for row in rows:
         if row["name"] in fitted:
             row["fitted"] = fitted[row["name"]]  # value, plausible range and its source, ...
@@ -220,6 +225,14 @@ def params(preset: str, assignments: tuple[str, ...], json_target: str | None) -
     for p in TABLE:
         value = ps[p.name]
         shown = f"{value:.6g}" + (f" ({value / DEG:.4g} deg)" if p.unit == "rad" else "")
+        rng = f"[{p.min:g}, {p.max:g}]"
+        click.echo(f"{p.name:30} {shown:>12} {p.unit:6} {rng:>24}  {p.description}")
+    fmu = None
+    for p in others:
+        if p.fmu != fmu:
+            fmu = p.fmu
+            click.echo(f"\n{fmu}.fmu (defaults):")
+        shown = f"{p.default:.6g}" + (f" ({p.default / DEG:.4g} deg)" if p.unit == "rad" else "")
         rng = f"[{p.min:g}, {p.max:g}]"
         click.echo(f"{p.name:30} {shown:>12} {p.unit:6} {rng:>24}  {p.description}")
     if fitted:
@@ -839,6 +852,11 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
         chassis_values = parse_assignments(rover_items, find=rover_lookup)
     except WheelTerrainError as err:
         _fail(err)
+    if "rover.gravity" in chassis_values:  # it was silently replaced by --gravity's value
+        known = ", ".join(f"{k} {v:g}" for k, v in rover_system.GRAVITY.items())
+        _usage_error(f"--set rover.gravity={chassis_values['rover.gravity']:g}: the gravity is "
+                     f"--gravity's ({known} m/s2): each scenario's ramps, forces and "
+                     "predictions are set for it")
     ps = _load(preset, tuple(a for a in assignments if a not in rover_items))
     from wheelterrain.cosim import rover_fmus, ssp
 
