@@ -244,6 +244,17 @@ def test_fmpy_ssp_runner_refuses_a_soil_map_with_the_reason(built, terrain, in_p
                                 _patched(terrain, in_process), {}, STOP)
 
 
+@pytest.mark.parametrize("scenario", rover_system.LIMIT_SCENARIOS)
+def test_fmpy_ssp_runner_refuses_a_scenario_that_ends_at_a_limit_before_running(built, terrain,
+                                                                                scenario):
+    """slope, descent and pull-test end at a step a wheel refuses, where fmpy.ssp raises and
+    returns nothing: it ran the whole simulation (219 s quiet, > 900 s loaded) before
+    failing, with another message. Refused before anything runs now."""
+    with pytest.raises(CosimulationError, match="fmpy's SSP runner cannot run"):
+        rover_fmus.simulate_ssp("fmpy-ssp", built / "native", scenario,
+                                rover_system.Soil(terrain), {}, 0.05)
+
+
 def test_model_exchange_agrees_with_co_simulation(built):
     """The native RoverChassis alone under constant forces: the co-simulation steps (first
     order) converge to what CVode makes of the model-exchange interface, their error halving

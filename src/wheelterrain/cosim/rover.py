@@ -538,6 +538,9 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
 NO_RIPPLE = {"ripple.k_g": 0.0, "ripple.k_0": 0.0}
 TRACKED_SCENARIOS = ("level", "soft-patch")
 """Scenarios on level ground, where the rover has a steady motion to hold (:func:`tracking`)."""
+LIMIT_SCENARIOS = ("slope", "descent", "pull-test")
+"""Scenarios that run until the rover reaches a limit (a stall or a slide): each ends at a step
+a wheel's contact model refuses (it leaves the model's domain)."""
 TRACKING_FROM = 2.0  # s: the rover has sunk in and settled (a controller may take over here)
 
 

@@ -245,6 +245,13 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
             "fmpy's SSP runner sets every connected input to 0 before the first step, and 0 is "
             "outside the declared ranges of the wheels' ground.* inputs (soil.k_phi >= 10, "
             "...): a soil map cannot run there (ecos, libcosim and our master run it)")
+    if engine == "fmpy-ssp" and scenario in rover_system.LIMIT_SCENARIOS:
+        # refused before the run: fmpy's runner would simulate it whole (minutes) first
+        raise CosimulationError(
+            f"fmpy's SSP runner cannot run {scenario}: the scenario ends where a wheel leaves "
+            "the contact model's domain (the rover's stall or slide), and fmpy.ssp stops with "
+            "an exception at the first step an FMU refuses, returning nothing of the run; "
+            "ecos, libcosim, OMSimulator and our master (--engine fmus) keep the record")
     names = _ssp_variables()
     dotted = tuple(f"{c}.{v}" for c, v in names)  # "component.variable", as engines name them
     with tempfile.TemporaryDirectory(prefix="wheelterrain_rover_") as tmp:
