@@ -214,3 +214,11 @@ def test_setting_the_rovers_gravity_is_refused_not_ignored():
     result = CliRunner().invoke(main, ["rover", "--scenario", "level",
                                        "--set", "rover.gravity=1.62"])
     _one_line_exit_2(result, "the gravity is --gravity's (earth 9.81, moon 1.62 m/s2)")
+
+
+def test_a_sweep_too_large_to_hold_is_refused_with_its_size():
+    """A 1e8-point grid was neither refused nor warned: every row is held in memory until
+    the CSV is written."""
+    result = CliRunner().invoke(main, ["sweep", "--slip", "0:0.9:10000",
+                                       "--load", "10:100:10000"])
+    _one_line_exit_2(result, "the grid has 1e+08 points, more than --max-points 1000000")

@@ -2,6 +2,16 @@
 
 from __future__ import annotations
 
+import numbers
+
+
+def shown(value: object) -> str:
+    """``value`` as a message shows it: a number as Python writes a float (a NumPy scalar was
+    shown as np.float64(1.5)), anything else as its repr (a string in quotes)."""
+    if isinstance(value, numbers.Real) and not isinstance(value, bool):
+        return repr(float(value)) if not isinstance(value, numbers.Integral) else str(int(value))
+    return repr(value)
+
 
 class WheelTerrainError(ValueError):
     """Base class: bad input or an operating point the model cannot represent."""
@@ -13,8 +23,8 @@ class ParameterError(WheelTerrainError):
     def __init__(self, name: str, value: object, problem: str) -> None:
         self.name = name
         self.value = value
-        shown = "" if value is None else f" = {value!r}"
-        super().__init__(f"parameter {name}{shown} {problem}")
+        text = "" if value is None else f" = {shown(value)}"
+        super().__init__(f"parameter {name}{text} {problem}")
 
 
 class InputError(WheelTerrainError):
@@ -23,7 +33,7 @@ class InputError(WheelTerrainError):
     def __init__(self, name: str, value: object, problem: str) -> None:
         self.name = name
         self.value = value
-        super().__init__(f"input {name} = {value!r} {problem}")
+        super().__init__(f"input {name} = {shown(value)} {problem}")
 
 
 class LoadTooLargeError(WheelTerrainError):
