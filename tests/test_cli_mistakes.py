@@ -198,10 +198,13 @@ def test_ctrl_c_exits_130_with_one_line(tmp_path):
     import signal
     import time
 
-    run = subprocess.Popen([sys.executable, "-m", "wheelterrain.cli", "validate"],
+    # the Moon's slope scenario: minutes of work at its 0.25 ms step, so Ctrl-C lands inside
+    run = subprocess.Popen([sys.executable, "-m", "wheelterrain.cli", "rover", "--scenario",
+                            "slope", "--gravity", "moon", "--out", str(tmp_path)],
                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                            text=True)
-    time.sleep(4.0)  # inside the run (it takes ~20 s)
+    time.sleep(5.0)
+    assert run.poll() is None  # still running
     run.send_signal(signal.SIGINT)
     _, err = run.communicate(timeout=60)
     assert run.returncode == 130, (run.returncode, err[-2000:])
