@@ -193,17 +193,21 @@ def test_build_into_a_folder_it_cannot_make_is_one_line(tmp_path):
     _one_line_exit_2(result, "cannot write the FMUs to")
 
 
+# a run that lasts (the Moon's pull test at a 0.1 ms step: about 40 s on a quiet 2-core
+# machine), so that a signal sent after a few seconds lands inside it
+LONG_RUN = ("rover", "--scenario", "pull-test", "--gravity", "moon", "--step", "1e-4")
+
+
 def test_ctrl_c_exits_130_with_one_line(tmp_path):
     """Ctrl-C exited 1, a code the CLI documents for nothing; the shell's convention is 130."""
     import signal
     import time
 
-    # the Moon's slope scenario: minutes of work at its 0.25 ms step, so Ctrl-C lands inside
-    run = subprocess.Popen([sys.executable, "-m", "wheelterrain.cli", "rover", "--scenario",
-                            "slope", "--gravity", "moon", "--out", str(tmp_path)],
+    run = subprocess.Popen([sys.executable, "-m", "wheelterrain.cli", *LONG_RUN,
+                            "--out", str(tmp_path)],
                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                            text=True)
-    time.sleep(5.0)
+    time.sleep(4.0)
     assert run.poll() is None  # still running
     run.send_signal(signal.SIGINT)
     _, err = run.communicate(timeout=60)
@@ -225,3 +229,51 @@ def test_a_sweep_too_large_to_hold_is_refused_with_its_size():
     result = CliRunner().invoke(main, ["sweep", "--slip", "0:0.9:10000",
                                        "--load", "10:100:10000"])
     _one_line_exit_2(result, "the grid has 1e+08 points, more than --max-points 1000000")
+
+
+def test_an_interrupted_set_of_results_is_left_whole_or_not_at_all(tmp_path):
+    """Ctrl-C while reproduce wrote its files left part of a set (C1.csv alone, or
+    C1.csv C1.png C1.ssp C2.csv) in 4 of 5 tries. The set is written aside and moved in
+    once whole."""
+    from wheelterrain.cosim.master import one_set
+
+    out = tmp_path / "out"
+    (out / "old.txt").parent.mkdir()
+    (out / "old.txt").write_text("kept")
+    def interrupted_while_writing():
+        with one_set(out) as staging:
+            (staging / "C1.csv").write_text("1")
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        interrupted_while_writing()
+    assert sorted(p.name for p in out.iterdir()) == ["old.txt"]  # nothing of it, no folder
+    with one_set(out) as staging:
+        for case in ("C1", "C2"):
+            (staging / f"{case}.csv").write_text(case)
+    assert sorted(p.name for p in out.iterdir()) == ["C1.csv", "C2.csv", "old.txt"]
+
+
+def test_sigterm_exits_143_and_leaves_no_output_or_temporary_folder(tmp_path):
+    """SIGTERM left an empty output folder and temporary folders: it now unwinds like an
+    error, so the folder made for the run and every temporary folder go."""
+    import glob
+    import signal
+    import tempfile
+    import time
+
+    before = set(glob.glob(f"{tempfile.gettempdir()}/wheelterrain_*"))
+    out = tmp_path / "new" / "out"
+    run = subprocess.Popen([sys.executable, "-m", "wheelterrain.cli", *LONG_RUN,
+                            "--out", str(out)],
+                           cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True)
+    time.sleep(4.0)
+    assert run.poll() is None  # still running
+    run.send_signal(signal.SIGTERM)
+    _, err = run.communicate(timeout=60)
+    assert run.returncode == 143, (run.returncode, err[-2000:])
+    assert "terminated" in err
+    assert "Traceback" not in err
+    assert not (tmp_path / "new").exists()  # the folder made for the run is gone
+    assert set(glob.glob(f"{tempfile.gettempdir()}/wheelterrain_*")) <= before

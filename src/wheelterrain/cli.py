@@ -37,7 +37,7 @@ OUTPUT_ERRORS = {errno.ENOSPC, errno.EPIPE, errno.EIO, getattr(errno, "EDQUOT", 
 
 EPILOG = """\b
 Exit codes: 0 ok, 2 bad usage or parameter, 3 infeasible operating point, 4 numerical failure,
-130 interrupted (Ctrl-C).
+130 interrupted (Ctrl-C), 143 terminated (SIGTERM); an interrupted run writes none of its files.
 Parameter names are those of `wheelterrain params`; they are also the FMU parameter names."""
 
 
@@ -454,12 +454,13 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str | None,
         say(f"in-sample: {preset} was fitted on {', '.join(fitted_on)}; its held-out "
             "errors are printed by `wheelterrain validate`")
     experiment = {row["case"]: row["experiment"] for row in paper["cases"]}
-    for r in results:
-        cosim.write_csv(out_dir / f"{r.case}.csv", r)
-        plots.time_series(r, experiment[r.case], out_dir / f"{r.case}.png")
-        ssp.write(out_dir / f"{r.case}.ssp", folder, r.case, ps, r.slip_paper,
-                  paper["load_N"], paper["wheel_speed_m_per_s"], stop, step)
-    plots.means_bar_chart(rows, out_dir / "means.png", preset, fitted_on)
+    with cosim.one_set(out_dir) as staging:  # all files, or none if interrupted
+        for r in results:
+            cosim.write_csv(staging / f"{r.case}.csv", r)
+            plots.time_series(r, experiment[r.case], staging / f"{r.case}.png")
+            ssp.write(staging / f"{r.case}.ssp", folder, r.case, ps, r.slip_paper,
+                      paper["load_N"], paper["wheel_speed_m_per_s"], stop, step)
+        plots.means_bar_chart(rows, staging / "means.png", preset, fitted_on)
     say(f"wrote {out_dir}/C1..C4.csv, C1..C4.png, means.png, C1..C4.ssp")
     if json_target:  # the JSON document: replacing the text, or beside it in a file
         payload = {"preset": preset, "set": list(assignments), "interface": interface,
@@ -914,16 +915,18 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     result = run["result"]
     out_dir = Path(out)
     stem = f"{scenario}-{gravity}" + ("-mpc" if controller == "mpc" else "")
-    plots.rover(result, figures, out_dir / f"{stem}.png")
     series = {"time": result.time, **{f"{w}.{k}": v for w, d in result.wheels.items()
                                       for k, v in d.items()},
               **result.chassis, **result.inputs}
-    cosim.write_series(out_dir / f"{stem}.csv", series, every=max(len(result.time) // 5000, 1),
-                       units=rover_system.record_units())
-    ssp_path = None
-    if built:
-        ssp_path = rover_fmus.write_ssp(out_dir / f"Rover-{scenario}.ssp", folder, scenario,
-                                        soil, run["values"], run["stop"], run["step"])
+    with cosim.one_set(out_dir) as staging:  # all files, or none if interrupted
+        plots.rover(result, figures, staging / f"{stem}.png")
+        cosim.write_series(staging / f"{stem}.csv", series,
+                           every=max(len(result.time) // 5000, 1),
+                           units=rover_system.record_units())
+        if built:
+            rover_fmus.write_ssp(staging / f"Rover-{scenario}.ssp", folder, scenario, soil,
+                                 run["values"], run["stop"], run["step"])
+    ssp_path = out_dir / f"Rover-{scenario}.ssp" if built else None
     figures["ssp"] = str(ssp_path) if ssp_path else None
     if _emit_json(json_target, figures):
         return
@@ -1025,13 +1028,27 @@ def _validate_user_data(data_file: str, json_target: str | None, starts: int) ->
     click.echo(prediction.format_table(result))
 
 
+class _Terminated(BaseException):
+    """SIGTERM, raised where the process is, so that every cleanup on the way out runs."""
+
+
 def entry() -> None:
     """The console script: ``main`` with a clear line, not a traceback, when standard output
     cannot be written (a full disk, a closed pipe)."""
     import os
+    import signal
 
+    def terminated(signum, frame):  # SIGTERM: unwind, so temporary files and folders go
+        raise _Terminated
+
+    with contextlib.suppress(ValueError):  # not the main thread: keep the default
+        signal.signal(signal.SIGTERM, terminated)
     try:
         code = main(standalone_mode=False)
+    except _Terminated:
+        with contextlib.suppress(OSError):
+            click.echo("terminated", err=True)
+        sys.exit(128 + signal.SIGTERM)
     except click.exceptions.Abort:  # Ctrl-C (click turns KeyboardInterrupt into Abort)
         click.echo("interrupted", err=True)
         sys.exit(130)  # the shell's code for SIGINT (128 + 2)

@@ -16,6 +16,7 @@ steady state.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -521,6 +522,22 @@ def file_mode() -> int:
     """The mode a new file gets from the user's umask (what open() gives): for a result
     written through a temporary file, which is created 0600."""
     return 0o666 & ~_umask()
+
+
+@contextlib.contextmanager
+def one_set(out_dir: Path):
+    """A folder to write a set of result files into; they appear in ``out_dir`` together when
+    the block ends without an exception. An interrupted run (Ctrl-C, SIGTERM, an error) leaves
+    ``out_dir`` as it was: never part of a set (C1.csv alone), no temporary folder."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(dir=out_dir, prefix=".partial-"))
+    try:
+        yield staging
+        for f in sorted(staging.iterdir()):
+            os.replace(f, out_dir / f.name)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
 
 
 def write_atomic(path: Path, text: str) -> None:
