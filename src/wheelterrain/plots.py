@@ -77,14 +77,17 @@ def means_bar_chart(rows: list[dict], path: Path, preset: str,
                    label=f"paper's simulation: MAE {np.mean(np.abs(paper - measured)):.2f} "
                    f"{unit}")
         bottom.set_ylabel(f"{label.split(' [')[0]} - experiment [{unit}]")
-        bottom.legend(fontsize=7)
+        # below the axes: inside, a legend can hide a bar
+        bottom.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12))
         for ax in (top, bottom):
             ax.axhline(0, color="k", lw=0.6)
             ax.grid(axis="y", alpha=0.3)
         bottom.set_xticks(x, cases)
-    axes[0, 0].legend(fontsize=8)
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="upper center", ncol=3, fontsize=9,
+               bbox_to_anchor=(0.5, 0.955))
     fig.suptitle("C1-C4 means against Table III (bottom: residuals against the experiment)")
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0, 1, 0.93))
     _save(fig, path)
 
 
@@ -173,46 +176,83 @@ def closed_loop(result, scenario, path: Path) -> None:
     _save(fig, path)
 
 
+def _wheel_lines(ax, t, wheels: dict, key: str, scale: float, stride: int) -> None:
+    """``key`` per wheel; where the left and right wheels of an axle agree (a straight run on
+    uniform ground: symmetric) one line for the axle, labelled so, instead of two lines drawn
+    over each other."""
+    for axle, ls in (("front", "-"), ("rear", "--")):
+        left, right = wheels[f"{axle}_left"][key], wheels[f"{axle}_right"][key]
+        if np.allclose(left, right, rtol=1e-9, atol=1e-12, equal_nan=True):
+            ax.plot(t[::stride], scale * left[::stride], lw=0.9, ls=ls,
+                    label=f"{axle} (left = right)")
+            continue
+        for side, color in (("left", None), ("right", None)):
+            ax.plot(t[::stride], scale * wheels[f"{axle}_{side}"][key][::stride], lw=0.8,
+                    ls=ls, color=color, label=f"{axle}_{side}")
+
+
 def rover(result, figures: dict, path: Path) -> None:
-    """One rover scenario: per wheel over time (slip, sinkage, normal force, drawbar pull), the
-    chassis' speed, the slope and towing force; for the slope scenario slip against slope."""
+    """One rover scenario: per axle (or wheel, where left and right differ) over time: slip,
+    sinkage, normal force, drawbar pull; the chassis' speed; the slope and towing force, each
+    on its own axis; and the scenario's limit beside its prediction: slip against slope (slope
+    and descent, the predicted stall or slide slope marked), or the pull-slip curve against
+    the four single-wheel curves (pull-test)."""
     t = result.time
     stride = max(len(t) // 4000, 1)  # at most ~4000 points a line
-    rows = 6 if figures["scenario"] == "slope" else 5
-    fig, axes = plt.subplots(rows, 1, figsize=(8, 2.0 * rows + 1), sharex=False)
+    scenario = figures["scenario"]
+    limit_panel = scenario in ("slope", "descent", "pull-test")
+    rows = 7 if limit_panel else 6
+    fig, axes = plt.subplots(rows, 1, figsize=(8, 1.9 * rows + 1), sharex=False)
     quantities = (("slip", 1.0, "traction slip [1]"), ("sinkage", 1e3, "sinkage [mm]"),
                   ("normal_force", 1.0, "normal force [N]"),
                   ("drawbar_pull", 1.0, "drawbar pull [N]"))
     for ax, (key, scale, label) in zip(axes, quantities, strict=False):
-        for wheel, series in result.wheels.items():
-            ax.plot(t[::stride], scale * series[key][::stride], lw=0.8,
-                    ls="-" if wheel.startswith("front") else "--", label=wheel)
+        _wheel_lines(ax, t, result.wheels, key, scale, stride)
         ax.set_ylabel(label)
     axes[0].legend(loc="best", fontsize=8, ncol=2)
-    ax = axes[4]
-    ax.plot(t[::stride], 1e3 * result.chassis["speed"][::stride], lw=0.8, label="speed [mm/s]")
-    ax.plot(t[::stride], np.degrees(result.inputs["slope"][::stride]), lw=0.8,
-            label="slope [deg]")
-    ax.plot(t[::stride], result.inputs["towing_force"][::stride], lw=0.8,
-            label="towing force [N]")
-    ax.set_ylabel("chassis, inputs")
-    ax.legend(loc="best", fontsize=8)
-    for a in axes[:5]:
+    axes[4].plot(t[::stride], 1e3 * result.chassis["speed"][::stride], lw=0.8, color="C2")
+    axes[4].set_ylabel("chassis speed [mm/s]")
+    ax = axes[5]
+    ax.plot(t[::stride], np.degrees(result.inputs["slope"][::stride]), lw=0.8, color="C3")
+    ax.set_ylabel("slope [deg]", color="C3")
+    twin = ax.twinx()
+    twin.plot(t[::stride], result.inputs["towing_force"][::stride], lw=0.8, color="C4")
+    twin.set_ylabel("towing force [N]", color="C4")
+    for a in axes[:6]:
         a.set_xlabel("time [s]")
         a.grid(True, alpha=0.3)
-    if rows == 6:
-        ax = axes[5]
-        ax.plot(np.degrees(result.inputs["slope"][::stride]),
-                result.wheels["front_left"]["slip"][::stride], lw=0.8, label="simulated")
-        pred = figures.get("predicted_stall_slope_deg")
-        if pred is not None:
-            ax.axvline(pred, color="k", ls="--", lw=0.8,
-                       label=f"predicted stall {pred:.2f} deg ({figures['predicted_stall_limit']})")
-        ax.set_xlabel("slope [deg]")
-        ax.set_ylabel("traction slip [1]")
+    if limit_panel:
+        ax = axes[6]
+        if scenario == "pull-test":
+            curve = np.array(figures.get("pull_curve") or np.empty((0, 2)))
+            predicted = figures.get("predicted_pull") or []
+            if len(curve):
+                ax.plot(curve[:, 0], curve[:, 1], "o-", ms=3, lw=0.8,
+                        label="rover: towing force held")
+                ax.plot(curve[:, 0], predicted, "s--", ms=3, lw=0.8,
+                        label="four single-wheel steady pulls at the axle loads")
+            stall = figures.get("stall_towing_force")
+            if stall is not None:
+                ax.axhline(stall, color="k", ls=":", lw=0.8, label=f"stalls at {stall:.2f} N")
+            ax.set_xlabel("traction slip [1]")
+            ax.set_ylabel("pull [N]")
+        else:
+            ax.plot(np.degrees(result.inputs["slope"][::stride]),
+                    result.wheels["front_left"]["slip"][::stride], lw=0.8,
+                    label="simulated (front left)")
+            key = ("predicted_stall_slope_deg" if scenario == "slope"
+                   else "predicted_descent_limit_deg")
+            what = ("predicted_stall_limit" if scenario == "slope"
+                    else "predicted_descent_limit")
+            pred = figures.get(key)
+            if pred is not None:
+                ax.axvline(pred, color="k", ls="--", lw=0.8,
+                           label=f"predicted {'stall' if scenario == 'slope' else 'slide'} "
+                                 f"{pred:.2f} deg ({figures.get(what)})")
+            ax.set_xlabel("slope [deg]")
+            ax.set_ylabel("traction slip [1]")
         ax.legend(loc="best", fontsize=8)
         ax.grid(True, alpha=0.3)
-    axes[0].set_title(f"rover '{figures['scenario']}' ({figures['gravity']}), "
-                      f"{figures['engine']}")
+    axes[0].set_title(f"rover '{scenario}' ({figures['gravity']}), {figures['engine']}")
     fig.tight_layout()
     _save(fig, path)
