@@ -277,3 +277,28 @@ def test_sigterm_exits_143_and_leaves_no_output_or_temporary_folder(tmp_path):
     assert "Traceback" not in err
     assert not (tmp_path / "new").exists()  # the folder made for the run is gone
     assert set(glob.glob(f"{tempfile.gettempdir()}/wheelterrain_*")) <= before
+
+
+def test_validate_data_that_no_form_can_predict_exits_3_with_no_coverage(tmp_path):
+    """One point the wheel cannot carry (1e300 N): every form 'failed', exit 0, and a null MAE
+    stood beside an interval coverage of 1.0."""
+    from wheelterrain import data
+
+    lines = [line for line in data.path("wheel_tests.csv").read_text().splitlines()
+             if not line.startswith("#")][:3]
+    header = lines[0].split(",")
+    load = next(k for k, name in enumerate(header) if name.startswith("load"))
+    bad = lines[2].split(",")
+    bad[load] = "1e300"
+    user = tmp_path / "mine.csv"
+    user.write_text("\n".join([lines[0], lines[1], ",".join(bad)]) + "\n")
+    result = CliRunner().invoke(main, ["validate", "--data", str(user), "--json",
+                                       str(tmp_path / "out.json")])
+    assert result.exit_code == 3, result.output
+    assert "no model form could predict" in result.output
+    rows = json.loads((tmp_path / "out.json").read_text())["rows"]
+    assert rows
+    for row in rows:
+        assert row["error"]
+        assert row["drawbar_pull_mae"] is None
+        assert row["interval_coverage"] is None

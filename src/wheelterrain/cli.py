@@ -330,7 +330,8 @@ def build(out: str, flavor: str) -> None:
       ecos). Needs a C compiler to build; ships its C sources in sources/. Binaries for
       linux64 and, with the MinGW-w64 cross compiler (x86_64-w64-mingw32-gcc), win64.
     Both have the same modelDescription (names, units, structure). Try one alone:
-      fmpy simulate build/WheelTerrain.fmu --start-values quasi_static true soil.phi 0.45
+      fmpy simulate build/WheelTerrain.fmu --output-file wheel.csv --start-values
+        quasi_static true soil.phi 0.45
     """
     from pathlib import Path
 
@@ -1023,9 +1024,13 @@ def _validate_user_data(data_file: str, json_target: str | None, starts: int) ->
                                     progress=lambda _: bar.update(1))
     result = {"rows": rows, "data": data_file,
               "units": {"drawbar_pull_mae": "N", "sinkage_mae": "m"}}
-    if _emit_json(json_target, result):
-        return
-    click.echo(prediction.format_table(result))
+    failed = [r for r in rows if r.get("error")]
+    if not _emit_json(json_target, result):
+        click.echo(prediction.format_table(result))
+    if rows and len(failed) == len(rows):  # nothing was predicted: not a result
+        click.echo(f"error: no model form could predict {data_file}: {failed[0]['error']}",
+                   err=True)
+        sys.exit(EXIT_INFEASIBLE)
 
 
 class _Terminated(BaseException):

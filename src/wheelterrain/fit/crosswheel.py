@@ -208,8 +208,9 @@ class Fold:
         row = {"model": self.form, "protocol": "leave-one-dataset-out", "dataset": self.dataset,
                "points": len(self.points), "free": sorted(self.constants),
                "drawbar_pull_mae": self.mae("drawbar_pull"), "sinkage_mae": self.mae("sinkage"),
-               "interval_coverage": self.coverage(), "in_sample": False,
-               "fitted": self.constants,
+               # a row with no figures (a point the form cannot predict) has no coverage either
+               "interval_coverage": None if self.error else self.coverage(),
+               "in_sample": False, "fitted": self.constants,
                "judged_on": [p["case"] for p in self.points], "data": self.dataset}
         if self.error:
             row["error"] = self.error
