@@ -198,20 +198,34 @@ def test_build_into_a_folder_it_cannot_make_is_one_line(tmp_path):
 LONG_RUN = ("rover", "--scenario", "pull-test", "--gravity", "moon", "--step", "1e-4")
 
 
-def test_ctrl_c_exits_130_with_one_line(tmp_path):
-    """Ctrl-C exited 1, a code the CLI documents for nothing; the shell's convention is 130."""
+def _signalled_long_run(tmp_path, out, signum: int) -> tuple[int, str]:
+    """(exit status, standard error) of LONG_RUN writing to ``out``, sent ``signum`` once it
+    is well inside the run. SIGINT as a terminal delivers it: a process started by one that
+    ignores it (a background job, a test runner's worker) would inherit the ignoring."""
     import signal
     import time
 
+    def as_from_a_terminal() -> None:
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+
     run = subprocess.Popen([sys.executable, "-m", "wheelterrain.cli", *LONG_RUN,
-                            "--out", str(tmp_path)],
+                            "--out", str(out)],
                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                           text=True)
+                           text=True, preexec_fn=as_from_a_terminal)
     time.sleep(4.0)
     assert run.poll() is None  # still running
-    run.send_signal(signal.SIGINT)
+    run.send_signal(signum)
     _, err = run.communicate(timeout=60)
-    assert run.returncode == 130, (run.returncode, err[-2000:])
+    return run.returncode, err
+
+
+def test_ctrl_c_exits_130_with_one_line(tmp_path):
+    """Ctrl-C exited 1, a code the CLI documents for nothing; the shell's convention is 130."""
+    import signal
+
+    code, err = _signalled_long_run(tmp_path, tmp_path, signal.SIGINT)
+    assert code == 130, (code, err[-2000:])
     assert "interrupted" in err
     assert "Traceback" not in err
 
@@ -240,6 +254,7 @@ def test_an_interrupted_set_of_results_is_left_whole_or_not_at_all(tmp_path):
     out = tmp_path / "out"
     (out / "old.txt").parent.mkdir()
     (out / "old.txt").write_text("kept")
+
     def interrupted_while_writing():
         with one_set(out) as staging:
             (staging / "C1.csv").write_text("1")
@@ -260,19 +275,10 @@ def test_sigterm_exits_143_and_leaves_no_output_or_temporary_folder(tmp_path):
     import glob
     import signal
     import tempfile
-    import time
 
     before = set(glob.glob(f"{tempfile.gettempdir()}/wheelterrain_*"))
-    out = tmp_path / "new" / "out"
-    run = subprocess.Popen([sys.executable, "-m", "wheelterrain.cli", *LONG_RUN,
-                            "--out", str(out)],
-                           cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                           text=True)
-    time.sleep(4.0)
-    assert run.poll() is None  # still running
-    run.send_signal(signal.SIGTERM)
-    _, err = run.communicate(timeout=60)
-    assert run.returncode == 143, (run.returncode, err[-2000:])
+    code, err = _signalled_long_run(tmp_path, tmp_path / "new" / "out", signal.SIGTERM)
+    assert code == 143, (code, err[-2000:])
     assert "terminated" in err
     assert "Traceback" not in err
     assert not (tmp_path / "new").exists()  # the folder made for the run is gone
