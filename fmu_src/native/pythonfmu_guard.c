@@ -29,6 +29,7 @@
 #define _GNU_SOURCE /* dladdr */
 #include <dlfcn.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -93,6 +94,9 @@ typedef struct GuardState {
 
 static Guard *live_instances;
 static GuardState *live_states;
+/* the two lists above are the library's, shared by its instances, which a host may call from
+   several threads */
+static pthread_mutex_t lists = PTHREAD_MUTEX_INITIALIZER;
 
 /* ---- pythonfmu's library -------------------------------------------------------------- */
 
@@ -339,9 +343,13 @@ static void free_at_exit(void) {
     int (*initialized)(void) = NULL;
     *(void **)&initialized = dlsym(RTLD_DEFAULT, "Py_IsInitialized");
     if (initialized == NULL || !initialized()) return;
-    while (live_instances != NULL) {
-        Guard *g = live_instances;
-        live_instances = g->next;
+    for (;;) {
+        Guard *g;
+        pthread_mutex_lock(&lists);
+        g = live_instances;
+        if (g != NULL) live_instances = g->next;
+        pthread_mutex_unlock(&lists);
+        if (g == NULL) return;
         F.free_instance(g->real);
         free(g);
     }
@@ -397,21 +405,25 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
         return NULL;
     }
     g->mode = M_INSTANTIATED;
+    pthread_mutex_lock(&lists);
     g->next = live_instances;
     live_instances = g;
     if (!exit_handler) exit_handler = atexit(free_at_exit) == 0;
+    pthread_mutex_unlock(&lists);
     return g;
 }
 
 void fmi2FreeInstance(fmi2Component c) {
     Guard *g = (Guard *)c;
     if (g == NULL) return;
+    pthread_mutex_lock(&lists);
     for (Guard **p = &live_instances; *p != NULL; p = &(*p)->next) {
         if (*p == g) {
             *p = g->next;
             break;
         }
     }
+    pthread_mutex_unlock(&lists);
     F.free_instance(g->real);
     free(g);
 }
@@ -496,9 +508,9 @@ GETTER(fmi2GetBoolean, fmi2Boolean, G_BOOLEAN, get_boolean)
 
 /* Real values: a value that is not finite is never served as fmi2OK. An output the model
    leaves undefined at this point (e.g. the paper's slip with the carriage at rest) is NaN with
-   fmi2Warning and its description (logged by the slave); any other is NaN only where the model has had no valid
-   operating point yet (every evaluation so far refused; pythonfmu keeps the last valid
-   outputs once there is one): fmi2Warning, saying so and why. */
+   fmi2Warning and its description (logged by the slave); any other is NaN only where the
+   model has had no valid operating point yet (every evaluation so far refused; pythonfmu
+   keeps the last valid outputs once there is one): fmi2Warning, saying so and why. */
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
                        fmi2Real value[]) {
     Guard *g = legal(c, "fmi2GetReal", M_GETTABLE);
@@ -572,26 +584,33 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 /* ``state`` if this library made it and has not freed it (found by its address alone: a
    pointer of another model's library, or a freed one, is never read); else NULL. */
 static GuardState *own_state(fmi2FMUstate state) {
-    for (GuardState *s = live_states; s != NULL; s = s->next)
-        if ((void *)s == state) return s;
-    return NULL;
+    GuardState *found = NULL;
+    pthread_mutex_lock(&lists);
+    for (GuardState *s = live_states; s != NULL && found == NULL; s = s->next)
+        if ((void *)s == state) found = s;
+    pthread_mutex_unlock(&lists);
+    return found;
 }
 
 static GuardState *new_state(void) {
     GuardState *s = (GuardState *)calloc(1, sizeof(GuardState));
     if (s == NULL) return NULL;
+    pthread_mutex_lock(&lists);
     s->next = live_states;
     live_states = s;
+    pthread_mutex_unlock(&lists);
     return s;
 }
 
 static void drop_state(GuardState *s) {
+    pthread_mutex_lock(&lists);
     for (GuardState **p = &live_states; *p != NULL; p = &(*p)->next) {
         if (*p == s) {
             *p = s->next;
             break;
         }
     }
+    pthread_mutex_unlock(&lists);
     free(s);
 }
 
