@@ -90,10 +90,11 @@ def follow_resources(resources: str | None) -> None:
         path = getattr(module, "__path__", None)
         if path is None or not (name == "wheelterrain" or name.startswith("wheelterrain.")):
             continue
+        if not isinstance(path, list):
+            continue  # a namespace package: Python recomputes its path from sys.path itself
         folder = own.joinpath(*name.split(".")[1:])
-        entries = [str(folder), *(entry for entry in path
-                                  if entry != str(folder) and Path(entry).is_dir())]
-        module.__path__[:] = entries  # type: ignore[index]
+        kept = [entry for entry in path if entry != str(folder) and Path(entry).is_dir()]
+        path[:] = [str(folder), *kept]
 
 
 # --------------------------------------------------------------------------------------------
