@@ -1043,7 +1043,13 @@ def entry() -> None:
     import os
     import signal
 
+    main_process = os.getpid()
+
     def terminated(signum, frame):  # SIGTERM: unwind, so temporary files and folders go
+        if os.getpid() != main_process:  # a forked worker (a pool ending it): end as before
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+            os.kill(os.getpid(), signal.SIGTERM)
+            return
         raise _Terminated
 
     with contextlib.suppress(ValueError):  # not the main thread: keep the default
