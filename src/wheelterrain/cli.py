@@ -1043,17 +1043,15 @@ def entry() -> None:
     import os
     import signal
 
-    main_process = os.getpid()
-
     def terminated(signum, frame):  # SIGTERM: unwind, so temporary files and folders go
-        if os.getpid() != main_process:  # a forked worker (a pool ending it): end as before
-            signal.signal(signal.SIGTERM, signal.SIG_DFL)
-            os.kill(os.getpid(), signal.SIGTERM)
-            return
         raise _Terminated
 
     with contextlib.suppress(ValueError):  # not the main thread: keep the default
         signal.signal(signal.SIGTERM, terminated)
+        # a forked pool worker, which its pool ends with SIGTERM, ends at once as before (a
+        # Python handler would wait for the C call it is in, and print a traceback)
+        os.register_at_fork(
+            after_in_child=lambda: signal.signal(signal.SIGTERM, signal.SIG_DFL))
     try:
         code = main(standalone_mode=False)
     except _Terminated:
