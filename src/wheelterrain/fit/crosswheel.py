@@ -205,13 +205,19 @@ class Fold:
         return float(np.mean(inside)) if inside else None
 
     def as_row(self) -> dict:
+        cases = [p["case"] for p in self.points]
+        if len(set(cases)) < len(cases):  # a user's data set may repeat a case name
+            cases = [f"{case} ({k + 1})" for k, case in enumerate(cases)]
         row = {"model": self.form, "protocol": "leave-one-dataset-out", "dataset": self.dataset,
                "points": len(self.points), "free": sorted(self.constants),
                "drawbar_pull_mae": self.mae("drawbar_pull"), "sinkage_mae": self.mae("sinkage"),
                # a row with no figures (a point the form cannot predict) has no coverage either
                "interval_coverage": None if self.error else self.coverage(),
                "in_sample": False, "fitted": self.constants,
-               "judged_on": [p["case"] for p in self.points], "data": self.dataset}
+               "judged_on": cases, "data": self.dataset,
+               "errors": {case: {k: p[k] - p["measured"][k] for k in SCALES
+                                 if p.get(k) is not None}
+                          for case, p in zip(cases, self.points, strict=True)}}
         if self.error:
             row["error"] = self.error
         return row
@@ -285,14 +291,16 @@ def line_rows(sets: Sequence[Dataset]) -> list[dict]:
                 "sinkage": np.polyfit(slips, [p.sinkage / p.values["wheel.radius"]
                                               for p in train], 1)}
         scale = {"drawbar_pull": lambda p: p.load, "sinkage": lambda p: p.values["wheel.radius"]}
-        mae = {k: float(np.mean([abs(np.polyval(c, p.slip) * scale[k](p) - getattr(p, k))
-                                 for p in held.points])) for k, c in fits.items()}
+        errors = {p.case: {k: float(np.polyval(c, p.slip) * scale[k](p) - getattr(p, k))
+                           for k, c in fits.items()} for p in held.points}
+        mae = {k: float(np.mean([abs(e[k]) for e in errors.values()])) for k in fits}
         rows.append({"model": "line", "protocol": "leave-one-dataset-out",
                      "dataset": held.name, "points": len(held.points), "free": ["a", "b"],
                      "drawbar_pull_mae": mae["drawbar_pull"], "sinkage_mae": mae["sinkage"],
                      "interval_coverage": None, "in_sample": False,
                      "fitted": {k: [float(x) for x in c] for k, c in fits.items()},
-                     "judged_on": [p.case for p in held.points], "data": held.name})
+                     "judged_on": [p.case for p in held.points], "data": held.name,
+                     "errors": errors})
     return rows
 
 

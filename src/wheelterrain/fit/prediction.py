@@ -129,7 +129,9 @@ class Row:
         row = {"model": self.model, "protocol": self.protocol, "free": self.free,
                "drawbar_pull_mae": mae["drawbar_pull"], "sinkage_mae": mae["sinkage"],
                "in_sample": self.in_sample, "judged_on": list(self.errors), "data": self.data,
-               "errors": self.errors, "fitted": self.fitted}
+               "errors": self.errors,
+               # what each fold fitted, one object per fold (none where nothing was fitted)
+               "fitted": {"per_fold": self.fitted} if self.fitted else {}}
         if self.error is not None:
             row["error"] = self.error
         return row
@@ -258,10 +260,15 @@ def run(progress: Callable[[str], None] | None = None, starts: int = 4) -> dict:
         for wheel, label in (("smooth", "ding2011-smooth"), ("lug10", "ding2011-lugged")):
             try:
                 t = transfer_errors(ps, wheel)
+                by_case = {case: {k: t["errors"][k][i] for k in t["errors"]}
+                           for i, case in enumerate(t["cases"])}
+                t = {**t, "errors": by_case, "judged_on": t["cases"]}
             except WheelTerrainError as exc:  # reported, not hidden
-                t = {"drawbar_pull_mae": None, "sinkage_mae": None, "error": str(exc)}
+                t = {"drawbar_pull_mae": None, "sinkage_mae": None, "error": str(exc),
+                     "errors": {}, "judged_on": []}
+            # nothing is refitted: the preset's values, that soil's own
             add({"model": name, "protocol": "transfer", "free": [], "in_sample": False,
-                 "data": f"{label} ({DING_SOURCE})", **t})
+                 "data": f"{label} ({DING_SOURCE})", "fitted": {}, **t})
     for row in crosswheel.lodo_rows(datasets.shipped(), starts=min(starts, 3)):
         add(row)
     return {"rows": rows, "load": LOAD, "transfer_load": DING_LOAD,
