@@ -1284,3 +1284,27 @@ def test_fmi3_messages_name_fmi3_functions_and_int64_has_no_variables(flavours):
         assert "fmi3GetInt32: no variable" in said, said
     finally:
         t.fmu.raw.freeInstance()
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not os.environ.get("FMUCHECK"),
+                    reason="the FMU Compliance Checker is not installed: it is on neither PyPI "
+                           "nor Debian (build modelica-tools/FMUComplianceChecker from its "
+                           "public sources and point $FMUCHECK at its fmuCheck binary)")
+@pytest.mark.parametrize(("folder", "kind"), [("pythonfmu", "cs"), ("native", "me"),
+                                              ("native", "cs")])
+@pytest.mark.parametrize("name", ["WheelTerrain", "SingleWheelRig", "RoverChassis", "Terrain"])
+def test_the_compliance_checker_passes_every_fmu_alone(built_root, tmp_path, folder, kind,
+                                                       name):
+    """The FMU Compliance Checker runs each FMU alone from its start values (its default
+    experiment): exit 0, no warning, no error. RoverChassis alone ended with 2 errors and 2
+    fatal (model exchange) while its wheel loads started at 0."""
+    env = ssp.c_host_environment() if folder == "pythonfmu" else None
+    run = subprocess.run([os.environ["FMUCHECK"], "-k", kind, "-o", str(tmp_path / "out.csv"),
+                          str(built_root / folder / f"{name}.fmu")],
+                         capture_output=True, text=True, env=env, timeout=600, check=False)
+    out = run.stdout + run.stderr
+    assert run.returncode == 0, out[-3000:]
+    assert "\t0 Warning(s)" in out, out[-3000:]
+    assert "\t0 Error(s)" in out, out[-3000:]
+    assert "Simulation finished successfully" in out, out[-3000:]
