@@ -288,3 +288,60 @@ def test_an_unzip_folder_named_with_a_literal_percent_20_is_refused_with_a_messa
     assert run.returncode == 0, (run.returncode, run.stderr[-2000:])
     assert "refused:" in run.stdout
     assert "which pythonfmu 0.7 reads as a space" in run.stdout + run.stderr
+
+
+ENGINES_AFTER_FMPY = """
+import importlib.util, sys
+# only the FMUs' bundled copies of wheelterrain, as in a host that has not installed it
+sys.meta_path[:] = [f for f in sys.meta_path if "editable" not in getattr(f, "__module__", "")
+                    and "editable" not in type(f).__module__]
+assert importlib.util.find_spec("wheelterrain") is None
+import numpy as np
+import fmpy
+from ecospy import EcosSimulation
+from libcosimpy.CosimExecution import CosimExecution
+from libcosimpy.CosimObserver import CosimObserver
+fmus, path, tmp = sys.argv[1], sys.argv[2], sys.argv[3]
+fmpy.simulate_fmu(f"{fmus}/WheelTerrain.fmu", stop_time=0.02)  # its unzip folder is removed
+for k in range(2):
+    sim = EcosSimulation(step_size=1e-3, ssp_path=path)
+    sim.add_csv_writer(f"{tmp}/e{k}.csv", identifiers=["terrain::normal_force"],
+                       decimation_factor=1)
+    assert sim.init(0.0, "C3")
+    sim.step(200)
+    sim.terminate()
+    sim.free()
+    print("ecos", np.loadtxt(f"{tmp}/e{k}.csv", delimiter=",", skiprows=1)[-1, -1])
+execution = CosimExecution.from_ssp_file(path)
+observer = CosimObserver.create_last_value()
+execution.add_observer(observer)
+for _ in range(200):
+    assert execution.step()
+index = execution.slave_index_from_instance_name("terrain")
+ref = {v.name.decode(): v.reference for v in execution.slave_variables(index)}["normal_force"]
+print("libcosim", observer.last_real_values(index, [ref])[0])
+"""
+
+
+def test_ecos_and_libcosim_run_the_fmus_in_a_process_that_ran_them_before(fmu_dir, tmp_path):
+    """After one fmpy run in the same process (its unzip folder then removed), ecos reported
+    a successful initialisation and ran with zero soil forces, twice, and libcosim crashed
+    (SIGSEGV): the bundled package read its data from the removed folder. In a fresh process
+    without the project installed, the FMUs' own copies only."""
+    from wheelterrain import presets
+    from wheelterrain.cosim import ssp
+
+    pytest.importorskip("ecospy")
+    pytest.importorskip("libcosimpy")
+    if ssp.libpython() is None:
+        pytest.skip("needs a shared libpython to preload (this Python is static)")
+    path = ssp.write(tmp_path / "C3.ssp", fmu_dir, "C3", presets.load(presets.DEFAULT_PRESET),
+                     0.5, 62.0, 0.03, 0.2, 1e-3)
+    run = subprocess.run([sys.executable, "-c", ENGINES_AFTER_FMPY, str(fmu_dir), str(path),
+                          str(tmp_path)], env=ssp.c_host_environment(), capture_output=True,
+                         text=True, timeout=600, check=False)
+    assert run.returncode == 0, (run.returncode, run.stderr[-2000:])
+    forces = [float(line.split()[1]) for line in run.stdout.splitlines()
+              if line.startswith(("ecos ", "libcosim "))]
+    assert len(forces) == 3
+    assert min(forces) > 50.0  # the soil carries the 62 N wheel in every run
