@@ -15,10 +15,12 @@ from __future__ import annotations
 
 import ctypes
 import math
+import os
 import random
 import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 from fmpy import extract
@@ -337,9 +339,14 @@ def test_ecos_and_libcosim_run_the_fmus_in_a_process_that_ran_them_before(fmu_di
         pytest.skip("needs a shared libpython to preload (this Python is static)")
     path = ssp.write(tmp_path / "C3.ssp", fmu_dir, "C3", presets.load(presets.DEFAULT_PRESET),
                      0.5, 62.0, 0.03, 0.2, 1e-3)
+    env = ssp.c_host_environment()
+    # not the resources folders of FMUs this test run instantiated in process (pythonfmu puts
+    # them on sys.path): the child must find no wheelterrain but in the FMUs it loads
+    env["PYTHONPATH"] = os.pathsep.join(
+        p for p in env["PYTHONPATH"].split(os.pathsep) if not (Path(p) / "wheelterrain").exists())
     run = subprocess.run([sys.executable, "-c", ENGINES_AFTER_FMPY, str(fmu_dir), str(path),
-                          str(tmp_path)], env=ssp.c_host_environment(), capture_output=True,
-                         text=True, timeout=600, check=False)
+                          str(tmp_path)], env=env, capture_output=True, text=True, timeout=600,
+                         check=False)
     assert run.returncode == 0, (run.returncode, run.stderr[-2000:])
     forces = [float(line.split()[1]) for line in run.stdout.splitlines()
               if line.startswith(("ecos ", "libcosim "))]
