@@ -221,20 +221,20 @@ def params(preset: str, assignments: tuple[str, ...], json_target: str | None) -
     if _emit_json(json_target, rows):
         return
     click.echo(f"preset {doc.get('name', preset)}: {doc.get('description', '')}\n")
-    click.echo(f"{'name':30} {'value':>12} {'unit':6} {'range':>24}  description")
-    for p in TABLE:
-        value = ps[p.name]
+    def line(p, value: float) -> str:
         shown = f"{value:.6g}" + (f" ({value / DEG:.4g} deg)" if p.unit == "rad" else "")
         rng = f"[{p.min:g}, {p.max:g}]"
-        click.echo(f"{p.name:30} {shown:>12} {p.unit:6} {rng:>24}  {p.description}")
+        return f"{p.name:30} {shown:>12} {p.unit:6} {rng:>24}  {p.description}"
+
+    click.echo(f"{'name':30} {'value':>12} {'unit':6} {'range':>24}  description")
+    for p in TABLE:
+        click.echo(line(p, ps[p.name]))
     fmu = None
     for p in others:
         if p.fmu != fmu:
             fmu = p.fmu
             click.echo(f"\n{fmu}.fmu (defaults):")
-        shown = f"{p.default:.6g}" + (f" ({p.default / DEG:.4g} deg)" if p.unit == "rad" else "")
-        rng = f"[{p.min:g}, {p.max:g}]"
-        click.echo(f"{p.name:30} {shown:>12} {p.unit:6} {rng:>24}  {p.description}")
+        click.echo(line(p, p.default))
     if fitted:
         prov = doc["provenance"]
         click.echo(f"\nfitted on {', '.join(prov['fitted_on'])} ({prov['date_of_fit']}, "
@@ -1058,12 +1058,9 @@ def entry() -> None:
         with contextlib.suppress(OSError):
             click.echo("terminated", err=True)
         sys.exit(128 + signal.SIGTERM)
-    except click.exceptions.Abort:  # Ctrl-C (click turns KeyboardInterrupt into Abort)
+    except (click.exceptions.Abort, KeyboardInterrupt):  # Ctrl-C (click: Abort)
         click.echo("interrupted", err=True)
-        sys.exit(130)  # the shell's code for SIGINT (128 + 2)
-    except KeyboardInterrupt:
-        click.echo("interrupted", err=True)
-        sys.exit(130)
+        sys.exit(128 + signal.SIGINT)  # the shell's convention: 130
     except click.ClickException as err:
         err.show()
         sys.exit(err.exit_code)

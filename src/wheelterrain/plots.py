@@ -13,6 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from wheelterrain.cosim.master import CaseResult
+from wheelterrain.cosim.rover import LIMIT_SCENARIOS
 
 
 def _save(fig, path: Path) -> None:
@@ -186,9 +187,9 @@ def _wheel_lines(ax, t, wheels: dict, key: str, scale: float, stride: int) -> No
             ax.plot(t[::stride], scale * left[::stride], lw=0.9, ls=ls,
                     label=f"{axle} (left = right)")
             continue
-        for side, color in (("left", None), ("right", None)):
+        for side in ("left", "right"):
             ax.plot(t[::stride], scale * wheels[f"{axle}_{side}"][key][::stride], lw=0.8,
-                    ls=ls, color=color, label=f"{axle}_{side}")
+                    ls=ls, label=f"{axle}_{side}")
 
 
 def rover(result, figures: dict, path: Path) -> None:
@@ -200,7 +201,7 @@ def rover(result, figures: dict, path: Path) -> None:
     t = result.time
     stride = max(len(t) // 4000, 1)  # at most ~4000 points a line
     scenario = figures["scenario"]
-    limit_panel = scenario in ("slope", "descent", "pull-test")
+    limit_panel = scenario in LIMIT_SCENARIOS
     rows = 7 if limit_panel else 6
     fig, axes = plt.subplots(rows, 1, figsize=(8, 1.9 * rows + 1), sharex=False)
     quantities = (("slip", 1.0, "traction slip [1]"), ("sinkage", 1e3, "sinkage [mm]"),

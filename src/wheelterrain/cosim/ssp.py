@@ -10,6 +10,7 @@ ParameterBindings, all named after the case (ecos applies a named set at init:
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import importlib.util
 import os
@@ -199,31 +200,13 @@ def simulate_with_ecos(path: Path, case: str | None, stop: float, step: float, c
     None takes the one set the file binds; a name the file does not bind is refused. On
     ecos's command line: ``ecos simulate --path C2.ssp --parameterSet C2 --stopTime ...
     --stepSize ...``."""
-    from ecospy import EcosSimulation
-
     names = parameter_set_names(path)
     if case is None and len(names) == 1:
         case = names[0]
     if case not in names:
         raise RuntimeError(f"{path} binds the parameter sets {names}, not {case!r}: ecos would "
                            "run its FMUs at their start values")
-    # ecos unzips the SSP and its FMUs into folders of its own (ecos_ssp_<uuid>, ~1 MB each)
-    # under the temporary directory and leaves them there: give it one of ours, removed after
-    with tempfile.TemporaryDirectory(prefix="wheelterrain_ecos_") as scratch:
-        saved = os.environ.get("TMPDIR")
-        os.environ["TMPDIR"] = scratch  # read by ecos when it unzips, in the constructor
-        try:
-            sim = EcosSimulation(step_size=step, ssp_path=str(path))
-        finally:
-            if saved is None:
-                os.environ.pop("TMPDIR", None)
-            else:
-                os.environ["TMPDIR"] = saved
-        _run_ecos(sim, path, case, stop, step, csv, variables, go_on, every)
-
-
-def _run_ecos(sim, path, case, stop, step, csv, variables, go_on, every) -> None:
-    try:
+    with _ecos(path, step) as sim:
         sim.add_csv_writer(str(csv), identifiers=list(variables), decimation_factor=1)
         if not sim.init(0.0, case):
             raise RuntimeError(f"ecos could not initialise {path} with parameter set {case}")
@@ -236,8 +219,29 @@ def _run_ecos(sim, path, case, stop, step, csv, variables, go_on, every) -> None
             if go_on is not None and not go_on(sim.get_real):
                 break
         sim.terminate()
-    finally:
-        sim.free()
+
+
+@contextlib.contextmanager
+def _ecos(path: Path, step: float):
+    """An ecos simulation of the SSP at ``path``, freed after the block. ecos unzips the SSP and
+    its FMUs into folders of its own (ecos_ssp_<uuid>, ~1 MB each) under the temporary
+    directory and leaves them there: it is given one of ours, removed after."""
+    from ecospy import EcosSimulation
+
+    with tempfile.TemporaryDirectory(prefix="wheelterrain_ecos_") as scratch:
+        saved = os.environ.get("TMPDIR")
+        os.environ["TMPDIR"] = scratch  # read by ecos when it unzips, in the constructor
+        try:
+            sim = EcosSimulation(step_size=step, ssp_path=str(path))
+        finally:
+            if saved is None:
+                os.environ.pop("TMPDIR", None)
+            else:
+                os.environ["TMPDIR"] = saved
+        try:
+            yield sim
+        finally:
+            sim.free()
 
 
 def read_csv_columns(path: Path, names: tuple[str, ...]) -> np.ndarray:
