@@ -23,6 +23,9 @@ POINT = {
     "model.shear_length_ratio": 0.4, "model.interface_ratio": 0.7,
     "model.grouser_shear_height": 0.005, "model.diameter_exponent": -0.3,
     "model.bulldozing": 0.5,
+    # the wheel in a rut (soil memory on): below every sinkage of the test, and deeper than the
+    # rut's elastic layer, so that no node crosses the reloading line's kink
+    "soil.rut_depth": 0.001,
 }
 
 

@@ -34,7 +34,7 @@ def test_missing_compiler_is_a_clear_error(tmp_path, monkeypatch):
 
 
 @pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
-@pytest.mark.parametrize("which", [0, 1])
+@pytest.mark.parametrize("which", [0, 1, 2])
 def test_compiled_fmu_functions_equal_the_vm(tmp_path, which):
     from wheelterrain.fmu import functions as fmu_model
 
@@ -47,8 +47,10 @@ def test_compiled_fmu_functions_equal_the_vm(tmp_path, which):
              rng.uniform(0.0, 0.04), rng.uniform(1.0, 100.0)]
         # quasi-static: cold (guess 0) and warm-started from a guess
         guess = rng.choice([0.0, rng.uniform(0.002, 0.06)])
-        args = (u, rng.uniform(-10, 10), p) if which == 0 else (u, p, guess)
-        want = [np.asarray(x, dtype=float).ravel() for x in fn(*args)]
+        plastic = rng.choice([0.0, u[0] + rng.uniform(0.0, 3e-4)])  # pressed deeper before
+        args = ((u, rng.uniform(-10, 10), plastic, p), (u, p, guess),
+                (u, plastic, p, rng.uniform(1e-4, 1e-2)))[which]
+        want = [np.asarray(x, dtype=float).ravel() for x in fn.call(list(args))]
         got = compiled(*args)
         np.testing.assert_allclose(np.asarray(got[0]), want[0], rtol=1e-12, atol=1e-12)
-        assert got[1:] == pytest.approx([float(want[1][0]), float(want[2][0])], rel=1e-12)
+        assert got[1:] == pytest.approx([float(w[0]) for w in want[1:]], rel=1e-12)

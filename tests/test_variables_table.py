@@ -54,7 +54,7 @@ def test_the_derived_lists_are_the_ones_the_faces_use():
     assert variables.COUPLED_FORCES == rig.FORCE_INPUTS
     assert variables.COUPLED_STATES == ("sinkage", "sinkage_rate", "wheel_speed",
                                         "carriage_speed")
-    dynamic, quasi = fmu_model.terrain_functions()
+    dynamic, quasi, _ = fmu_model.terrain_functions()
     for fn in (dynamic, quasi):
         assert fn.size1_in(0) == len(variables.TERRAIN_INPUTS)
         assert fn.size1_out(0) == len(variables.TERRAIN_OUTPUTS)

@@ -179,6 +179,23 @@ TABLE: tuple[Parameter, ...] = (
        "contact. The quasi-static solve (zero rate) does not see it.",
        f"{_TABLE2}: C_f = 800 N.s/m, read as the vertical damper of the wheel's contact",
        quantity="TranslationalDampingConstant"),
+    _P("soil.rut_depth", "m", 0.0, 0.0, 0.5,
+       "Depth below the original surface of the rut earlier passes left here: the free "
+       "surface of soil pressed plastically before (its yield depth lies the elastic "
+       "rebound sigma/K_u below it; see soil.unloading_stiffness). 0 = virgin soil. A wheel "
+       "meets it with model.soil_memory = 1; a terrain with memory supplies it per position.",
+       "Wong, Theory of Ground Vehicles, ch. 2 (response to repetitive loading); the multi-pass "
+       "effect of a rut: Holm 1969; Senatore & Iagnemma 2011", quantity="Length",
+       display_unit="mm"),
+    _P("soil.unloading_stiffness", "Pa/m", 4.0e7, 1.0e5, 1.0e10,
+       "Stiffness K_u of the soil's unloading and reloading line (pressure per depth): below "
+       "the largest pressure the soil has carried it answers elastically, p = K_u*(z - z_p); "
+       "beyond it, along the pressure-sinkage law. Its rebound sigma/K_u is the part of a "
+       "sinkage that springs back.",
+       "Wong, Theory of Ground Vehicles, ch. 2 (repetitive loading: a stiff, nearly linear "
+       "unloading-reloading line); Krenn & Hirzinger 2009, SCM (elastic stiffness, larger "
+       "than k_phi; Project Chrono's SCM demos use 4e7-4e8 Pa/m)",
+       plausible=(4.0e6, 4.0e8, "SCM demos 4e7-4e8 Pa/m; a decade softer for loose sand")),
     # --- grouser ripple (Irani et al. 2011) --------------------------------------------------
     _P("ripple.k_g", "1", 0.0, 0.0, 1.0,
        "Stress coefficient k_g' of the ripple amplitude A = k_g'*mean_pressure + "
@@ -247,6 +264,15 @@ TABLE: tuple[Parameter, ...] = (
        "Wong & Reece 1967 (0); Bekker 1956/1960 and Wong, Theory of Ground Vehicles, ch. 2 and "
        "4 (1), the soft-soil reading of Abubakar et al.'s eq. 1", kind="enum",
        choices=MappingProxyType({0: "arc", 1: "patch"})),
+    _P("model.soil_memory", "1", 1, 0, 1,
+       "Soil with memory: 1 = elastic-plastic, a wheel in a rut (soil.rut_depth > 0) meets "
+       "soil that answers elastically up to the pressure it has carried and plastically "
+       "beyond, and its contact begins at the rut's surface; 0 = the rut is ignored (every "
+       "wheel meets virgin soil: the results of the elastic soil, exactly). Identical where "
+       "soil.rut_depth = 0.",
+       "Wong, Theory of Ground Vehicles, ch. 2 (repetitive loading); Krenn & Hirzinger 2009 "
+       "(SCM's elastic-plastic soil node)", kind="enum",
+       choices=MappingProxyType({0: "off", 1: "elastic-plastic"})),
     # --- cross-wheel mechanisms (validation/DATA.md; chosen by leave-one-dataset-out) ----------
     _P("model.shear_length_ratio", "1", 0.0, 0.0, 2.0,
        "Growth of the shear deformation modulus with the length of the shearing surface: "

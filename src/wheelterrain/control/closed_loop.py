@@ -138,11 +138,12 @@ class CasadiPlant:
     FMUs."""
 
     def __init__(self, ps: ParameterSet, p_rig: dict[str, float]) -> None:
-        self.terrain, _ = fmu_model.terrain_functions()
+        self.terrain, _, self.memory = fmu_model.terrain_functions()
         self.p = np.array([ps[name] for name in NAMES])
         self.p_rig = dict(p_rig)
         self.x = rig.initial_state(self.p_rig)
         self.angle = 0.0
+        self.plastic = 0.0  # WheelTerrain's plastic sinkage
         self.motor_torque = 0.0
 
     def set_soil(self, values: dict[str, float]) -> None:
@@ -156,7 +157,7 @@ class CasadiPlant:
         """The terrain's outputs (TERRAIN_OUTPUTS) at the rig's state, its inputs by name."""
         given = {**dict(zip(rig.RIG_STATES, self.x, strict=True)), "load": self.p_rig["rig.load"]}
         u = [given[n] for n in fmu_model.TERRAIN_INPUTS]
-        y, status, info = self.terrain(u, self.angle, self.p)
+        y, status, info, _ = self.terrain(u, self.angle, self.plastic, self.p)
         if int(status) != fmu_model.STATUS_OK:
             raise mpc.PlantError("the in-process plant refused the step: "
                                  + fmu_model.status_message(int(status), float(info), u))
@@ -172,8 +173,12 @@ class CasadiPlant:
                      "wheel_speed_command": command, "motor_torque_command": 0.0}
             forces = tuple(given[n] for n in variables.RIG_INPUTS)
             record(self.x, self.angle, y, self.motor_torque)
-            # WheelTerrain advances its angle with the speed it was given
+            # WheelTerrain advances its angle and plastic sinkage with the inputs it was given
             omega = self.x[rig.RIG_STATES.index("wheel_speed")]
+            given = {**dict(zip(rig.RIG_STATES, self.x, strict=True)),
+                     "load": self.p_rig["rig.load"]}
+            u = [given[n] for n in fmu_model.TERRAIN_INPUTS]
+            self.plastic = float(self.memory(u, self.plastic, self.p, PLANT_STEP))
             self.x, self.motor_torque = rig.step(self.x, forces, self.p_rig, PLANT_STEP)
             self.angle += omega * PLANT_STEP
 
@@ -245,7 +250,7 @@ class SoilEstimator:
     """
 
     def __init__(self, p: np.ndarray, load: float, interval: float) -> None:
-        terrain, _ = fmu_model.terrain_functions()
+        terrain = fmu_model.terrain_functions()[0]
         theta = ca.MX.sym("theta", len(ESTIMATED))
         x = ca.MX.sym("x", len(mpc.MPC_STATES))
         pt = ca.MX.sym("p", len(NAMES))
@@ -254,8 +259,10 @@ class SoilEstimator:
                               else theta[ESTIMATED.index(n)] * nominal[ESTIMATED.index(n)]
                               for n in NAMES))
         xs = dict(zip(mpc.MPC_STATES, ca.vertsplit(x), strict=True))
+        # the soil's memory off the measurement model: the wheel yields at its sinkage
         out = dict(zip(fmu_model.TERRAIN_OUTPUTS, ca.vertsplit(
-            terrain(mpc.terrain_inputs(xs, load), xs["wheel_angle"], scaled)[0]), strict=True))
+            terrain(mpc.terrain_inputs(xs, load), xs["wheel_angle"], xs["sinkage"], scaled)[0]),
+            strict=True))
         y = ca.vertcat(*(out[n] for n in MEASURED))
         self.measure = ca.Function("soil_measurement", [theta, x, pt], [y, ca.jacobian(y, theta)])
         self.nominal, self.p = nominal, np.array(p, dtype=float)

@@ -137,14 +137,17 @@ def terrain_inputs(states: dict, load):
 def dynamics() -> ca.Function:
     """``dynamics(x, command, p_terrain, p_rig) -> (xdot, y)``: the continuous prediction model
     (x = MPC_STATES, y = OUTPUTS) from the FMUs' Functions: terrain_dynamic and rig.rates."""
-    terrain, _ = fmu_model.terrain_functions()
+    terrain = fmu_model.terrain_functions()[0]
     x = ca.MX.sym("x", len(MPC_STATES))
     command = ca.MX.sym("command")
     pt, pr = ca.MX.sym("p_terrain", len(NAMES)), ca.MX.sym("p_rig", len(rig.RIG_NAMES))
     named = rig.named(pr)
     xs = dict(zip(MPC_STATES, ca.vertsplit(x), strict=True))
+    # the prediction yields the soil at the wheel's sinkage (plastic sinkage = sinkage): the
+    # loading branch, smooth, without the unloading memory the plant keeps
     out = dict(zip(fmu_model.TERRAIN_OUTPUTS, ca.vertsplit(
-        terrain(terrain_inputs(xs, named["rig.load"]), xs["wheel_angle"], pt)[0]), strict=True))
+        terrain(terrain_inputs(xs, named["rig.load"]), xs["wheel_angle"], xs["sinkage"],
+                pt)[0]), strict=True))
     # the command is the speed loop's reference (rig.drive 1) or the torque (rig.drive 2)
     given = {**out, "wheel_speed_command": command, "motor_torque_command": command}
     inputs = tuple(given[n] for n in rig.INPUTS)

@@ -167,8 +167,8 @@ def _hook_config(model: str, vr: dict[str, int]) -> list[str]:
                                    [p.name for p in TABLE])
         lines = [f"#define N_IN {len(inputs)}"]
         lines += [f"#define VR_{name.upper()} {vr[name]}" for name in
-                  ("quasi_static", "warm_start", "wheel_angle", "sinkage", "wheel_speed",
-                   "carriage_speed", "load", "contact_sinkage")]
+                  ("quasi_static", "warm_start", "wheel_angle", "plastic_sinkage", "sinkage",
+                   "wheel_speed", "carriage_speed", "load", "contact_sinkage")]
         # soil_from_inputs: the ground.* inputs replace the soil's entries of p
         lines += [f"#define VR_SOIL_FROM_INPUTS {vr['soil_from_inputs']}",
                   f"#define N_GROUND {len(GROUND)}",

@@ -58,6 +58,7 @@ BASE_UNITS: dict[str, dict[str, int]] = {
     "N.m": {"kg": 1, "m": 2, "s": -2},
     "Pa": {"kg": 1, "m": -1, "s": -2},
     "N/m3": {"kg": 1, "m": -2, "s": -2},
+    "Pa/m": {"kg": 1, "m": -2, "s": -2},
     "N.s/m": {"kg": 1, "s": -1},
     "s": {"s": 1},
     "N/s": {"kg": 1, "m": 1, "s": -3},
@@ -67,7 +68,7 @@ MODELICA_SI = {"Length", "Velocity", "Angle", "AngularVelocity", "Acceleration",
                "AngularAcceleration", "Mass", "MomentOfInertia",
                "Force", "Torque", "Pressure", "TranslationalDampingConstant",
                "DimensionlessRatio", "Time"}
-NON_SI_QUANTITY = {"N/m3": "WeightDensity", "N/s": "ForceRate"}
+NON_SI_QUANTITY = {"N/m3": "WeightDensity", "N/s": "ForceRate", "Pa/m": "PressurePerDepth"}
 
 
 class BuildError(RuntimeError):

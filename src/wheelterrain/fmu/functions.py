@@ -7,11 +7,12 @@ construction, and the glue in each wrapper is bookkeeping (values, modes, messag
 arithmetic.
 
 WheelTerrain
-    ``terrain_dynamic(u, angle, p) -> (y, status, info)`` and
+    ``terrain_dynamic(u, angle, plastic, p) -> (y, status, info, plastic_rate)``,
+    ``terrain_memory(u, plastic, p, h) -> plastic_next`` and
     ``terrain_quasi_static(u, p, guess) -> (y, status, info)`` with u = TERRAIN_INPUTS, y =
-    TERRAIN_OUTPUTS (without wheel_angle, which the wrapper integrates); ``guess`` the sinkage
-    [m] the solve starts Newton from (``warm_start``: the last contact_sinkage output), 0 for a
-    cold solve (``contact.build().steady_from``). ``status``: STATUS_OK,
+    TERRAIN_OUTPUTS (without wheel_angle and plastic_sinkage, the wrapper's states); ``guess``
+    the sinkage [m] the solve starts Newton from (``warm_start``: the last contact_sinkage
+    output), 0 for a cold solve (``contact.build().steady_from``). ``status``: STATUS_OK,
     STATUS_SLIP (traction slip outside [-1, 1], or the wheel or the carriage moving backward;
     ``info`` is the slip), STATUS_LOAD (load beyond the capacity; ``info`` is the capacity),
     STATUS_UNCONVERGED (the solve's convergence check failed), STATUS_BURIED (dynamic mode:
@@ -154,26 +155,39 @@ def slip_radius(p):
 
 
 @lru_cache(maxsize=2)
-def terrain_functions() -> tuple[ca.Function, ca.Function]:
+def terrain_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
+    """(terrain_dynamic, terrain_quasi_static, terrain_memory): see the module's docstring.
+    ``terrain_dynamic(u, angle, plastic, p) -> (y, status, info, plastic_rate)`` takes the
+    wheel's plastic sinkage (WheelTerrain's second state) and gives its rate (model exchange);
+    ``terrain_memory(u, plastic, p, h) -> plastic_next`` advances it over a co-simulation
+    step with the inputs held, :func:`wheelterrain.model.contact.plastic_update`."""
     fns = contact.build()
     u, angle, p = ca.MX.sym("u", len(TERRAIN_INPUTS)), ca.MX.sym("angle"), ca.MX.sym(
         "p", len(NAMES))
+    plastic = ca.MX.sym("plastic")
     sinkage, rate, omega, speed, load = (u[k] for k in range(len(TERRAIN_INPUTS)))
     traction, paper, forward = slips(omega, speed, slip_radius(p))
     slip_bad = ca.logic_or(ca.logic_not(forward), ca.logic_or(traction < -1, traction > 1))
     safe_slip = ca.fmin(ca.fmax(traction, -1), 1)  # only used when the status is OK
 
-    out = dict(zip(contact.CONTACT_OUTPUTS, fns.contact(sinkage, rate, safe_slip, angle, p),
+    out = dict(zip((*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS),
+                   fns.contact_memory(sinkage, rate, safe_slip, angle, plastic, speed, p),
                    strict=True))
     out.update(contact_sinkage=sinkage, slip=traction, slip_paper=paper)
     y = ca.vertcat(*(out[k] for k in TERRAIN_OUTPUTS))
-    full_burial = contact._radii(contact._P(p))[0]  # sinkage R_c: the soil at the axle
+    # sinkage R_c below the surface the contact begins at (a rut's): the soil at the axle
+    full_burial = contact._radii(contact._P(p))[0] + contact.rut_surface(contact._P(p))
     status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(
         sinkage > full_burial, STATUS_BURIED, ca.if_else(
             _finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE)))
     info = ca.if_else(slip_bad, traction, full_burial)
-    dynamic = ca.Function("terrain_dynamic", [u, angle, p], [y, status, info],
-                          ["u", "angle", "p"], ["y", "status", "info"])
+    dynamic = ca.Function("terrain_dynamic", [u, angle, plastic, p],
+                          [y, status, info, out["plastic_rate"]],
+                          ["u", "angle", "plastic", "p"], ["y", "status", "info", "plastic_rate"])
+    h = ca.MX.sym("h")
+    memory = ca.Function("terrain_memory", [u, plastic, p, h],
+                         [fns.plastic_step(sinkage, plastic, speed, p, h)],
+                         ["u", "plastic", "p", "h"], ["plastic_next"])
 
     guess = ca.MX.sym("guess")
     steady = dict(zip(contact.STEADY_OUTPUTS, fns.steady_from(load, safe_slip, p, guess),
@@ -189,7 +203,7 @@ def terrain_functions() -> tuple[ca.Function, ca.Function]:
     info = ca.if_else(slip_bad, traction, steady["capacity"])
     quasi = ca.Function("terrain_quasi_static", [u, p, guess], [y, status, info],
                         ["u", "p", "guess"], ["y", "status", "info"])
-    return dynamic, quasi
+    return dynamic, quasi, memory
 
 
 # The rig's own domain: a state outside it means the terrain no longer holds the wheel (or

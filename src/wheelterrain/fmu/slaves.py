@@ -360,17 +360,35 @@ class TerrainCore(_Core):
     def __init__(self, slave) -> None:
         resources = getattr(slave, "resources", None)
         follow_resources(resources)
-        dynamic, quasi = fmu_model.terrain_functions()
+        dynamic, quasi, memory = fmu_model.terrain_functions()
         self.dynamic, self.evaluator = compiled_or_vm(dynamic, resources)
         self.quasi_static, _ = compiled_or_vm(quasi, resources)
+        self.memory, _ = compiled_or_vm(memory, resources)
         super().__init__(slave, terrain_variables())
         self.angle = 0.0
+        self.plastic = 0.0  # the plastic sinkage: the soil's memory under the wheel
 
     def internal_state(self) -> dict:
-        return {"angle": self.angle}
+        return {"angle": self.angle, "plastic": self.plastic}
 
     def set_internal_state(self, state: dict) -> None:
         self.angle = float(state["angle"])
+        self.plastic = float(state["plastic"])
+
+    def _inputs_and_parameters(self) -> tuple[list, list]:
+        v = self.values
+        u = [float(v[name]) for name in fmu_model.TERRAIN_INPUTS]
+        p = [float(v[prm.name]) for prm in TABLE]
+        if v["soil_from_inputs"]:
+            p = soil_from_ground(p, v)
+        return u, p
+
+    def _advance(self, h: float) -> None:
+        """The states over a step of ``h`` with the inputs held (fmi2_native.c's model_step)."""
+        self.angle += float(self.values["wheel_speed"]) * h
+        if not self.values["quasi_static"]:
+            u, p = self._inputs_and_parameters()
+            self.plastic = float(self.memory(u, self.plastic, p, h)[0])
 
     def refresh(self) -> None:
         """Recompute the outputs from the current inputs, parameters and wheel angle."""
@@ -380,21 +398,19 @@ class TerrainCore(_Core):
         if self._settings_invalid():
             return  # keep the last valid outputs; the next doStep refuses with the reason
         v = self.values
-        u = [float(v[name]) for name in fmu_model.TERRAIN_INPUTS]
-        p = [float(v[prm.name]) for prm in TABLE]
-        if v["soil_from_inputs"]:
-            p = soil_from_ground(p, v)
+        u, p = self._inputs_and_parameters()
         if v["quasi_static"]:
             # warm start: from the last solved sinkage (none yet: 0, cold)
             guess = float(v.get("contact_sinkage", 0.0)) if v["warm_start"] else 0.0
             y, status, info = self.quasi_static(u, p, guess)
         else:
-            y, status, info = self.dynamic(u, self.angle, p)
+            y, status, info, _ = self.dynamic(u, self.angle, self.plastic, p)
         if self._operating_point(None if status == fmu_model.STATUS_OK else
                                  fmu_model.status_message(int(status), info, u)):
             return
         v.update(zip(fmu_model.TERRAIN_OUTPUTS, y, strict=True))
         v["wheel_angle"] = self.angle
+        v["plastic_sinkage"] = self.plastic
 
     def initialize(self) -> None:
         # Logged here, not at instantiation: pythonfmu 0.7 crashes the host (SIGSEGV) when an
@@ -408,7 +424,8 @@ class TerrainCore(_Core):
         self.refresh()
 
     def do_step(self, t: float, h: float) -> bool:
-        """Check the step's inputs, advance the wheel angle, as fmi2_native.c does. Inputs not
+        """Check the step's inputs, advance the wheel angle and the plastic sinkage, as
+        fmi2_native.c does. Inputs not
         evaluated since they were set are evaluated once, at the step's end (what the master
         reads next: a set + doStep + get costs one evaluation); the terrain's refusals depend
         on its inputs, not on the angle, and a refused step is not taken. Inputs already
@@ -418,17 +435,17 @@ class TerrainCore(_Core):
         if not self.step_allowed(t, h):
             return False
         if self.dirty and not self._settings_invalid():
-            start = self.angle
-            self.angle += float(self.values["wheel_speed"]) * h
+            start = self.angle, self.plastic
+            self._advance(h)
             self.refresh()
             if self.refuse_if_invalid():
                 return True
-            self.angle = start
+            self.angle, self.plastic = start
             return False
         self.refresh()
         if not self.refuse_if_invalid():
             return False
-        self.angle += float(self.values["wheel_speed"]) * h
+        self._advance(h)
         self.dirty = True
         return True
 

@@ -149,10 +149,21 @@ TERRAIN_IO: tuple[Var, ...] = (
             "Pressure"),
         Var("ripple_amplitude", "output", "Amplitude A of the grouser stress ripple (0 in "
             "quasi-static mode)", "Pa", "Pressure"),
+        Var("rut_left", "output", "Depth of the rut the wheel leaves behind, from the "
+            "original surface: the deepest point it pressed the soil to less the elastic "
+            "rebound, never shallower than the rut it met (soil.rut_depth); 0 with "
+            "model.soil_memory = 0. What a terrain with memory records along the track",
+            "m", "Length", "mm"),
     ], (*_TERRAIN_INPUTS, *GROUND)),
     Var("wheel_angle", "output", "Wheel rotation angle, integrated from wheel_speed (phase of "
         "the grouser ripple)", "rad", "Angle", "deg", depends_on=(), integrated=True,
         nominal=1.0),
+    Var("plastic_sinkage", "output", "Plastic sinkage z_p of the soil under the wheel (a "
+        "state): the deepest the wheel has pressed it, relaxing toward the wheel's sinkage as "
+        "it rolls onto the soil ahead (over about one contact length). Above it the soil "
+        "answers elastically (soil.unloading_stiffness); 0 and unused with "
+        "model.soil_memory = 0", "m", "Length", "mm", depends_on=(), integrated=True,
+        nominal=0.01),
     # after everything else, so that the value references of the variables above stay as they
     # were before a terrain map could feed the soil
     Var("soil_from_inputs", "parameter",
@@ -388,10 +399,11 @@ _DERIVATIVE_QUANTITY = {"Length": "Velocity", "Velocity": "Acceleration",
 
 def continuous_states(model: str) -> tuple[str, ...]:
     """The continuous states of ``model``'s model-exchange interface, in the order of its state
-    vector: the terrain's wheel angle; the rig's states (:data:`wheelterrain.model.rig.RIG_STATES`,
-    the very states its co-simulation step advances). Each is an output of the FMU."""
+    vector: the terrain's wheel angle and plastic sinkage; the rig's states
+    (:data:`wheelterrain.model.rig.RIG_STATES`, the very states its co-simulation step
+    advances). Each is an output of the FMU."""
     if model == TERRAIN_FMU:
-        return ("wheel_angle",)
+        return ("wheel_angle", "plastic_sinkage")
     if model == GROUND_FMU:
         return ()
     if model == ROVER_FMU:

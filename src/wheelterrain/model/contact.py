@@ -116,7 +116,10 @@ CONTACT_OUTPUTS = (
     "normal_force", "drawbar_pull", "torque", "gross_thrust", "compaction_resistance",
     "entry_angle", "exit_angle", "max_stress_angle", "contact_length", "mean_pressure",
     "sinkage_exponent", "ripple_amplitude", "normal_force_static", "bulldozing_resistance",
+    "rut_left",
 )
+MEMORY_OUTPUTS = ("yield_sinkage", "plastic_rate")
+"""``contact_memory``'s outputs beyond CONTACT_OUTPUTS: z_y = max(z_p, z) and d(z_p)/dt."""
 STEADY_INPUTS = ("load", "slip", "p")
 STEADY_OUTPUTS = ("sinkage", *CONTACT_OUTPUTS, "residual", "last_step", "capacity")
 FORCES = ("normal_force", "drawbar_pull", "torque")
@@ -359,6 +362,84 @@ def _reece(slip: ca.SX, P: _P) -> tuple[ca.SX, ca.SX]:
     return n, modulus
 
 
+@dataclass(frozen=True)
+class Rut:
+    """The rut a wheel meets, with ``model.soil_memory`` = 1 and ``soil.rut_depth`` > 0
+    (``on``; else every field describes virgin soil and ``on`` is 0).
+
+    The elastic-plastic soil of repetitive loading (Wong, *Theory of Ground Vehicles*, ch. 2;
+    the Soil Contact Model's soil node, Krenn & Hirzinger 2009): soil that was pressed to a
+    yield depth y carried the pressure p(y) of the pressure-sinkage law there; pressed again it
+    answers along a stiff elastic line up to p(y) and along the law beyond. Unloaded, its
+    surface sprang back by the elastic rebound p(y)/K_u (K_u = ``soil.unloading_stiffness``)
+    to the rut's free surface, ``soil.rut_depth`` (what a profile of the rut measures). So a
+    point at depth d below the rut's surface carries::
+
+        p = p(surface + d)            d >= layer   (plastic: the law, from the original surface)
+        p = p(surface + layer)*d/layer  d < layer  (elastic reloading)
+        layer = p(surface)/K_u        the rebound, p at the surface: first order in layer/y
+
+    ``surface`` [m], ``layer`` [m] and ``yield_depth`` = surface + layer; ``n`` and
+    ``modulus`` of :func:`_reece` (p(z) = modulus*(z/b)**n). The contact begins at the rut's
+    surface (:func:`rut_surface`): both forms take the entry angle of the depth below it.
+    Where ``on`` is 0 the fields describe a stand-in rut of depth b, so that the branch a
+    switch does not take has finite derivatives (CasADi's derivative of ``if_else`` multiplies
+    the branch not taken by 0, and 0*inf is NaN); every use selects by ``on``. Virgin soil,
+    ``soil.rut_depth`` = 0, is a kink: the exact Jacobians report the virgin branch's
+    derivative there, 0 for that column, although a rut's one-sided effect is not 0 (the
+    patch form's chord begins at the rut's surface); differentiate from a rut above 0."""
+
+    on: ca.SX
+    surface: ca.SX
+    layer: ca.SX
+    yield_depth: ca.SX
+    n: ca.SX
+    modulus: ca.SX
+    width: ca.SX
+
+    def law(self, depth: ca.SX) -> ca.SX:
+        """The pressure-sinkage law p at ``depth`` > 0 from the original surface."""
+        return self.modulus * ca.exp(self.n * ca.log(depth / self.width))
+
+    def pressure(self, d: ca.SX) -> ca.SX:
+        """The pressure at depth ``d`` >= 0 below the rut's surface (``on`` only)."""
+        plastic = self.law(self.surface + ca.fmax(d, self.layer))
+        elastic = self.law(self.yield_depth) * d / self.layer
+        return ca.if_else(d >= self.layer, plastic, elastic)
+
+
+def rut(slip: ca.SX, P: _P) -> Rut:
+    """The :class:`Rut` under the wheel at traction slip ``slip``."""
+    n, modulus = _reece(slip, P)
+    b = P["wheel.width"]
+    on = ca.logic_and(P["model.soil_memory"] == 1, P["soil.rut_depth"] > 0)
+    surface = ca.if_else(on, P["soil.rut_depth"], b)  # the stand-in where off
+    layer = modulus * ca.exp(n * ca.log(surface / b)) / P["soil.unloading_stiffness"]
+    return Rut(on, surface, layer, surface + layer, n, modulus, b)
+
+
+def rut_surface(P: _P) -> ca.SX:
+    """Depth [m] of the surface a wheel's contact begins at: the rut's (``soil.rut_depth``)
+    with ``model.soil_memory`` = 1, else the original surface, 0. Sinkage is counted from the
+    original surface; the contact's geometry from this one."""
+    on = ca.logic_and(P["model.soil_memory"] == 1, P["soil.rut_depth"] > 0)
+    return ca.if_else(on, P["soil.rut_depth"], 0)
+
+
+def rut_left(theta_f: ca.SX, ground: Rut, P: _P) -> ca.SX:
+    """Depth of the rut a wheel leaves (its free surface, from the original surface) at entry
+    angle ``theta_f`` below ``ground``'s surface: the deepest point it pressed the soil to,
+    surface + R_c*(1 - cos(theta_f)), less the elastic rebound p/K_u there; never shallower
+    than the rut it met (a wheel that only reloaded the soil elastically leaves it as it was).
+    0 with ``model.soil_memory`` = 0 (elastic soil closes behind the wheel)."""
+    Rc, _, _ = _radii(P)
+    surface = rut_surface(P)
+    depth = surface + 2 * Rc * ca.sin(theta_f / 2) ** 2
+    rebound = ground.law(ca.fmax(depth, 1e-300)) / P["soil.unloading_stiffness"]
+    left = ca.if_else(depth > 0, ca.fmax(surface, depth - rebound), surface)
+    return ca.if_else(P["model.soil_memory"] == 1, left, 0)
+
+
 def _max_stress_ratio(slip: ca.SX, P: _P) -> ca.SX:
     """theta_m/theta_f = a0 + a1*i (Wong & Reece 1967)."""
     return P["model.a0"] + P["model.a1"] * slip
@@ -410,6 +491,8 @@ def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tup
     # zero derivative, as the power did for n > 1.
     drop = front["cos_drop"]
     sigma0 = k_eq * ca.if_else(drop > 0, ca.exp(n * ca.log(drop)), 0)
+    ground = rut(slip, P)  # in a rut: the elastic-plastic soil below its surface
+    sigma0 = ca.if_else(ground.on, ground.pressure(Rc * drop), sigma0)
 
     contact_length = Rc * (ca.sin(theta_f) - ca.sin(theta_r))
     K = effective_shear_modulus(contact_length, P)
@@ -457,6 +540,7 @@ def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tup
         "ripple_amplitude": amplitude if ripple else ca.SX(0),
         "normal_force_static": normal_static,
         "bulldozing_resistance": dozing,
+        "rut_left": rut_left(theta_f, ground, P),
     }
 
 
@@ -568,6 +652,14 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
     theta_r = exit_angle(theta_f, P)
     length = Rc * (ca.sin(theta_f) - ca.sin(theta_r))
     pressure = modulus * (z / b) ** n
+    compaction = b * pressure * z / (n + 1)
+    ground = rut(slip, P)  # in a rut: the elastic-plastic soil below its surface
+    depth = ground.surface + z
+    # the plastic work of the rut's deepening, b*int_y^depth p dz (the elastic part returns)
+    deepening = b * (ground.law(ca.fmax(depth, ground.yield_depth)) * ca.fmax(
+        depth, ground.yield_depth) - ground.law(ground.yield_depth) * ground.yield_depth) / (n + 1)
+    pressure = ca.if_else(ground.on, ground.pressure(z), pressure)
+    compaction = ca.if_else(ground.on, deepening, compaction)
     normal_static = b * length * pressure
     amplitude = P["ripple.k_g"] * pressure + P["ripple.k_0"] * length * P["soil.gamma_variation"]
     if ripple:
@@ -580,7 +672,6 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
     x = (1 - kinematics) * (1 - v / Rs) + kinematics * (soil_ratio - 1)
     mobilised = patch_shear_mean(x * length / effective_shear_modulus(length, P), P)
     thrust = (c * b * length + normal * tan_phi) * mobilised
-    compaction = b * pressure * z / (n + 1)
     dozing = bulldozing(z, P)
     return {
         "normal_force": normal,
@@ -597,6 +688,7 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
         "ripple_amplitude": amplitude if ripple else ca.SX(0),
         "normal_force_static": normal_static,
         "bulldozing_resistance": dozing,
+        "rut_left": rut_left(theta_f, ground, P),
     }
 
 
@@ -627,6 +719,9 @@ def static_bound(theta_f: ca.SX, slip: ca.SX, P: _P) -> ca.SX:
     k_eq = modulus * (Rc / b) ** n
     half = ca.sin(theta_f / 2)
     sigma_max = k_eq * ca.exp(n * ca.log(2 * half**2))  # k_eq*(1 - cos(theta_f))**n
+    ground = rut(slip, P)  # in a rut: the law at the deepest point (the elastic part is less)
+    sigma_max = ca.if_else(ground.on, ground.law(ground.surface + 2 * Rc * half**2),
+                           sigma_max)
     theta_r = exit_angle(theta_f, P)
     ratio = _max_stress_ratio(slip, P)
     theta_m = ratio * theta_f
@@ -707,20 +802,84 @@ def _entry_angle(z, P: _P):
     return 2 * ca.asin(ca.sqrt(ca.fmax(z, 0) / (2 * Rc)))
 
 
+SCALED = ("normal_force", "drawbar_pull", "torque", "gross_thrust", "compaction_resistance",
+          "normal_force_static", "bulldozing_resistance")
+"""The contact outputs the elastic unloading of :func:`_contact` scales (forces, torque)."""
+
+
 def _contact(z, z_rate, slip, wheel_angle, P: _P, nodes: tuple[int, int], ripple: bool,
-             form: ca.Function | None = None) -> dict:
+             form: ca.Function | None = None, plastic=None) -> dict:
     """Contact quantities at sinkage z (m, to the contact circle), with damping C_f*dz/dt.
     ``form``: one of :func:`_forms`' kernels to use in place of the switch (the lane kernels of
-    :func:`lane_kernels`); by default the switch picks it."""
-    theta_f = _entry_angle(z, P)
+    :func:`lane_kernels`); by default the switch picks it.
+
+    ``plastic``: the wheel's plastic sinkage z_p, the deepest it has pressed the soil under it
+    (:func:`plastic_update`); None for the contact without it (the quasi-static solve, the
+    grouser-period mean). With ``model.soil_memory`` = 1 the soil under the wheel yields at
+    the yield sinkage z_y = max(z_p, z): pressed deeper than z_p it follows the
+    pressure-sinkage law (plastic, the contact at z); lifted by d = z_y - z it unloads along
+    the elastic line of stiffness K_u (``soil.unloading_stiffness``): every contact pressure
+    falls by K_u*d, taken as a uniform share, the forces of the contact at z_y times
+    max(1 - K_u*d/p_mean, 0) (p_mean the mean pressure of the contact at z_y; exact for the
+    patch form's uniform pressure without cohesion, an approximation of the arc's distribution;
+    d <= p_mean/K_u, a fraction of a millimetre, is small against the sinkage, so the geometry
+    stays that of z_y). The damper acts while the wheel is in contact. Where z >= z_p (and
+    with ``model.soil_memory`` = 0) this is the contact without it, exactly."""
+    yielded = z
+    if plastic is not None:
+        yielded = ca.if_else(P["model.soil_memory"] == 1, ca.fmax(plastic, z), z)
+    below = yielded - rut_surface(P)  # depth below the surface the contact begins at
+    theta_f = _entry_angle(below, P)
     if form is None:
         out = _at_entry_angle(theta_f, slip, wheel_angle, P, nodes, ripple)
     else:
         values = form(theta_f, slip, wheel_angle, P.p)
         out = {k: values[i] for i, k in enumerate(CONTACT_OUTPUTS)}
-    damping = ca.if_else(z > 0, P["soil.damping"] * z_rate, 0)
+    if plastic is not None:
+        relief = P["soil.unloading_stiffness"] * (yielded - z)
+        share = ca.fmax(1 - relief / ca.fmax(out["mean_pressure"], 1e-300), 0)
+        out.update({k: share * out[k] for k in SCALED})
+        below = ca.if_else(share > 0, below, 0)  # lifted off: no damper
+        out["yield_sinkage"] = yielded
+    damping = ca.if_else(below > 0, P["soil.damping"] * z_rate, 0)
     out["normal_force"] = ca.fmax(out["normal_force"] + damping, 0)
     return out
+
+
+def _imprint_decay(yielded, speed, P: _P):
+    """|V|/l: the rate at which a wheel rolling at ``speed`` replaces the soil under it, l the
+    contact length at the yield sinkage (R_c*(sin(theta_f) - sin(theta_r)), the contact
+    forms' own)."""
+    Rc, _, _ = _radii(P)
+    theta_f = _entry_angle(yielded - rut_surface(P), P)
+    length = Rc * (ca.sin(theta_f) - ca.sin(exit_angle(theta_f, P)))
+    return ca.fabs(speed) / ca.fmax(length, 1e-300)
+
+
+def plastic_rate(z, z_rate, plastic, speed, P: _P):
+    """d(z_p)/dt of the wheel's plastic sinkage (model exchange; :func:`plastic_update` is the
+    co-simulation step): while the wheel presses the soil (z >= z_p) z_p follows the sinkage
+    down, max(dz/dt, 0); lifted (z < z_p) the imprint relaxes toward the wheel as it rolls onto
+    the soil ahead, -(|V|/l)*(z_p - z), l the contact length. 0 with ``model.soil_memory`` = 0.
+    Where the sinkage rate input is not the exact derivative of the sinkage, z_p can drift
+    below z: the outputs then yield at z (memory lost, never stiffness added)."""
+    decay = _imprint_decay(ca.fmax(plastic, z), speed, P)
+    rate = ca.if_else(z >= plastic, ca.fmax(z_rate, 0), -decay * (plastic - z))
+    return ca.if_else(P["model.soil_memory"] == 1, rate, 0)
+
+
+def plastic_update(z, plastic, speed, P: _P, h):
+    """The wheel's plastic sinkage z_p after a co-simulation step of ``h`` s with the sinkage
+    ``z`` and carriage speed ``speed`` held: the wheel yields the
+    soil at once to z_y = max(z_p, z) (the step's start), and the imprint under it is replaced
+    by the soil ahead as the wheel rolls, z_p -> z + (z_y - z)*exp(-|V|*h/l), l the contact
+    length at z_y: after one contact length of travel the wheel stands on soil it has not
+    pressed. The rut of earlier passes is
+    the ground's (``soil.rut_depth``), not this state's. ``plastic`` unchanged with
+    ``model.soil_memory`` = 0."""
+    yielded = ca.fmax(plastic, z)
+    relaxed = z + (yielded - z) * ca.exp(-_imprint_decay(yielded, speed, P) * h)
+    return ca.if_else(P["model.soil_memory"] == 1, relaxed, plastic)
 
 
 @lru_cache(maxsize=4)
@@ -733,7 +892,7 @@ def lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> tuple[ca.Function, t
     sym = [ca.SX.sym(name) for name in CONTACT_INPUTS[:-1]] + [ca.SX.sym("p", len(NAMES))]
     P = _P(sym[-1])
     case, switch = _forms(nodes, True)
-    theta_f = _entry_angle(sym[0], P)
+    theta_f = _entry_angle(sym[0] - rut_surface(P), P)
     case_fn = ca.Function("contact_case", sym, [case(theta_f, sym[2], P.p)],
                           list(CONTACT_INPUTS), ["case"], {"cse": True})
     forms = []
@@ -751,6 +910,12 @@ class ModelFunctions:
     """The CasADi Functions of the model, built once per quadrature order.
 
     - ``contact(sinkage, sinkage_rate, slip, wheel_angle, p)`` -> CONTACT_OUTPUTS (ripple on).
+    - ``contact_memory(sinkage, sinkage_rate, slip, wheel_angle, plastic_sinkage,
+      carriage_speed, p)`` -> CONTACT_OUTPUTS and MEMORY_OUTPUTS: the same with the wheel's
+      plastic sinkage (the elastic-plastic soil of :func:`_contact`); ``contact`` exactly where
+      sinkage >= plastic_sinkage.
+    - ``plastic_step(sinkage, plastic_sinkage, carriage_speed, p, h)`` ->
+      ``plastic_sinkage_next`` after a co-simulation step (:func:`plastic_update`).
     - ``contact_jacobian`` -> ``d_state`` (3x3: normal_force, drawbar_pull, torque by sinkage,
       sinkage_rate, slip) and ``d_params`` (3 x len(p)).
     - ``sinkage_solve(load, slip, p)`` -> ``sinkage``, ``residual`` (relative), ``last_step``
@@ -771,6 +936,8 @@ class ModelFunctions:
     """
 
     contact: ca.Function
+    contact_memory: ca.Function
+    plastic_step: ca.Function
     contact_jacobian: ca.Function
     sinkage_solve: ca.Function
     capacity: ca.Function
@@ -797,6 +964,19 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
     contact = ca.Function("contact", [z, z_rate, slip, angle, p],
                           [out[k] for k in CONTACT_OUTPUTS], list(CONTACT_INPUTS),
                           list(CONTACT_OUTPUTS))
+
+    plastic, speed, h = (ca.MX.sym("plastic_sinkage"), ca.MX.sym("carriage_speed"),
+                         ca.MX.sym("h"))
+    held = _contact(z, z_rate, slip, angle, P, nodes, ripple=True, plastic=plastic)
+    held["plastic_rate"] = plastic_rate(z, z_rate, plastic, speed, P)
+    contact_memory = ca.Function(
+        "contact_memory", [z, z_rate, slip, angle, plastic, speed, p],
+        [held[k] for k in (*CONTACT_OUTPUTS, *MEMORY_OUTPUTS)],
+        [*CONTACT_INPUTS[:4], "plastic_sinkage", "carriage_speed", "p"],
+        [*CONTACT_OUTPUTS, *MEMORY_OUTPUTS])
+    plastic_step = ca.Function(
+        "plastic_step", [z, plastic, speed, p, h], [plastic_update(z, plastic, speed, P, h)],
+        ["sinkage", "plastic_sinkage", "carriage_speed", "p", "h"], ["plastic_sinkage_next"])
 
     forces = ca.vertcat(*(out[k] for k in FORCES))
     contact_jacobian = ca.Function(
@@ -831,5 +1011,6 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
     d_params = ca.vertcat(dz_dp, ca.jacobian(ys, p) + dy_dz @ dz_dp)
     steady_jacobian = ca.Function("steady_jacobian", [load, slip, p, z], [d_inputs, d_params],
                                   [*STEADY_INPUTS, "sinkage"], ["d_inputs", "d_params"])
-    return ModelFunctions(contact, contact_jacobian, sinkage_solve, capacity_fn, steady,
-                          sv._steady_from(steady, nodes), steady_jacobian, nodes)
+    return ModelFunctions(contact, contact_memory, plastic_step, contact_jacobian, sinkage_solve,
+                          capacity_fn, steady, sv._steady_from(steady, nodes), steady_jacobian,
+                          nodes)

@@ -28,6 +28,7 @@ from wheelterrain.model.contact import (
     _entry_angle,
     _forms,
     _radii,
+    rut_surface,
     static_bound,
 )
 from wheelterrain.parameters import NAMES
@@ -240,7 +241,7 @@ def _solve_start_warm(load, f_first, f_last, guess, P: _P):
     w_safe = _safe_load(load)
     lo, hi = _scan_range(load)
     h_lo, h_hi = _residual(f_first, w_safe), _residual(f_last, w_safe)
-    y = ca.log(ca.fmax(_entry_angle(guess, P), THETA_MIN))
+    y = ca.log(ca.fmax(_entry_angle(guess - rut_surface(P), P), THETA_MIN))
     y = ca.if_else(ca.logic_and(y > lo, y < hi), y, _fallback(lo, hi, h_lo, h_hi))
     return _first_state(y, lo, hi, h_lo, h_hi), f_last, w_safe
 
@@ -254,7 +255,8 @@ def _solve_finish(load, state, f, P: _P):
     """Sinkage, relative residual and last step at the final angle, where Fz_static is ``f``."""
     Rc, _, _ = _radii(P)
     theta = _solve_angle(load, state)
-    sinkage = 2 * Rc * ca.sin(theta / 2) ** 2  # = R_c*(1 - cos(theta)), without cancellation
+    # R_c*(1 - cos(theta)) without cancellation, below the surface the contact begins at
+    sinkage = rut_surface(P) + 2 * Rc * ca.sin(theta / 2) ** 2
     w_safe = _safe_load(load)
     residual = ca.if_else(load > 0, (f - load) / w_safe, 0)
     last_step = ca.if_else(load > 0, state[6], 0)

@@ -1,0 +1,276 @@
+"""The soil with memory: elastic-plastic contact in a rut, the wheel's plastic sinkage, multi-pass
+on the rig (model.soil_memory, soil.rut_depth, soil.unloading_stiffness)."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from wheelterrain import model, presets
+from wheelterrain.cli import main
+from wheelterrain.model import contact, multipass
+from wheelterrain.parameters import INDEX
+
+FORMS = {"patch": "rashid-patch", "arc": "rashid-calibrated"}
+OUTPUTS = (*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS)
+
+
+def _vector(preset: str, **values) -> np.ndarray:
+    ps = presets.load(preset).with_values({k.replace("__", "."): v for k, v in values.items()})
+    return ps.vector()
+
+
+def _memory(fns, z, rate, slip, plastic, p, angle=0.3, speed=0.03) -> dict:
+    return dict(zip(OUTPUTS, (float(v) for v in fns.contact_memory(
+        z, rate, slip, angle, plastic, speed, p)), strict=True))
+
+
+def _contact(fns, z, rate, slip, p, angle=0.3) -> dict:
+    return dict(zip(contact.CONTACT_OUTPUTS, (float(v) for v in fns.contact(
+        z, rate, slip, angle, p)), strict=True))
+
+
+@pytest.mark.parametrize("form", FORMS)
+def test_memory_off_is_the_elastic_soil_bit_for_bit(form):
+    """model.soil_memory = 0: the rut and the plastic sinkage change nothing, to the bit."""
+    fns = contact.build()
+    off = _vector(FORMS[form], model__soil_memory=0)
+    rutted = _vector(FORMS[form], model__soil_memory=0, soil__rut_depth=0.012)
+    for z, rate, slip in ((0.004, 0.01, 0.2), (0.02, -0.02, 0.6), (0.013, 0.0, -0.3)):
+        ref = _contact(fns, z, rate, slip, off)
+        assert _contact(fns, z, rate, slip, rutted) == {**ref, "rut_left": 0.0}
+        for plastic in (0.0, z + 2e-4, 0.05):
+            got = _memory(fns, z, rate, slip, plastic, rutted)
+            assert {k: got[k] for k in ref} == {**ref, "rut_left": 0.0}
+            assert got["plastic_rate"] == 0.0
+    for slip in (0.1, 0.5):
+        a = model.steady_state(presets.load(FORMS[form]).with_values(
+            {"model.soil_memory": 0}), 62.0, slip)
+        b = model.steady_state(presets.load(FORMS[form]).with_values(
+            {"model.soil_memory": 0, "soil.rut_depth": 0.01}), 62.0, slip)
+        assert a == b
+
+
+@pytest.mark.parametrize("form", FORMS)
+def test_memory_on_without_a_rut_or_unloading_is_the_elastic_soil_bit_for_bit(form):
+    """Virgin soil, a wheel that presses at least as deep as it ever did: the same numbers
+    as without memory (the switch's default changes nothing there)."""
+    fns = contact.build()
+    on, off = _vector(FORMS[form]), _vector(FORMS[form], model__soil_memory=0)
+    for z, rate, slip in ((0.004, 0.01, 0.2), (0.02, -0.02, 0.6)):
+        ref = _contact(fns, z, rate, slip, off)
+        for plastic in (0.0, z, z * 0.5):
+            got = _memory(fns, z, rate, slip, plastic, on)
+            assert {k: got[k] for k in ref if k != "rut_left"} == \
+                {k: v for k, v in ref.items() if k != "rut_left"}
+    a = model.steady_state(presets.load(FORMS[form]), 62.0, 0.3)
+    b = model.steady_state(presets.load(FORMS[form]).with_values({"model.soil_memory": 0}),
+                           62.0, 0.3)
+    assert {k: v for k, v in a.items() if k != "rut_left"} == \
+        {k: v for k, v in b.items() if k != "rut_left"}
+
+
+def test_unloading_follows_the_elastic_line_of_the_unloading_stiffness():
+    """Patch form, no cohesion, ripple and damper off: lifted by d from where it yielded, the
+    wheel's normal force falls along F0*(1 - K_u*d/p) = F0 - K_u*b*l*d, the elastic line of
+    the table's stiffness per contact area, to 0 at d = p/K_u (it lifts off)."""
+    fns = contact.build()
+    p = _vector("rashid-patch", ripple__k_g=0.0, ripple__k_0=0.0, soil__cohesion=0.0)
+    ku, b = p[INDEX["soil.unloading_stiffness"]], p[INDEX["wheel.width"]]
+    zy = 0.015
+    top = _memory(fns, zy, 0.0, 0.2, zy, p)
+    for d in (1e-5, 5e-5, 1e-4):
+        got = _memory(fns, zy - d, 0.0, 0.2, zy, p)
+        want = top["normal_force"] - ku * b * top["contact_length"] * d
+        assert got["normal_force"] == pytest.approx(want, rel=1e-10)
+        assert got["yield_sinkage"] == zy
+    lift = top["mean_pressure"] / ku
+    assert lift < 1e-3  # a fraction of a millimetre springs back
+    assert _memory(fns, zy - 1.01 * lift, 0.0, 0.2, zy, p)["normal_force"] == 0.0
+
+
+@pytest.mark.parametrize("form", FORMS)
+def test_in_a_rut_the_pressure_is_continuous_and_the_contact_begins_at_its_surface(form):
+    fns = contact.build()
+    rut = 0.01
+    p = _vector(FORMS[form], soil__rut_depth=rut, ripple__k_g=0.0, ripple__k_0=0.0)
+    # above the rut's surface the wheel touches nothing
+    assert _contact(fns, rut - 1e-4, 0.0, 0.2, p)["normal_force"] == 0.0
+    # the normal force rises continuously from the surface through the elastic layer
+    depths = rut + np.linspace(1e-7, 2e-3, 400)
+    forces = np.array([_contact(fns, z, 0.0, 0.2, p)["normal_force"] for z in depths])
+    assert np.all(np.diff(forces) > 0)
+    assert np.max(np.abs(np.diff(forces, 2))) < 0.05 * np.max(forces)  # no jump
+    # a wheel in the rut carries a load with less extra sinkage than on virgin soil
+    virgin = model.steady_state(presets.load(FORMS[form]), 62.0, 0.2)
+    in_rut = model.steady_state(presets.load(FORMS[form]).with_values(
+        {"soil.rut_depth": virgin["rut_left"]}), 62.0, 0.2)
+    assert in_rut["sinkage"] > virgin["rut_left"]
+    assert in_rut["sinkage"] - virgin["rut_left"] < 0.5 * virgin["sinkage"]
+    assert in_rut["normal_force"] == pytest.approx(62.0, rel=1e-9)
+
+
+def test_the_plastic_sinkage_yields_at_once_and_relaxes_over_a_contact_length():
+    fns = contact.build()
+    p = _vector("rashid-patch")
+    # pressed deeper: it follows at once
+    assert float(fns.plastic_step(0.02, 0.015, 0.03, p, 1e-3)) == 0.02
+    # lifted by d while rolling at V: d*exp(-V*h/l) after h, l the contact length at z_p
+    zp, z, v = 0.02, 0.0199, 0.03
+    length = _memory(fns, zp, 0.0, 0.2, zp, p)["contact_length"]
+    h = length / v  # one contact length of travel
+    assert float(fns.plastic_step(z, zp, v, p, h)) == pytest.approx(
+        z + (zp - z) * math.exp(-1), rel=1e-12)
+    # standing still: the imprint stays
+    assert float(fns.plastic_step(z, zp, 0.0, p, 10.0)) == zp
+
+
+def test_the_model_exchange_rate_integrates_to_the_co_simulation_step():
+    """d(z_p)/dt (model exchange) integrated with small steps over an input that goes down
+    and up converges to the co-simulation steps of the same input (first order in the step)."""
+    fns = contact.build()
+    p = _vector("rashid-patch")
+    t_end, v = 2.0, 0.03
+
+    def z_of(t):
+        return 0.015 + 0.0004 * math.sin(2 * math.pi * 1.5 * t)
+
+    def rate_of(t):
+        return 0.0004 * 2 * math.pi * 1.5 * math.cos(2 * math.pi * 1.5 * t)
+
+    def me(n):
+        zp, h = 0.0, t_end / n
+        for k in range(n):
+            t = k * h
+            zp = max(zp, z_of(t)) if k == 0 else zp
+            out = _memory(fns, z_of(t), rate_of(t), 0.2, zp, p, speed=v)
+            zp += h * out["plastic_rate"]
+        return zp
+
+    def cs(n):
+        zp, h = 0.0, t_end / n
+        for k in range(n):
+            zp = float(fns.plastic_step(z_of(k * h), zp, v, p, h))
+        return zp
+
+    ref = cs(20000)
+    errors = [abs(me(n) - ref) for n in (500, 2000)]
+    assert errors[1] < 0.5 * errors[0] + 1e-9
+    assert errors[1] < 2e-6
+
+
+@pytest.mark.parametrize("form", FORMS)
+def test_multipass_sinks_less_each_pass_and_leaves_a_rut_near_its_sinkage(form):
+    rows = multipass.run(presets.load(FORMS[form]), 62.0, 0.3, passes=5)
+    assert [r["pass"] for r in rows] == [1, 2, 3, 4, 5]
+    increments = [r["sinkage_increment"] for r in rows]
+    assert all(b < a for a, b in itertools.pairwise(increments))
+    assert all(i > 0 for i in increments)
+    for r in rows:
+        assert r["rut_left"] >= 0.95 * r["sinkage"]
+        assert r["traction_coefficient"] == pytest.approx(r["drawbar_pull"] / 62.0)
+    assert rows[1]["rut_met"] == rows[0]["rut_left"]
+    off = multipass.run(presets.load(FORMS[form]).with_values({"model.soil_memory": 0}),
+                        62.0, 0.3, passes=3)
+    assert off[0] == {**off[1], "pass": 1, "sinkage_increment": off[0]["sinkage"]}
+
+
+def test_multipass_cli_json_and_mistakes(tmp_path):
+    runner = CliRunner()
+    result = runner.invoke(main, ["multipass", "--slip", "0.2,0.4", "--passes", "3", "--out",
+                                  str(tmp_path), "--json"])
+    assert result.exit_code == 0, result.output
+    doc = json.loads(result.output)
+    assert [len(r["passes"]) for r in doc["runs"]] == [3, 3]
+    assert set(multipass.KEYS) <= set(doc["runs"][0]["passes"][0])
+    assert doc["units"]["sinkage"] == "m"
+    assert doc["soil_memory"] == 1
+    assert (tmp_path / "multipass.png").stat().st_size > 0
+    bad = runner.invoke(main, ["multipass", "--slip", "fast", "--out", str(tmp_path)])
+    assert bad.exit_code == 2
+    assert "comma-separated" in bad.output
+    heavy = runner.invoke(main, ["multipass", "--slip", "0.2", "--load", "1e5", "--out",
+                                 str(tmp_path)])
+    assert heavy.exit_code == 3
+    assert "Traceback" not in heavy.output
+
+
+# --- WheelTerrain.fmu carries the plastic sinkage as its state (both flavours) --------------
+
+def _wheel(folder, tag):
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    path = str(folder / "WheelTerrain.fmu")
+    md = read_model_description(path)
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(path),
+                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName=tag)
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    return fmu, {v.name: v.valueReference for v in md.modelVariables}
+
+
+PROFILE = [0.012 + 0.0004 * math.sin(2 * math.pi * k / 40) for k in range(120)]
+"""A sinkage that goes down and up: the wheel presses, lifts (elastic), presses deeper."""
+
+
+def _drive(fmu, vr, profile, t0=0.0, h=1e-3):
+    rows = []
+    names = ("normal_force", "drawbar_pull", "plastic_sinkage", "rut_left")
+    for k, z in enumerate(profile):
+        fmu.setReal([vr["sinkage"], vr["sinkage_rate"]], [z, 0.0])
+        fmu.doStep(t0 + k * h, h)
+        rows.append(fmu.getReal([vr[n] for n in names]))
+    return np.array(rows)
+
+
+@pytest.fixture(scope="module", params=["pythonfmu", "native"])
+def flavour_dir(request, fmu_dir):
+    if request.param == "pythonfmu":
+        return fmu_dir
+    return request.getfixturevalue("native_dir")
+
+
+def test_the_fmu_keeps_the_plastic_sinkage_and_restores_it_bit_for_bit(flavour_dir):
+    fmu, vr = _wheel(flavour_dir, "memory")
+    try:
+        first = _drive(fmu, vr, PROFILE[:60])
+        # lifted from its deepest point, the soil unloads: the force falls below the
+        # elastic soil's at the same sinkage, and the plastic sinkage stays above it
+        assert first[:, 2].max() >= max(PROFILE[:60]) - 1e-12
+        state = fmu.getFMUstate()
+        blob = fmu.serializeFMUstate(state)
+        a = _drive(fmu, vr, PROFILE[60:], t0=0.06)
+        fmu.setFMUstate(state)
+        b = _drive(fmu, vr, PROFILE[60:], t0=0.06)
+        fmu.setFMUstate(fmu.deSerializeFMUstate(blob))
+        c = _drive(fmu, vr, PROFILE[60:], t0=0.06)
+        np.testing.assert_array_equal(a, b)
+        np.testing.assert_array_equal(a, c)
+        fmu.freeFMUstate(state)
+    finally:
+        fmu.terminate()
+        fmu.freeInstance()
+
+
+def test_both_flavours_and_the_core_give_the_same_memory(fmu_dir, request):
+    native_dir = request.getfixturevalue("native_dir")
+    runs = []
+    for folder in (fmu_dir, native_dir):
+        fmu, vr = _wheel(folder, "agree")
+        try:
+            runs.append(_drive(fmu, vr, PROFILE))
+        finally:
+            fmu.terminate()
+            fmu.freeInstance()
+    np.testing.assert_allclose(runs[1], runs[0], rtol=1e-12, atol=1e-15)
+    # the elastic unloading is there: on the way up the force is below the elastic soil's
+    rising = [k for k in range(1, len(PROFILE)) if PROFILE[k] < PROFILE[k - 1]]
+    assert any(runs[0][k, 0] < runs[0][k - 1, 0] * 0.5 for k in rising)
