@@ -245,15 +245,51 @@ def rover(result, figures: dict, path: Path) -> None:
                    else "predicted_descent_limit_deg")
             what = ("predicted_stall_limit" if scenario == "slope"
                     else "predicted_descent_limit")
+            rows = figures.get("slip_vs_slope") or []
+            if rows:
+                ax.plot([r["slope_deg"] for r in rows], [r["mean_slip"] for r in rows], "o",
+                        ms=3, color="C0", label="four wheels' mean at each whole degree")
+                deep = ax.twinx()
+                deep.plot([r["slope_deg"] for r in rows],
+                          [1e3 * r["mean_sinkage"] for r in rows], "s", ms=3, color="C5")
+                deep.set_ylabel("mean sinkage [mm]", color="C5")
             pred = figures.get(key)
             if pred is not None:
                 ax.axvline(pred, color="k", ls="--", lw=0.8,
                            label=f"predicted {'stall' if scenario == 'slope' else 'slide'} "
                                  f"{pred:.2f} deg ({figures.get(what)})")
+            if figures.get("stall_cause"):
+                ax.set_title(f"ended by: {figures['stall_cause']}", fontsize=9)
             ax.set_xlabel("slope [deg]")
             ax.set_ylabel("traction slip [1]")
         ax.legend(loc="best", fontsize=8)
         ax.grid(True, alpha=0.3)
     axes[0].set_title(f"rover '{scenario}' ({figures['gravity']}), {figures['engine']}")
+    fig.tight_layout()
+    _save(fig, path)
+
+
+def multipass(runs: list[dict], path: Path, title: str) -> None:
+    """Multi-pass on the rig: the traction coefficient per pass (left) and the sinkage from
+    the original surface with the rut each pass leaves (right), one line per slip."""
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
+    for k, run in enumerate(runs):
+        rows = run["passes"]
+        n = [r["pass"] for r in rows]
+        label = f"slip {run['slip']:.3g}"
+        left.plot(n, [r["traction_coefficient"] for r in rows], "o-", color=f"C{k}",
+                  label=label)
+        right.plot(n, [1e3 * r["sinkage"] for r in rows], "o-", color=f"C{k}",
+                   label=f"{label}: sinkage")
+        right.plot(n, [1e3 * r["rut_left"] for r in rows], "s--", color=f"C{k}", alpha=0.6,
+                   label=f"{label}: rut left")
+    left.set_ylabel("traction coefficient (drawbar pull / load)")
+    right.set_ylabel("depth below the original surface [mm]")
+    for ax in (left, right):
+        ax.set_xlabel("pass")
+        ax.set_xticks(range(1, max(len(r["passes"]) for r in runs) + 1))
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="best")
+    fig.suptitle(f"Multi-pass on the rig ({title})")
     fig.tight_layout()
     _save(fig, path)

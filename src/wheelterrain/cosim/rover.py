@@ -44,20 +44,24 @@ by an amount first order in the step. On the Moon, where the grouser ripple is n
 (validation/rover_engines.py [--step], README); on Earth 1 ms is enough (at most 8.2e-4)."""
 BLOCK = 100  # steps per call of the mapped system step
 RECORD = ("slip", "sinkage", "normal_force", "drawbar_pull", "torque", "motor_torque",
-          "wheel_speed")
+          "wheel_speed", "rut_left")
 """Per-wheel quantities recorded at every step."""
 CHASSIS_RECORD = ("position", "speed", "heave", "pitch", "effective_slope",
                   "effective_towing_force")
-N_X = len(rover.STATES) + len(rover.WHEELS)  # chassis states, then the four wheel angles
+N_X = len(rover.STATES) + 2 * len(rover.WHEELS)
+"""The in-process state: the chassis states, then the four wheel angles, then the four wheels'
+plastic sinkages (WheelTerrain's states in the FMUs)."""
 
 
-def _coupled_forces(xs: list, p: dict, pt: ca.MX, angles) -> tuple[dict, list]:
+def _coupled_forces(xs: list, p: dict, pt: ca.MX, angles, plastics=None) -> tuple[dict, list]:
     """The chassis' inputs (by rover.INPUTS name, commands 0, slope and towing force left to
     the caller) from the four contacts at the chassis state ``xs``, as our master couples the
     FMUs: each wheel's sinkage, rate and slip from the chassis, its terrain parameters the
-    column of ``pt``, its angle from ``angles``. The slip is evaluated inside the contact
-    model's domain (a state outside it ends a run: :func:`simulate`). Also returns per wheel
-    (traction slip, sinkage, contact outputs by name)."""
+    column of ``pt``, its angle from ``angles``, its plastic sinkage from ``plastics`` (None:
+    the contact without the wheel's own memory, the grouser-period mean of a steady motion).
+    The slip is evaluated inside the contact model's domain (a state outside it ends a run:
+    :func:`simulate`). Also returns per wheel (traction slip, sinkage, contact outputs by
+    name)."""
     fns = contact.build()
     s = dict(zip(rover.STATES, xs, strict=True))
     u, wheels = {}, []
@@ -66,8 +70,13 @@ def _coupled_forces(xs: list, p: dict, pt: ca.MX, angles) -> tuple[dict, list]:
         traction, _, _ = functions.slips(s[f"{w}.wheel_speed"], s["speed"],
                                          p["rover.slip_radius"])
         slip = ca.fmin(ca.fmax(traction, -1), 1)
-        out = dict(zip(contact.CONTACT_OUTPUTS,
-                       fns.contact(z, rate, slip, angles[k], pt[:, k]), strict=True))
+        if plastics is None:
+            out = dict(zip(contact.CONTACT_OUTPUTS,
+                           fns.contact(z, rate, slip, angles[k], pt[:, k]), strict=True))
+        else:
+            out = dict(zip((*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS),
+                           fns.contact_memory(z, rate, slip, angles[k], plastics[k], s["speed"],
+                                              pt[:, k]), strict=True))
         u.update({f"{w}.{n}": out[n] for n in rover.WHEEL_FORCES})
         u.update({f"{w}.{n}": 0.0 for n in rover.WHEEL_COMMANDS})
         wheels.append((traction, z, out))
@@ -105,22 +114,28 @@ def _system_step() -> ca.Function:
     pr = ca.MX.sym("pr", len(rover.ROVER_NAMES))
     slope, tow, h = ca.MX.sym("slope"), ca.MX.sym("tow"), ca.MX.sym("h")
     xs = [x[k] for k in range(len(rover.STATES))]
-    angles = [x[len(rover.STATES) + k] for k in range(len(rover.WHEELS))]
+    n_s, n_w = len(rover.STATES), len(rover.WHEELS)
+    angles = [x[n_s + k] for k in range(n_w)]
+    plastics = [x[n_s + n_w + k] for k in range(n_w)]
     p = rover.named([pr[k] for k in range(len(rover.ROVER_NAMES))])
     s = dict(zip(rover.STATES, xs, strict=True))
-    u, wheels = _coupled_forces(xs, p, _wheel_soils(xs, p, pw, pg), angles)
+    soils = _wheel_soils(xs, p, pw, pg)
+    u, wheels = _coupled_forces(xs, p, soils, angles, plastics)
     u.update(slope=slope, towing_force=tow)
     u.update({f"{w}.{n}": cmd[k] for k, (w, n) in enumerate(
         (w, n) for w in rover.WHEELS for n in rover.WHEEL_COMMANDS)})
     rec = [(traction, z, out["normal_force"], out["drawbar_pull"], out["torque"],
-            rover.motor_torque(xs, u, p, w), s[f"{w}.wheel_speed"])
+            rover.motor_torque(xs, u, p, w), s[f"{w}.wheel_speed"], out["rut_left"])
            for w, (traction, z, out) in zip(rover.WHEELS, wheels, strict=True)]
     nxt, _ = rover.step(tuple(xs), u, p, h)
     new_angles = [angles[k] + h * s[f"{w}.wheel_speed"] for k, w in enumerate(rover.WHEELS)]
+    fns = contact.build()
+    new_plastics = [fns.plastic_step(z, plastics[k], s["speed"], soils[:, k], h)
+                    for k, (_, z, _) in enumerate(wheels)]
     s["effective_slope"], s["effective_towing_force"] = rover.effective_inputs(xs, u, p)
     record = [v for wheel in rec for v in wheel] + [s[n] for n in CHASSIS_RECORD]
     return ca.Function("rover_system", [x, pw, pg, pr, slope, tow, cmd, h],
-                       [ca.vertcat(*nxt, *new_angles), ca.vertcat(*record)],
+                       [ca.vertcat(*nxt, *new_angles, *new_plastics), ca.vertcat(*record)],
                        ["x", "pw", "pg", "pr", "slope", "tow", "cmd", "h"], ["x_next", "rec"])
 
 
@@ -198,20 +213,24 @@ class RoverResult:
 def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: float = STEP,
              block: int = BLOCK, stop_when: Callable[[dict], bool] | None = None,
              slope: float = 0.0, towing: float = 0.0,
-             control: Callable[[float, list], list] | None = None) -> RoverResult:
+             control: Callable[[float, list], list] | None = None,
+             x0: list[float] | None = None) -> RoverResult:
     """Run the rover in process from rest on the surface for ``stop`` s, its inputs ``slope``
     [rad] and ``towing`` [N] constant (a scenario's ramps are the chassis' input profile, rows
     ``rover.ramp_time`` ... ``rover.towing_rate`` of ``rover_values``); ``stop_when(last)``
     (the last step's record by name) ends the run early. ``control(t, x)`` (x: rover.STATES
     then the wheel angles) gives the wheels' commands (N_CMD) held over the next ``block``
-    steps (default: none, 0)."""
+    steps (default: none, 0). ``x0``: the state to start from (N_X: rover.STATES, the wheel
+    angles, the wheels' plastic sinkages) instead of rest on the surface."""
     p = {**rover.defaults(), **rover_values}
     evaluate, engine = _evaluator(block)
     pr = [p[n] for n in rover.ROVER_NAMES]
     pw = soil.base.vector()
     g = soil.map_values()
     pg = [g[n] for n in ground.NAMES]
-    x = list(rover.initial_state(p)) + [0.0] * len(rover.WHEELS)
+    x = list(rover.initial_state(p)) + [0.0] * (2 * len(rover.WHEELS))  # angles, plastics
+    if x0 is not None:
+        x = [float(v) for v in x0]
     blocks = max(1, round(stop / (step * block)))
     records = []
     left = None
@@ -367,19 +386,131 @@ def steady_slip(terrain: Mapping, p: Mapping[str, float], slope: float) -> float
         return None
 
 
+def has_memory(terrain: Mapping) -> bool:
+    """True where the wheels' soil remembers (``model.soil_memory`` = 1)."""
+    return any(terrain[w]["model.soil_memory"] == 1 for w in rover.WHEELS)
+
+
+PROBE_TIME = 12.0  # s: how long a perturbed steady motion is run (PROBE_KICK's test)
+PROBE_KICK = 1e-4  # rad/s: the pitch rate the steady motion is started with
+
+
+def holds(terrain: Mapping, p: Mapping[str, float], slope: float, slip: float,
+          step: float = STEP, balance_tow: bool = False) -> bool:
+    """Whether the rover's steady motion at ``slip`` on ``slope`` survives a small
+    disturbance, by running it: from the steady state (:func:`steady_state_vector`, each wheel's
+    plastic sinkage at its sinkage) with the pitch rate PROBE_KICK, in process for PROBE_TIME s
+    at that slope; it holds when the normal forces' deviation from the steady motion over the
+    last second is below its largest over the first second (it dies out) and the slip stays
+    below STALL_SLIP. The test for a soil with memory, which has no one linearisation: lifted,
+    a wheel unloads along the stiff elastic line; pressed, it yields along the soft
+    pressure-sinkage law. ``balance_tow``: the towing force is whatever holds the rover at
+    that slip (the pull test), else 0 (``slip`` must be the slope's steady slip)."""
+    balance = rover.steady_balance(terrain, p, slope, slip)
+    tow = balance["surplus"] if balance_tow else 0.0
+    x = steady_state_vector(balance, p)
+    x[rover.STATES.index("pitch_rate")] += PROBE_KICK
+    plastics = [float(rover.wheel_kinematics(list(x), p, w)[0]) for w in rover.WHEELS]
+    x0 = [*x, *([0.0] * len(rover.WHEELS)), *plastics]
+    base = terrain["front_left"]
+    res = simulate(Soil(base), dict(p), PROBE_TIME, step=step, slope=slope, towing=tow, x0=x0)
+    if res.left_domain or res.time.size < round(PROBE_TIME / step) - 1:
+        return False
+    steady = np.array([balance["wheels"][w]["normal_force"] for w in rover.WHEELS])
+    forces = np.array([res.wheels[w]["normal_force"] for w in rover.WHEELS])
+    deviation = np.max(np.abs(forces - steady[:, None]), axis=0)
+    second = round(1.0 / step)
+    slips = np.array([res.wheels[w]["slip"] for w in rover.WHEELS])
+    return bool(deviation[-second:].max() < deviation[:second].max()
+                and slips.max() < STALL_SLIP)
+
+
+def statically_stable(terrain: Mapping, p: Mapping[str, float], slope: float,
+                      slip: float) -> bool:
+    """The force balance's slope at a steady slip: more slip must give more net forward force
+    (the rover then slows less and the slip falls back). Where sinkage grows with slip faster
+    than the thrust (``soil.n1``, bulldozing), the surplus can fall with slip: the steady
+    motion is then statically unstable and the slip runs away (``slip_sinkage``)."""
+    h = 1e-4
+    lo, hi = max(slip - h, -0.999), min(slip + h, 0.999)
+    return (rover.steady_balance(terrain, p, slope, hi)["surplus"]
+            > rover.steady_balance(terrain, p, slope, lo)["surplus"])
+
+
+STALL_CAUSES = ("traction", "slip_sinkage", "stability", "motor_torque", "domain")
+"""What can end a slope or descent run (``stall_cause``), in the order they are tested."""
+
+
+def steady_cause(terrain: Mapping, p: Mapping[str, float], slope: float) -> str | None:
+    """Which steady condition fails on ``slope``, or None: no steady slip in
+    [-0.999, STALL_SLIP] (``traction``: the wheels cannot hold the rover; downhill, cannot
+    brake it), the force balance falls with slip there (``slip_sinkage``), or the motors
+    cannot give its torque (``motor_torque``, rover.motor_torque_limit)."""
+    i = steady_slip(terrain, p, slope)
+    if i is None:
+        return "traction"
+    if not statically_stable(terrain, p, slope, i):
+        return "slip_sinkage"
+    balance = rover.steady_balance(terrain, p, slope, i)
+    if max(abs(balance["wheels"][w]["torque"]) for w in rover.WHEELS) \
+            > p["rover.motor_torque_limit"]:
+        return "motor_torque"
+    return None
+
+
+def run_cause(res: RoverResult, terrain: Mapping, p: Mapping[str, float],
+              slope: float) -> str:
+    """Which of STALL_CAUSES ended a run that stalled or slid at ``slope`` [rad]: ``domain``
+    where it left the model's domain other than by its slip (a non-finite value, a refused
+    step); else the first steady condition that fails there (:func:`steady_cause`, on the
+    ripple-free soil ``terrain``); else ``stability``: a steady motion that the motors can
+    drive exists and is statically stable, and the run did not hold it (a disturbance grew)."""
+    if res.left_domain and "slip reached" not in res.left_domain:
+        return "domain"
+    return steady_cause(terrain, p, slope) or "stability"
+
+
+def slip_vs_slope(res: RoverResult, settle: float = 1.0) -> list[dict]:
+    """One row per whole degree of slope the run reached: the four wheels' mean slip and
+    sinkage over ``settle`` s from where the slope first reached it (uphill or downhill)."""
+    slope = np.degrees(np.abs(res.inputs["slope"]))
+    step = float(res.time[1] - res.time[0]) if res.time.size > 1 else STEP
+    window = max(round(settle / step), 1)
+    slips = np.mean([v["slip"] for v in res.wheels.values()], axis=0)
+    sinkages = np.mean([v["sinkage"] for v in res.wheels.values()], axis=0)
+    rows = []
+    for degree in range(int(np.floor(slope.max())) + 1 if slope.size else 0):
+        k = int(np.argmax(slope >= degree))
+        sign = 1.0 if res.inputs["slope"][min(k + 1, slope.size - 1)] >= 0 else -1.0
+        rows.append({"slope_deg": sign * degree,
+                     "mean_slip": float(np.mean(slips[k:k + window])),
+                     "mean_sinkage": float(np.mean(sinkages[k:k + window]))})
+    return rows
+
+
 def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
                 tolerance: float = 1e-4) -> dict:
     """The steepest slope [rad] (uphill for ``direction`` 1, downhill for -1) on which the rover
-    has a steady motion that is also stable: a steady slip exists in [-0.999, STALL_SLIP] (the
-    traction, or braking, limit) and the linearisation about it has no eigenvalue with a
-    positive real part (the stability limit). Bisection on the slope from level ground, both
-    conditions checked at every trial; ``limit`` says which one ended it."""
+    has a steady motion that it also holds: a steady slip exists in [-0.999, STALL_SLIP] (else
+    ``traction``: the wheels cannot hold the rover, downhill their braking), more slip gives
+    more net force there (else ``slip_sinkage``, :func:`statically_stable`), and a disturbance
+    dies out (else ``stability``): on a soil without memory the linearisation about the steady
+    motion has no eigenvalue with a positive real part; on a soil with memory, which has none,
+    the perturbed motion is run (:func:`holds`). Bisection on the slope from level ground, every
+    condition checked at every trial; ``limit`` says which one ended it (a tolerance of
+    1e-3 rad where the motion is run)."""
     top = direction * math.radians(60)
+    memory = has_memory(terrain)
+    if memory:
+        tolerance = max(tolerance, 1e-3)
 
     def verdict(slope: float) -> str | None:
+        cause = steady_cause(terrain, p, slope)
+        if cause is not None:
+            return cause
         i = steady_slip(terrain, p, slope)
-        if i is None:
-            return "traction" if direction > 0 else "braking"
+        if memory:
+            return None if holds(terrain, p, slope, i) else "stability"
         return "stability" if growth_rate(terrain, p, slope, i)["rate"] > 0 else None
 
     if verdict(0.0) is not None:
@@ -504,11 +635,14 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
            "simulated_time_s": float(res.time[-1] + step), "wall_time_s": res.wall_time,
            "real_time_factor": float((res.time[-1] + step) / max(res.wall_time, 1e-12)),
            "averaged_from_s": sc.settle, "step_s": step,
+           "soil_memory": int(terrain["model.soil_memory"]),
            "wheels": [{"name": w, "mean_slip": _mean(v["slip"], keep),
                        "mean_sinkage": _mean(v["sinkage"], keep),
                        "mean_normal_force": _mean(v["normal_force"], keep),
                        "mean_drawbar_pull": _mean(v["drawbar_pull"], keep),
-                       "mean_motor_power": _mean(v["motor_torque"] * v["wheel_speed"], keep)}
+                       "mean_motor_power": _mean(v["motor_torque"] * v["wheel_speed"], keep),
+                       "rut_depth": _mean(v["rut_left"], keep),
+                       "peak_sinkage": _peak(v["sinkage"], res.time, sc.settle)}
                       for w, v in res.wheels.items()]}
     if name in STALL_SCENARIOS:
         slip = res.wheels["front_left"]["slip"]
@@ -520,6 +654,9 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
             out["stall_slope_deg"] = math.degrees(res.inputs["slope"][k]) if hit.size else None
             out["predicted_stall_slope_deg"] = math.degrees(pred["slope"])
             out["predicted_stall_limit"] = pred["limit"]
+            out["stall_cause"] = (run_cause(res, quiet, p, float(res.inputs["slope"][k]))
+                                  if hit.size else None)
+            out["slip_vs_slope"] = slip_vs_slope(res)
         else:
             out["stall_towing_force"] = float(res.inputs["towing_force"][k]) \
                 if hit.size else None
@@ -531,6 +668,9 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
         out["predicted_descent_limit"] = pred["limit"]
         out["slide_slope_deg"] = (math.degrees(res.inputs["slope"][-1])
                                   if res.left_domain else None)
+        out["stall_cause"] = (run_cause(res, quiet, p, float(res.inputs["slope"][-1]))
+                              if res.left_domain else None)
+        out["slip_vs_slope"] = slip_vs_slope(res)
     return {"figures": out, "result": res, "values": {**values, **sc.profile},
             "stop": sc.stop, "step": step}
 
@@ -569,6 +709,14 @@ def tracking(res: RoverResult, soil: Soil, p: Mapping[str, float]) -> dict:
             "tracking_from_s": TRACKING_FROM}
 
 
+def _peak(values: np.ndarray, time: np.ndarray, settle: float) -> float | None:
+    """The largest value from ``settle`` s on, or from TRACKING_FROM (after the rover has
+    landed in the soil and its first sinking has settled) where the averaging starts earlier;
+    None where the run ended before."""
+    keep = time >= max(settle, TRACKING_FROM)
+    return float(np.max(values[keep])) if keep.any() else None
+
+
 def _mean(values: np.ndarray, keep: np.ndarray) -> float | None:
     """Mean over the averaging window; None where the run ended before it (left_domain says
     why)."""
@@ -581,15 +729,28 @@ def pull_curve(res: RoverResult, terrain: Mapping, p: Mapping[str, float], end: 
     over one grouser period), sampled at ``points`` slips from 0.02 up to the slip where the
     steady motion loses its stability (:func:`growth_rate`, towing balanced) or 0.9, beside the
     sum of the four single-wheel steady pulls at those slips with the loads of
-    :func:`rover.steady_balance`."""
+    :func:`rover.steady_balance`. On a soil with memory the stability is :func:`holds`'s."""
     from scipy.optimize import brentq
 
-    def rate(i: float) -> float:
-        return growth_rate(terrain, p, 0.0, i, balance_tow=True)["rate"]
-
     top = 0.9
-    if rate(top) > 0:
-        top = brentq(rate, 0.02, top, xtol=1e-5) if rate(0.02) < 0 else 0.02
+    if has_memory(terrain):  # no linearisation: the perturbed motion is run (:func:`holds`)
+        def stable(i: float) -> bool:
+            return holds(terrain, p, 0.0, i, balance_tow=True)
+
+        if not stable(top):
+            lo, hi = 0.02, top
+            if not stable(lo):
+                hi = lo
+            while hi - lo > 1e-3:
+                mid = (lo + hi) / 2
+                lo, hi = (mid, hi) if stable(mid) else (lo, mid)
+            top = lo
+    else:
+        def rate(i: float) -> float:
+            return growth_rate(terrain, p, 0.0, i, balance_tow=True)["rate"]
+
+        if rate(top) > 0:
+            top = brentq(rate, 0.02, top, xtol=1e-5) if rate(0.02) < 0 else 0.02
     omega = p["rover.rim_speed"] / p["rover.slip_radius"]
     n_g = max(terrain["front_left"]["grouser.count"], 1)
     window = max(round(2 * math.pi / (n_g * omega) / (res.time[1] - res.time[0])), 1)
@@ -642,7 +803,8 @@ def difference(ref: RoverResult, other: RoverResult, settle: float) -> dict:
 def record_units() -> dict[str, str]:
     """Units of the series a rover run writes (CSV headers)."""
     per_wheel = {"slip": "1", "sinkage": "m", "normal_force": "N", "drawbar_pull": "N",
-                 "torque": "N.m", "motor_torque": "N.m", "wheel_speed": "rad/s"}
+                 "torque": "N.m", "motor_torque": "N.m", "wheel_speed": "rad/s",
+                 "rut_left": "m"}
     units = {"time": "s", "position": "m", "speed": "m/s", "heave": "m", "pitch": "rad",
              "slope": "rad", "towing_force": "N"}
     units.update({f"{w}.{k}": u for w in rover.WHEELS for k, u in per_wheel.items()})

@@ -135,7 +135,8 @@ class RoverFMUs:
             self._map = {w: (self.instances[map_component(w)].refs(["position"]),
                              self.instances[map_component(w)].refs(GROUND),
                              self.instances[w].refs(GROUND)) for w in rover.WHEELS}
-        self._ter_out = {w: self.instances[w].refs((*TO_CHASSIS, "slip", "contact_sinkage"))
+        self._ter_out = {w: self.instances[w].refs((*TO_CHASSIS, "slip", "contact_sinkage",
+                                                    "rut_left"))
                          for w in rover.WHEELS}
 
     def exchange(self) -> list[float]:
@@ -161,11 +162,11 @@ class RoverFMUs:
         rec = ch.getReal(self._ch_record)
         row = []
         for k, w in enumerate(rover.WHEELS):
-            normal, pull, torque, slip, sinkage = per[w]
+            normal, pull, torque, slip, sinkage, rut = per[w]
             motor, omega = rec[2 * k], rec[2 * k + 1]
             values = {"slip": slip, "sinkage": sinkage, "normal_force": normal,
                       "drawbar_pull": pull, "torque": torque, "motor_torque": motor,
-                      "wheel_speed": omega}
+                      "wheel_speed": omega, "rut_left": rut}
             row += [values[r] for r in RECORD]
         return row + rec[2 * len(rover.WHEELS):]
 
@@ -220,7 +221,7 @@ def simulate(fmu_dir: Path, soil: Soil, values: Mapping[str, float], stop: float
 
 # what an SSP engine records, per wheel (component, variable) for each of RECORD
 _SSP_RECORD = {"slip": "slip", "sinkage": "contact_sinkage", "normal_force": "normal_force",
-               "drawbar_pull": "drawbar_pull", "torque": "torque"}
+               "drawbar_pull": "drawbar_pull", "torque": "torque", "rut_left": "rut_left"}
 _CHASSIS_OF_WHEEL = {"motor_torque": "motor_torque", "wheel_speed": "wheel_speed"}
 
 
