@@ -37,10 +37,11 @@ def test_build_then_reproduce_writes_the_contract(tmp_path):
         # the ripple's bias on the mean scales with the normal stress, not with the pull (which
         # is only ~3.6 N at C1 with the calibrated preset): compare on the normal-force scale
         assert abs(c["drawbar_pull"] - q["drawbar_pull"]) < 1e-3 * c["normal_force"]
-        # the ripple's clipping shifts the mean sinkage: measured 2.2e-3 relative at C1 with
-        # rashid-calibrated (its n0 = 0.5 leaves the stress small near the arc ends, where the
-        # ripple clips); with the ripple off the agreement is 1e-14 (tests/test_cosim.py)
-        assert abs(c["sinkage"] - q["sinkage"]) < 3e-3 * q["sinkage"]
+        # on the soil with memory (the default) the grouser ripple digs the wheel in: each
+        # downswing yields the soil, each upswing unloads it elastically; measured 3.5-4.5 %
+        # deeper than the quasi-static sinkage at C1-C4, never shallower (on the elastic
+        # soil the co-simulation meets the quasi-static solution: tests/test_cosim.py)
+        assert q["sinkage"] <= c["sinkage"] < 1.06 * q["sinkage"]
     for name in ("C1.csv", "C4.png", "means.png", "C3.ssp"):
         assert (tmp_path / "out" / name).stat().st_size > 0
     header = (tmp_path / "out" / "C1.csv").read_text().splitlines()[0].split(",")

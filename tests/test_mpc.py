@@ -16,9 +16,13 @@ from wheelterrain.cli import main
 from wheelterrain.control import closed_loop, mpc
 from wheelterrain.cosim import master as cosim
 from wheelterrain.model import rig
-from wheelterrain.parameters import NAMES, TABLE
+from wheelterrain.parameters import INDEX, NAMES, TABLE
 
-PS = presets.load(presets.DEFAULT_PRESET)
+# The tracking gates are the controller's on the plant it is designed for: the soil without
+# memory (the prediction's). On the default soil with memory the grouser ripple digs the
+# wheel in, a disturbance the prediction does not model (test below, docs/mpc.md).
+ELASTIC = {"model.soil_memory": 0}
+PS = presets.load(presets.DEFAULT_PRESET).with_values(ELASTIC)
 PT = np.array([PS[name] for name in NAMES])
 
 
@@ -68,6 +72,12 @@ def test_interval_jacobian_matches_central_differences():
                 values.append(np.array(fn(*a)[0]).ravel())
             numeric[:, j] = (values[0] - values[1]) / 2e-6
         tol = 1e-6 * np.maximum(np.abs(analytic), state_scale[:, None])
+        if arg == 3:  # soil.rut_depth = 0 (virgin soil) is a kink: the Jacobians report the
+            # virgin branch's 0 (contact.rut's note); central differences straddle it
+            kink = INDEX["soil.rut_depth"]
+            assert PT[kink] == 0.0
+            assert np.all(analytic[:, kink] == 0.0)
+            tol[:, kink] = np.inf
         bad = np.argwhere(np.abs(analytic - numeric) > tol)
         assert bad.size == 0, (f"input {arg}, entry {bad[0]}: AD {analytic[tuple(bad[0])]!r} "
                                f"vs FD {numeric[tuple(bad[0])]!r}")
@@ -151,6 +161,20 @@ def test_terrain_change_is_estimated_and_tracked():
     assert figures["failed_solves"] == 0, figures
 
 
+def test_on_the_soil_with_memory_the_loop_holds_and_misses_the_goal_by_the_ratchet():
+    """The default soil remembers: the grouser ripple's ratchet perturbs the torque the wheel
+    needs at every grouser, which the memoryless prediction does not foresee. The loop stays
+    closed (every solve succeeds), with the slip error after the transients measured at
+    6.3e-3 RMS: the nominal goal, 5e-4, is not met there (docs/mpc.md)."""
+    scenario = closed_loop.SCENARIOS["nominal"]
+    ps = presets.load(presets.DEFAULT_PRESET)
+    assert ps["model.soil_memory"] == 1
+    result = closed_loop.run(scenario, ps, "casadi")
+    figures = result.figures(scenario)
+    assert figures["failed_solves"] == 0
+    assert 5e-4 < figures["slip_rms_error"] < 1e-2, figures
+
+
 def test_free_carriage_tracks_while_the_vehicle_moves():
     scenario = dataclasses.replace(closed_loop.SCENARIOS["free-carriage"], duration=3.0)
     result = closed_loop.run(scenario, PS, "casadi")
@@ -165,8 +189,9 @@ def test_real_time_iteration_tracks_as_the_full_solve(tmp_path, options):
     """`wheelterrain mpc --iterations 1` (sqpmethod) and `--solver rti`: one SQP iteration
     per sample from the shifted warm start (the real-time iteration) tracks the nominal
     scenario within the same goal; the rti iteration reports every QP solved."""
-    run = CliRunner().invoke(main, ["mpc", "--plant", "casadi", *options, "--out",
-                                    str(tmp_path), "--json", str(tmp_path / "f.json")])
+    run = CliRunner().invoke(main, ["mpc", "--plant", "casadi", *options, "--set",
+                                    "model.soil_memory=0", "--out", str(tmp_path), "--json",
+                                    str(tmp_path / "f.json")])
     assert run.exit_code == 0, run.output
     figures = json.loads((tmp_path / "f.json").read_text())
     assert figures["iterations_median"] == 1
