@@ -39,15 +39,39 @@ def test_the_map_is_the_patch_on_its_half_open_interval_and_the_soil_elsewhere()
 
 
 def test_the_fmu_function_is_the_model_on_floats():
-    """Terrain.fmu's generated Function and the slave's float path are one expression."""
+    """Terrain.fmu's generated Functions and the slave's float path are one expression: the
+    map at both query points, and the rut record step by step."""
     model = fmu_model.STATE_MODELS["Terrain"]
-    outputs = model.functions()[1]
+    step, outputs, initial, _ = model.functions()
     p = _map()
-    for position in (0.5, 1.0, 1.7, 2.0):
-        y = [float(v) for v in outputs([], [position], [p[n] for n in ground.NAMES], [])
-             .full().ravel()]
-        assert y == list(model.output_values((), (position,), p, ()))
-    assert model.outputs == variables.GROUND
+    pv = [p[n] for n in ground.NAMES]
+    x_fn = initial(pv).full().ravel()
+    x_py = list(model.initial(p))
+    assert list(x_fn) == x_py
+    for k, position in enumerate((0.5, 1.0, 1.7, 2.0, 2.003, 2.2)):
+        u = (position, 0.001 * k, position - 0.4, 0.002 * k)
+        y = [float(v) for v in outputs(x_fn, u, pv, []).full().ravel()]
+        assert y == list(model.output_values(x_py, u, p, ()))
+        x_fn = step(x_fn, u, pv, 1e-3)[0].full().ravel()
+        x_py, _ = model.step(x_py, u, p, 1e-3)
+        assert list(x_fn) == list(x_py)
+    assert model.outputs == tuple(n for q in variables.QUERY_POINTS
+                                  for n in (*variables.query_ground(q), f"{q}.rut_met"))
+
+
+def test_the_record_keeps_the_deepest_rut_per_cell_and_serves_it_ahead():
+    """A wheel meets, terrain.lookahead ahead of its axle, the deepest rut left in that cell;
+    a cell nobody has passed, or one the ring has come round since, has none."""
+    p = ground.defaults()
+    x = ground.initial_record()
+    cell, ahead = p["terrain.cell"], p["terrain.lookahead"]
+    for rut in (0.004, 0.006, 0.005):  # three ruts left in one cell: the deepest stays
+        x = ground.record_one(x, 1.0 + cell / 2, rut, p)
+    assert ground.met(x, 1.0 + cell / 2 - ahead, p) == 0.006
+    assert ground.met(x, 1.0 + 1.5 * cell - ahead, p) == 0.0  # the next cell: untouched
+    # the ring comes round: a cell RUT_CELLS further on takes the slot, and the old is gone
+    x = ground.record_one(x, 1.0 + cell / 2 + ground.RUT_CELLS * cell, 0.001, p)
+    assert ground.met(x, 1.0 + cell / 2 - ahead, p) == 0.0
 
 
 @pytest.mark.parametrize("flavour", FLAVOURS)
@@ -63,10 +87,10 @@ def test_terrain_fmu_answers_the_map_at_its_query_point(built, flavour, interfac
     with Instance(built / flavour / "Terrain.fmu", log=True, interface=interface) as inst:
         inst.start({k: v for k, v in p.items() if not k.startswith("soil.")}, 1.0)
         for position in (0.5, 1.0, 1.99, 2.0):
-            inst.set({"position": position})
+            inst.set({"q1.position": position, "q2.position": position - 3.0})
             if interface == "cs":
                 inst.fmu.doStep(0.0, 1e-3) if position == 0.5 else None
-            got = inst.get(variables.GROUND)
+            got = inst.get(variables.query_ground("q1"))
             # the soil rows start at the default preset's values, as WheelTerrain's do
             want = ground.soil_at(position, {**p, **{
                 n: v for n, v in presets.load(presets.DEFAULT_PRESET).items()

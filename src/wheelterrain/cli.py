@@ -959,7 +959,7 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     from wheelterrain.cosim import rover_fmus, ssp
 
     soil = rover_system.scenario_soil(scenario, ps)
-    needed = rover_fmus.fmu_names(bool(soil.patch))
+    needed = rover_fmus.fmu_names()
     folder = Path(fmu_dir) if fmu_dir else next(
         (d for d in (Path("build/native"), Path("build"))
          if all((d / f"{n}.fmu").is_file() for n in needed)), Path("build/native"))

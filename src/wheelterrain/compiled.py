@@ -21,6 +21,7 @@ import tempfile
 from pathlib import Path
 
 import casadi as ca
+import numpy as np
 
 CFLAGS = ("-fPIC", "-shared")  # with the optimisation level compile_function is given
 
@@ -151,6 +152,17 @@ class CompiledFunction:
         self._scalar_out = [template.nnz_out(k) == 1 for k in range(self.n_out)]
 
     def __call__(self, *inputs) -> list:
+        self._evaluate(inputs)
+        return [buf[0] if scalar else list(buf)
+                for buf, scalar in zip(self._out, self._scalar_out, strict=True)]
+
+    def arrays(self, *inputs) -> list[np.ndarray]:
+        """The outputs as numpy arrays (copies): for large outputs, where a list of floats
+        costs more than the evaluation (the rover's record of a block of steps)."""
+        self._evaluate(inputs)
+        return [np.frombuffer(buf, dtype=np.float64).copy() for buf in self._out]
+
+    def _evaluate(self, inputs) -> None:
         for buf, value in zip(self._in, inputs, strict=True):
             if len(buf) == 1:
                 buf[0] = value
@@ -158,5 +170,3 @@ class CompiledFunction:
                 buf[:] = value
         if self._fn(self._arg, self._res, self._iw, self._w, 0) != 0:
             raise CompileError("compiled function reported an error")
-        return [buf[0] if scalar else list(buf)
-                for buf, scalar in zip(self._out, self._scalar_out, strict=True)]

@@ -153,10 +153,16 @@ class CasadiPlant:
     def set_rig(self, values: dict[str, float]) -> None:
         self.p_rig.update(values)
 
+    def _inputs(self) -> list[float]:
+        """WheelTerrain's inputs (TERRAIN_INPUTS) at the rig's state, as the FMU pair couples
+        them (no rut met: the rig's strip is virgin soil)."""
+        given = {**dict(zip(rig.RIG_STATES, self.x, strict=True)),
+                 "load": self.p_rig["rig.load"], "rut_met": 0.0}
+        return [given[n] for n in fmu_model.TERRAIN_INPUTS]
+
     def _forces(self) -> np.ndarray:
         """The terrain's outputs (TERRAIN_OUTPUTS) at the rig's state, its inputs by name."""
-        given = {**dict(zip(rig.RIG_STATES, self.x, strict=True)), "load": self.p_rig["rig.load"]}
-        u = [given[n] for n in fmu_model.TERRAIN_INPUTS]
+        u = self._inputs()
         y, status, info, _ = self.terrain(u, self.angle, self.plastic, self.p)
         if int(status) != fmu_model.STATUS_OK:
             raise mpc.PlantError("the in-process plant refused the step: "
@@ -175,10 +181,7 @@ class CasadiPlant:
             record(self.x, self.angle, y, self.motor_torque)
             # WheelTerrain advances its angle and plastic sinkage with the inputs it was given
             omega = self.x[rig.RIG_STATES.index("wheel_speed")]
-            given = {**dict(zip(rig.RIG_STATES, self.x, strict=True)),
-                     "load": self.p_rig["rig.load"]}
-            u = [given[n] for n in fmu_model.TERRAIN_INPUTS]
-            self.plastic = float(self.memory(u, self.plastic, self.p, PLANT_STEP))
+            self.plastic = float(self.memory(self._inputs(), self.plastic, self.p, PLANT_STEP))
             self.x, self.motor_torque = rig.step(self.x, forces, self.p_rig, PLANT_STEP)
             self.angle += omega * PLANT_STEP
 

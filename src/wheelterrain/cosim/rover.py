@@ -83,17 +83,81 @@ def _coupled_forces(xs: list, p: dict, pt: ca.MX, angles, plastics=None) -> tupl
     return u, wheels
 
 
-def _wheel_soils(xs: list, p: dict, pw: ca.MX, pg: ca.MX) -> ca.MX:
+TRACKS = rover.TRACKS
+"""The rover's tracks (a Terrain's query points q1, q2: the leading wheel, then the other)."""
+NEAR = 4
+"""Cells of the rut record a wheel may meet within one block of steps, from the one before the
+cell it meets at the block's start (:func:`met_table`): the record is replayed between
+blocks (:func:`replay`), exactly as Terrain.fmu keeps it step by step, where a wheel moves
+less than two cells a block."""
+N_MET = len(rover.WHEELS) * (NEAR + 1)
+
+
+def _wheel_soils(xs: list, p: dict, pw: ca.MX, pg: ca.MX, met: ca.MX) -> ca.MX:
     """The four wheels' terrain parameter vectors side by side (len(NAMES) x 4): the wheels'
     parameters ``pw`` with the soil the map (values ``pg``, ground.NAMES order) has at each
-    wheel's position, as each WheelTerrain with soil_from_inputs takes it from its Terrain."""
+    wheel's position, as each WheelTerrain with soil_from_inputs takes it from its Terrain, and
+    the rut it meets from the record (``met``: per wheel the number of the first of NEAR cells
+    and their ruts), as its input rut_met."""
     g = {name: pg[k] for k, name in enumerate(ground.NAMES)}
     columns = []
-    for w in rover.WHEELS:
-        soil = dict(zip(ground.SOIL_NAMES,
-                        ground.soil_at(rover.wheel_position(p, xs[0], w), g), strict=True))
-        columns.append(ca.vertcat(*(soil.get(name, pw[k]) for k, name in enumerate(NAMES))))
+    for j, w in enumerate(rover.WHEELS):
+        where = rover.wheel_position(p, xs[0], w)
+        soil = dict(zip(ground.SOIL_NAMES, ground.soil_at(where, g), strict=True))
+        number = ground.cell_number(where + g["terrain.lookahead"], g)
+        first = met[j * (NEAR + 1)]
+        rut = 0
+        for k in range(NEAR):
+            rut = rut + ca.if_else(number == first + k, met[j * (NEAR + 1) + 1 + k], 0)
+        column = ca.vertcat(*(soil.get(name, pw[k]) for k, name in enumerate(NAMES)))
+        columns.append(functions.with_rut_met(column, rut))
     return ca.horzcat(*columns)
+
+
+def met_table(records: dict, positions: dict[str, float], g: Mapping[str, float]) -> list:
+    """The ``met`` input of a block (N_MET): per wheel, the number of the cell before the one
+    it meets at the block's start, then the record's ruts of NEAR cells from there."""
+    out = []
+    for w in rover.WHEELS:
+        track = next(t for t, pair in TRACKS.items() if w in pair)
+        first = ground.cell_number(positions[w] + g["terrain.lookahead"], g) - 1
+        out += [float(first), *(ground.recorded(records[track], first + k)
+                                for k in range(NEAR))]
+    return out
+
+
+def replay(records: dict, wheel_positions: dict, ruts: dict, g: Mapping[str, float]) -> None:
+    """Terrain.fmu's record of each track after a block: every step, each wheel of the track
+    (the leading one first) left its rut at its position. Steps in one cell leave their
+    deepest rut once (ground.record_one); within a block the leading and the following
+    wheel never write the same slot (the record is longer than the wheelbase)."""
+    for track, pair in TRACKS.items():
+        x = records[track]
+        for w in pair:
+            numbers = np.floor(wheel_positions[w] / g["terrain.cell"])
+            starts = np.concatenate(([0], np.flatnonzero(np.diff(numbers)) + 1))
+            deepest = np.maximum.reduceat(ruts[w], starts)  # per run of steps in one cell
+            for a, rut in zip(starts, deepest, strict=True):
+                x = ground.record_one(x, float(wheel_positions[w][a]), float(rut), g)
+        records[track] = x
+
+
+def check_record(p: Mapping[str, float], g: Mapping[str, float]) -> None:
+    """Refuse, with the parameters to change, a rover the rut record cannot serve: a wheel
+    must meet the rut at least three cells ahead of where it leaves its own, and the record
+    must be longer than a track (the wheelbase and the lookahead, two cells to spare)."""
+    cell, ahead = g["terrain.cell"], g["terrain.lookahead"]
+    if ahead < 3 * cell:
+        raise WheelTerrainError(
+            f"terrain.lookahead = {ahead:g} m is less than three cells of terrain.cell = "
+            f"{cell:g} m: a wheel would meet the rut it leaves itself; make it at least "
+            f"{3 * cell:g} m")
+    span = p["rover.wheelbase"] + ahead + 2 * cell
+    if span >= ground.RUT_CELLS * cell:
+        raise WheelTerrainError(
+            f"the rut record holds {ground.RUT_CELLS} cells of terrain.cell = {cell:g} m "
+            f"({ground.RUT_CELLS * cell:g} m), less than the wheelbase and lookahead "
+            f"({span:g} m): make terrain.cell at least {span / ground.RUT_CELLS:.3g} m")
 
 
 N_CMD = len(rover.WHEELS) * len(rover.WHEEL_COMMANDS)
@@ -113,13 +177,14 @@ def _system_step() -> ca.Function:
     pw, pg = ca.MX.sym("pw", len(NAMES)), ca.MX.sym("pg", len(ground.NAMES))
     pr = ca.MX.sym("pr", len(rover.ROVER_NAMES))
     slope, tow, h = ca.MX.sym("slope"), ca.MX.sym("tow"), ca.MX.sym("h")
+    met = ca.MX.sym("met", N_MET)
     xs = [x[k] for k in range(len(rover.STATES))]
     n_s, n_w = len(rover.STATES), len(rover.WHEELS)
     angles = [x[n_s + k] for k in range(n_w)]
     plastics = [x[n_s + n_w + k] for k in range(n_w)]
     p = rover.named([pr[k] for k in range(len(rover.ROVER_NAMES))])
     s = dict(zip(rover.STATES, xs, strict=True))
-    soils = _wheel_soils(xs, p, pw, pg)
+    soils = _wheel_soils(xs, p, pw, pg, met)
     u, wheels = _coupled_forces(xs, p, soils, angles, plastics)
     u.update(slope=slope, towing_force=tow)
     u.update({f"{w}.{n}": cmd[k] for k, (w, n) in enumerate(
@@ -134,9 +199,10 @@ def _system_step() -> ca.Function:
                     for k, (_, z, _) in enumerate(wheels)]
     s["effective_slope"], s["effective_towing_force"] = rover.effective_inputs(xs, u, p)
     record = [v for wheel in rec for v in wheel] + [s[n] for n in CHASSIS_RECORD]
-    return ca.Function("rover_system", [x, pw, pg, pr, slope, tow, cmd, h],
+    return ca.Function("rover_system", [x, pw, pg, pr, slope, tow, cmd, h, met],
                        [ca.vertcat(*nxt, *new_angles, *new_plastics), ca.vertcat(*record)],
-                       ["x", "pw", "pg", "pr", "slope", "tow", "cmd", "h"], ["x_next", "rec"])
+                       ["x", "pw", "pg", "pr", "slope", "tow", "cmd", "h", "met"],
+                       ["x_next", "rec"])
 
 
 N_REC = len(RECORD) * len(rover.WHEELS) + len(CHASSIS_RECORD)
@@ -153,9 +219,11 @@ def block_function(block: int = BLOCK) -> ca.Function:
     pr = ca.MX.sym("pr", len(rover.ROVER_NAMES))
     slope, tow, h = ca.MX.sym("slope"), ca.MX.sym("tow"), ca.MX.sym("h")
     cmd = ca.MX.sym("cmd", N_CMD)
-    xs, recs = acc(x0, pw, pg, pr, slope, tow, cmd, h)
-    return ca.Function(f"rover_block{block}", [x0, pw, pg, pr, slope, tow, cmd, h],
-                       [xs[:, -1], recs], ["x", "pw", "pg", "pr", "slope", "tow", "cmd", "h"],
+    met = ca.MX.sym("met", N_MET)
+    xs, recs = acc(x0, pw, pg, pr, slope, tow, cmd, h, met)
+    return ca.Function(f"rover_block{block}", [x0, pw, pg, pr, slope, tow, cmd, h, met],
+                       [xs[:, -1], recs],
+                       ["x", "pw", "pg", "pr", "slope", "tow", "cmd", "h", "met"],
                        ["x_end", "rec"])
 
 
@@ -166,7 +234,7 @@ def _evaluator(block: int) -> tuple[Callable, str]:
     try:
         library = compiled.cached_library(fn, "rover", optimisation="-O1")
         c = compiled.CompiledFunction(library, fn)
-        return (lambda *a: c(*a)), "compiled C"
+        return c.arrays, "compiled C"
     except compiled.CompileError:
         return (lambda *a: [np.array(v).ravel().tolist() for v in fn(*a)]), "CasADi VM"
 
@@ -185,8 +253,9 @@ class Soil:
         self.patched = self.base.with_values(dict(self.patch or {}))  # checks the values
 
     def map_values(self) -> dict[str, float]:
-        """Terrain.fmu's parameters (ground.NAMES) for this map."""
-        out = {name: self.base[name] for name in ground.SOIL_NAMES}
+        """Terrain.fmu's parameters (ground.NAMES) for this map (the rut record's
+        terrain.cell and terrain.lookahead at their defaults)."""
+        out = {**ground.defaults(), **{name: self.base[name] for name in ground.SOIL_NAMES}}
         out.update({patch: self.patched[soil]
                     for soil, patch in zip(ground.SOIL_NAMES, ground.PATCH_NAMES, strict=True)})
         if self.patch:
@@ -214,20 +283,24 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
              block: int = BLOCK, stop_when: Callable[[dict], bool] | None = None,
              slope: float = 0.0, towing: float = 0.0,
              control: Callable[[float, list], list] | None = None,
-             x0: list[float] | None = None) -> RoverResult:
+             x0: list[float] | None = None, ruts0: dict | None = None) -> RoverResult:
     """Run the rover in process from rest on the surface for ``stop`` s, its inputs ``slope``
     [rad] and ``towing`` [N] constant (a scenario's ramps are the chassis' input profile, rows
     ``rover.ramp_time`` ... ``rover.towing_rate`` of ``rover_values``); ``stop_when(last)``
     (the last step's record by name) ends the run early. ``control(t, x)`` (x: rover.STATES
     then the wheel angles) gives the wheels' commands (N_CMD) held over the next ``block``
     steps (default: none, 0). ``x0``: the state to start from (N_X: rover.STATES, the wheel
-    angles, the wheels' plastic sinkages) instead of rest on the surface."""
+    angles, the wheels' plastic sinkages) instead of rest on the surface; ``ruts0``: the
+    tracks' rut records to start from (by track; default: no rut)."""
     p = {**rover.defaults(), **rover_values}
     evaluate, engine = _evaluator(block)
     pr = [p[n] for n in rover.ROVER_NAMES]
     pw = soil.base.vector()
     g = soil.map_values()
     pg = [g[n] for n in ground.NAMES]
+    check_record(p, g)
+    memory = {track: list(ruts0[track]) if ruts0 else ground.initial_record()
+              for track in TRACKS}  # Terrain.fmu's record, per track
     x = list(rover.initial_state(p)) + [0.0] * (2 * len(rover.WHEELS))  # angles, plastics
     if x0 is not None:
         x = [float(v) for v in x0]
@@ -238,8 +311,11 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
     for b in range(blocks):
         t = b * block * step
         cmd = [0.0] * N_CMD if control is None else control(t, x)
-        x, rec = evaluate(x, pw, pg, pr, slope, towing, cmd, step)
+        at = {w: rover.wheel_position(p, x[0], w) for w in rover.WHEELS}
+        met = met_table(memory, at, g)
+        x, rec = evaluate(x, pw, pg, pr, slope, towing, cmd, step, met)
         rec = np.asarray(rec, dtype=float).reshape(N_REC, block, order="F")
+        _remember(memory, rec, met, p, g)
         problem = _outside(rec)
         if problem is not None:
             k, why = problem
@@ -252,6 +328,23 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
     wall = time.perf_counter() - t0
     return from_records(np.concatenate(records, axis=1), step, wall, f"in-process ({engine})",
                         left)
+
+
+def _remember(records: dict, rec: np.ndarray, met: list, p: Mapping[str, float],
+              g: Mapping[str, float]) -> None:
+    """After a block: the ruts its steps left, into the tracks' records (:func:`replay`);
+    refused where a wheel met a cell outside the block's NEAR (it moved two cells or more)."""
+    wheels, chassis = named_record(rec)
+    positions = {w: rover.wheel_position(p, chassis["position"], w) for w in rover.WHEELS}
+    for j, w in enumerate(rover.WHEELS):
+        numbers = np.floor((positions[w] + g["terrain.lookahead"]) / g["terrain.cell"])
+        first = met[j * (NEAR + 1)]
+        if np.any(numbers < first) or np.any(numbers > first + NEAR - 1):
+            raise WheelTerrainError(
+                f"{w} moved more than two cells of the rut record (terrain.cell = "
+                f"{g['terrain.cell']:g} m) in one block of {rec.shape[1]} steps: make "
+                "terrain.cell larger or the block shorter")
+    replay(records, positions, {w: wheels[w]["rut_left"] for w in rover.WHEELS}, g)
 
 
 def named_record(rec) -> tuple[dict, dict]:
@@ -350,9 +443,10 @@ def growth_rate(terrain: Mapping, p: Mapping[str, float], slope: float, slip: fl
     ``balance_tow``: the towing force is whatever holds the rover at that slip (the pull
     test), else 0 (``slip`` must then be the slope's steady slip)."""
     f, jac = _closed_loop()
-    pt = np.column_stack([terrain[w].vector() for w in rover.WHEELS])
     pr = [p[n] for n in rover.ROVER_NAMES]
     balance = rover.steady_balance(terrain, p, slope, slip)
+    # each rear wheel in its front wheel's rut (the steady rover's soils)
+    pt = np.column_stack([balance["terrain"][w].vector() for w in rover.WHEELS])
     tow = balance["surplus"] if balance_tow else 0.0
     x = steady_state_vector(balance, p)
     keep = [rover.STATES.index(n) for n in MOVING]
@@ -412,8 +506,9 @@ def holds(terrain: Mapping, p: Mapping[str, float], slope: float, slip: float,
     x[rover.STATES.index("pitch_rate")] += PROBE_KICK
     plastics = [float(rover.wheel_kinematics(list(x), p, w)[0]) for w in rover.WHEELS]
     x0 = [*x, *([0.0] * len(rover.WHEELS)), *plastics]
-    base = terrain["front_left"]
-    res = simulate(Soil(base), dict(p), PROBE_TIME, step=step, slope=slope, towing=tow, x0=x0)
+    soil = Soil(terrain["front_left"])
+    res = simulate(soil, dict(p), PROBE_TIME, step=step, slope=slope, towing=tow, x0=x0,
+                   ruts0=steady_ruts(balance, p, x, soil.map_values()))
     if res.left_domain or res.time.size < round(PROBE_TIME / step) - 1:
         return False
     steady = np.array([balance["wheels"][w]["normal_force"] for w in rover.WHEELS])
@@ -423,6 +518,22 @@ def holds(terrain: Mapping, p: Mapping[str, float], slope: float, slip: float,
     slips = np.array([res.wheels[w]["slip"] for w in rover.WHEELS])
     return bool(deviation[-second:].max() < deviation[:second].max()
                 and slips.max() < STALL_SLIP)
+
+
+def steady_ruts(balance: dict, p: Mapping[str, float], x, g: Mapping[str, float]) -> dict:
+    """The tracks' rut records of a rover in steady motion (``balance``) at the state ``x``:
+    the track behind each leading wheel holds its steady rut, back past the wheel behind."""
+    records = {}
+    position = x[rover.STATES.index("position")]
+    for track, (front, rear) in TRACKS.items():
+        rut = balance["wheels"][front]["rut_left"]
+        record = ground.initial_record()
+        first = ground.cell_number(rover.wheel_position(p, position, rear), g) - 2
+        last = ground.cell_number(rover.wheel_position(p, position, front), g)
+        for number in range(first, last + 1):  # at each cell's middle: its own number
+            record = ground.record_one(record, (number + 0.5) * g["terrain.cell"], rut, g)
+        records[track] = record
+    return records
 
 
 def statically_stable(terrain: Mapping, p: Mapping[str, float], slope: float,

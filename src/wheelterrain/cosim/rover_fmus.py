@@ -1,28 +1,30 @@
-"""The rover as FMUs: RoverChassis.fmu and four WheelTerrain.fmu (and, for a soil that changes
-along the path, four Terrain.fmu), our master and Rover.ssp.
+"""The rover as FMUs: RoverChassis.fmu, four WheelTerrain.fmu and two Terrain.fmu (one per
+track: the soil map and the rut record each wheel's soil and rut come from), our master and
+Rover.ssp.
 
 Coupling per communication step h (fixed), Gauss-Seidel on the algebraic terrains, as the
 single-wheel master couples the rig (:mod:`wheelterrain.cosim.master`):
 
-1. the chassis' per-wheel outputs at t (``<wheel>.sinkage``, ``.sinkage_rate``,
-   ``.wheel_speed``, ``.carriage_speed``) are set as each wheel's WheelTerrain inputs; with a
-   soil map, ``<wheel>.position`` is set as the position of the wheel's Terrain instance (its
-   query point), whose ground.* outputs are set as the wheel's ground.* inputs (the wheels
-   take their soil from them: soil_from_inputs);
+1. each ``<wheel>.position`` of the chassis at t is set as its track's query point (the leading
+   wheel q1, the one behind q2); the track's ``q*.rut_met`` (and with a soil map its
+   ``q*.ground.*``, the wheels then taking their soil from them: soil_from_inputs) at t are
+   set as the wheel's inputs, with the chassis' per-wheel outputs at t (``<wheel>.sinkage``,
+   ``.sinkage_rate``, ``.wheel_speed``, ``.carriage_speed``);
 2. each WheelTerrain's forces at t (normal_force, drawbar_pull, torque) are set as the
-   chassis' ``<wheel>.*`` inputs, with the scenario's slope and towing force at t;
-3. all FMUs step t -> t + h.
+   chassis' ``<wheel>.*`` inputs, with the scenario's slope and towing force at t, and its
+   ``rut_left`` as its track's ``q*.rut_left``;
+3. all FMUs step t -> t + h (each track records the ruts left at t).
 
 The in-process rover (:mod:`wheelterrain.cosim.rover`) couples the same Functions the same
 way, so the two agree to rounding (tests/test_rover_fmus.py).
 
 Rover.ssp (``Rover_<scenario>`` system; components ``chassis``, one per wheel, named as the
-wheels, and with a soil map ``<wheel>_ground``) holds the FMUs, their connections and one
-parameter set named after the scenario: the terrain parameters on each wheel, the map's soils
-and patch, and the chassis' parameters, its input profile (the slope and towing ramps of the
-scenario) included, so any engine runs the scenario whole. Engines that pass every output one
-step late (libcosim, ecos) see the soil under a wheel two steps late (chassis -> map ->
-wheel): at the rover's speed, 0.1 mm of travel.
+wheels, and one per track, ``<track>_track``) holds the FMUs, their connections and one
+parameter set named after the scenario: the terrain parameters on each wheel, the map's soils,
+patch and rut record on each track, and the chassis' parameters, its input profile (the slope
+and towing ramps of the scenario) included, so any engine runs the scenario whole. Engines
+that pass every output one step late (libcosim, ecos) see the soil under a wheel two steps
+late (chassis -> track -> wheel): at the rover's speed, 0.1 mm of travel.
 """
 
 from __future__ import annotations
@@ -52,32 +54,43 @@ from wheelterrain.cosim.rover import (
 from wheelterrain.errors import CosimulationError
 from wheelterrain.fmu import functions
 from wheelterrain.fmu.instance import Instance
-from wheelterrain.fmu.variables import GROUND
+from wheelterrain.fmu.variables import GROUND, QUERY_POINTS
 from wheelterrain.model import rover
 from wheelterrain.parameters import GROUND_TABLE, ROVER_TABLE, TABLE, ParameterSet
 
 CHASSIS = "chassis"
-COMPONENTS = (CHASSIS, *rover.WHEELS)
 TO_TERRAIN = ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")
 TO_CHASSIS = rover.WHEEL_FORCES
 
 
-def map_component(wheel: str) -> str:
-    """The Terrain.fmu instance that answers for ``wheel``'s position (a soil map only)."""
-    return f"{wheel}_ground"
+def track_component(track: str) -> str:
+    """The Terrain.fmu instance of a track (rover.TRACKS)."""
+    return f"{track}_track"
+
+
+COMPONENTS = (CHASSIS, *rover.WHEELS, *(track_component(t) for t in rover.TRACKS))
+
+
+def query_of(wheel: str) -> tuple[str, str]:
+    """(track component, query point) that answers for ``wheel``."""
+    for track, pair in rover.TRACKS.items():
+        if wheel in pair:
+            return track_component(track), QUERY_POINTS[pair.index(wheel)]
+    raise KeyError(wheel)
 
 
 def connections(with_map: bool = False) -> list[tuple[str, str, str, str]]:
-    """(from component, output, to component, input) of Rover.ssp and of our master;
-    ``with_map``: each wheel's soil from its Terrain instance (query point: the wheel's
-    position)."""
+    """(from component, output, to component, input) of Rover.ssp and of our master: every
+    wheel's rut from its track's record; ``with_map``: also its soil from its track's map."""
     out = []
     for w in rover.WHEELS:
+        track, q = query_of(w)
         out += [(CHASSIS, f"{w}.{n}", w, n) for n in TO_TERRAIN]
         out += [(w, n, CHASSIS, f"{w}.{n}") for n in TO_CHASSIS]
+        out += [(CHASSIS, f"{w}.position", track, f"{q}.position"),
+                (w, "rut_left", track, f"{q}.rut_left"), (track, f"{q}.rut_met", w, "rut_met")]
         if with_map:
-            out.append((CHASSIS, f"{w}.position", map_component(w), "position"))
-            out += [(map_component(w), n, w, n) for n in GROUND]
+            out += [(track, f"{q}.{n}", w, n) for n in GROUND]
     return out
 
 
@@ -99,13 +112,14 @@ class RoverFMUs:
 
         fmu_dir = Path(fmu_dir)
         self.with_map = bool(soil.patch)
-        paths = {name: fmu_dir / f"{name}.fmu" for name in fmu_names(self.with_map)}
+        paths = {name: fmu_dir / f"{name}.fmu" for name in fmu_names()}
         missing = [str(p) for p in paths.values() if not p.is_file()]
         if missing:
             raise FileNotFoundError(f"{', '.join(missing)} not found: build the FMUs first "
                                     "(`wheelterrain build --flavor all`)")
         self._unzip = [extract(str(paths[name])) for name in paths if name != "RoverChassis"]
         self.instances: dict[str, Instance] = {}
+        tracks = [track_component(t) for t in rover.TRACKS]
         try:
             # log=True: the FMUs' messages are kept, not printed (standard output may be a
             # JSON document), and a refusal's reason ends up in the result
@@ -113,14 +127,14 @@ class RoverFMUs:
             for w in rover.WHEELS:
                 self.instances[w] = Instance(paths["WheelTerrain"], self._unzip[0], name=w,
                                              log=True)
-                if self.with_map:
-                    self.instances[map_component(w)] = Instance(
-                        paths["Terrain"], self._unzip[1], name=map_component(w), log=True)
+            for t in tracks:
+                self.instances[t] = Instance(paths["Terrain"], self._unzip[1], name=t,
+                                             log=True)
             self.instances[CHASSIS].start(chassis_values(values), stop)
             for w in rover.WHEELS:
                 self.instances[w].start(terrain_values(soil.base, self.with_map), stop)
-                if self.with_map:
-                    self.instances[map_component(w)].start(soil.map_values(), stop)
+            for t in tracks:
+                self.instances[t].start(soil.map_values(), stop)
         except BaseException:
             self.close()
             raise
@@ -130,11 +144,19 @@ class RoverFMUs:
         self._ch_record = ch.refs([*(f"{w}.{n}" for w in rover.WHEELS for n in
                                      ("motor_torque", "wheel_speed")), *CHASSIS_RECORD])
         self._ter_in = {w: self.instances[w].refs(TO_TERRAIN) for w in rover.WHEELS}
-        if self.with_map:
-            self._position = ch.refs(f"{w}.position" for w in rover.WHEELS)
-            self._map = {w: (self.instances[map_component(w)].refs(["position"]),
-                             self.instances[map_component(w)].refs(GROUND),
-                             self.instances[w].refs(GROUND)) for w in rover.WHEELS}
+        # per track, both query points at once: positions in; rut_met (and the map's soil)
+        # out; rut_left in; and each wheel's rut_met (and soil) inputs
+        self._tracks = {}
+        for track, pair in rover.TRACKS.items():
+            g = self.instances[track_component(track)]
+            outs = [f"{q}.{n}" for q in QUERY_POINTS
+                    for n in ("rut_met", *(GROUND if self.with_map else ()))]
+            self._tracks[track] = (ch.refs(f"{w}.position" for w in pair),
+                                   g.refs(f"{q}.position" for q in QUERY_POINTS), g.refs(outs),
+                                   g.refs(f"{q}.rut_left" for q in QUERY_POINTS))
+        self._rut_in = {w: self.instances[w].refs(["rut_met", *(GROUND if self.with_map
+                                                                else [])])
+                        for w in rover.WHEELS}
         self._ter_out = {w: self.instances[w].refs((*TO_CHASSIS, "slip", "contact_sinkage",
                                                     "rut_left"))
                          for w in rover.WHEELS}
@@ -144,20 +166,25 @@ class RoverFMUs:
         CHASSIS_RECORD."""
         ch = self.instances[CHASSIS].fmu
         x = ch.getReal(self._ch_out)
-        forces, per = [], {}
+        forces, per, met = [], {}, {}
         n = len(TO_TERRAIN)
-        positions = ch.getReal(self._position) if self.with_map else None
+        for track, pair in rover.TRACKS.items():  # the ruts met (and the map's soil), at t
+            positions, where, outs, _ = self._tracks[track]
+            g = self.instances[track_component(track)].fmu
+            g.setReal(where, ch.getReal(positions))
+            values = g.getReal(outs)
+            size = len(values) // len(pair)
+            met.update({w: values[j * size:(j + 1) * size] for j, w in enumerate(pair)})
         for k, w in enumerate(rover.WHEELS):
             t = self.instances[w].fmu
-            if self.with_map:  # the soil under the wheel, from its query point
-                where, ground_out, ground_in = self._map[w]
-                g = self.instances[map_component(w)].fmu
-                g.setReal(where, [positions[k]])
-                t.setReal(ground_in, g.getReal(ground_out))
+            t.setReal(self._rut_in[w], met[w])
             t.setReal(self._ter_in[w], x[k * n:(k + 1) * n])
             y = t.getReal(self._ter_out[w])
             forces += y[:len(TO_CHASSIS)]
             per[w] = y
+        for track, pair in rover.TRACKS.items():  # the ruts left, recorded at the step
+            g = self.instances[track_component(track)].fmu
+            g.setReal(self._tracks[track][3], [per[w][-1] for w in pair])
         ch.setReal(self._ch_in, forces)
         rec = ch.getReal(self._ch_record)
         row = []
@@ -363,9 +390,9 @@ def system_name(scenario: str) -> str:
     return "Rover_" + scenario.replace("-", "_")
 
 
-def fmu_names(with_map: bool) -> tuple[str, ...]:
-    """The FMUs a Rover.ssp holds: a soil map adds Terrain.fmu."""
-    return ("RoverChassis", "WheelTerrain", *(("Terrain",) if with_map else ()))
+def fmu_names() -> tuple[str, ...]:
+    """The FMUs a Rover.ssp holds (the tracks' Terrain.fmu in every scenario: the ruts)."""
+    return ("RoverChassis", "WheelTerrain", "Terrain")
 
 
 def system_description(scenario: str, soil: Soil, values: Mapping[str, float],
@@ -382,8 +409,7 @@ def system_description(scenario: str, soil: Soil, values: Mapping[str, float],
     chassis = {p.name: ssp._binding(p, chassis_values(values)[p.name]) for p in ROVER_TABLE}
     ins = [f"{w}.{n}" for w in rover.WHEELS for n in TO_CHASSIS]
     with_map = bool(soil.patch)
-    outs = [f"{w}.{n}" for w in rover.WHEELS
-            for n in (*TO_TERRAIN, *(("position",) if with_map else ()))]
+    outs = [f"{w}.{n}" for w in rover.WHEELS for n in (*TO_TERRAIN, "position")]
     # what the record reads (unconnected outputs; an engine records its connectors)
     recorded = {c: [v for comp, v in _ssp_variables() if comp == c] for c in COMPONENTS}
     outs += [v for v in recorded[CHASSIS] if v not in outs]
@@ -397,12 +423,15 @@ def system_description(scenario: str, soil: Soil, values: Mapping[str, float],
                    for name, value in soil.map_values().items()}
     for w in rover.WHEELS:
         ssp._component(elements, w, "resources/WheelTerrain.fmu",
-                       (*TO_TERRAIN, *(GROUND if with_map else ())),
+                       (*TO_TERRAIN, "rut_met", *(GROUND if with_map else ())),
                        (*TO_CHASSIS, *(v for v in recorded[w] if v not in TO_CHASSIS)), wheel,
                        scenario)
-        if with_map:
-            ssp._component(elements, map_component(w), "resources/Terrain.fmu", ("position",),
-                           GROUND, terrain_map, scenario)
+    for track in rover.TRACKS:
+        ins = [f"{q}.{n}" for q in QUERY_POINTS for n in ("position", "rut_left")]
+        outs = [f"{q}.{n}" for q in QUERY_POINTS
+                for n in ("rut_met", *(GROUND if with_map else ()))]
+        ssp._component(elements, track_component(track), "resources/Terrain.fmu", ins, outs,
+                       terrain_map, scenario)
     conns = ET.SubElement(system, q("ssd", "Connections"))
     for a, av, b, bv in connections(with_map):
         ET.SubElement(conns, q("ssd", "Connection"), startElement=a, startConnector=av,
@@ -426,7 +455,7 @@ def write_ssp(path: Path, fmu_dir: Path, scenario: str, soil: Soil,
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr("SystemStructure.ssd", system_description(scenario, soil, values,
                                                                  stop, step))
-            for name in fmu_names(bool(soil.patch)):
+            for name in fmu_names():
                 z.write(Path(fmu_dir) / f"{name}.fmu", f"resources/{name}.fmu")
         os.replace(partial, path)
     finally:

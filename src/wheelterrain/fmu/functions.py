@@ -46,7 +46,7 @@ from wheelterrain.fmu.variables import (
 )
 from wheelterrain.model import contact, ground, rig, rover, solve
 from wheelterrain.model.slip import reference_radius
-from wheelterrain.parameters import NAMES
+from wheelterrain.parameters import INDEX, NAMES
 
 if RIG_INPUTS != rig.INPUTS:  # the FMU's inputs are the rig model's, in the same order
     raise ImportError(f"SingleWheelRig's inputs {RIG_INPUTS} differ from the rig model's "
@@ -154,6 +154,13 @@ def slip_radius(p):
     return reference_radius(contact._P(p))
 
 
+def with_rut_met(p, rut_met):
+    """The parameter vector ``p`` (table order) with soil.rut_depth the deeper of its own and
+    the rut a terrain with memory says the wheel meets (WheelTerrain's input rut_met)."""
+    k = INDEX["soil.rut_depth"]
+    return ca.vertcat(p[:k], ca.fmax(p[k], rut_met), p[k + 1:])
+
+
 @lru_cache(maxsize=2)
 def terrain_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
     """(terrain_dynamic, terrain_quasi_static, terrain_memory): see the module's docstring.
@@ -162,10 +169,13 @@ def terrain_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
     ``terrain_memory(u, plastic, p, h) -> plastic_next`` advances it over a co-simulation
     step with the inputs held, :func:`wheelterrain.model.contact.plastic_update`."""
     fns = contact.build()
-    u, angle, p = ca.MX.sym("u", len(TERRAIN_INPUTS)), ca.MX.sym("angle"), ca.MX.sym(
+    u, angle, given = ca.MX.sym("u", len(TERRAIN_INPUTS)), ca.MX.sym("angle"), ca.MX.sym(
         "p", len(NAMES))
     plastic = ca.MX.sym("plastic")
-    sinkage, rate, omega, speed, load = (u[k] for k in range(len(TERRAIN_INPUTS)))
+    named = {name: u[k] for k, name in enumerate(TERRAIN_INPUTS)}
+    sinkage, rate, omega, speed, load = (named[n] for n in (
+        "sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "load"))
+    p = with_rut_met(given, named["rut_met"])  # the rut met: the parameter's or the input's
     traction, paper, forward = slips(omega, speed, slip_radius(p))
     slip_bad = ca.logic_or(ca.logic_not(forward), ca.logic_or(traction < -1, traction > 1))
     safe_slip = ca.fmin(ca.fmax(traction, -1), 1)  # only used when the status is OK
@@ -181,11 +191,11 @@ def terrain_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
         sinkage > full_burial, STATUS_BURIED, ca.if_else(
             _finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE)))
     info = ca.if_else(slip_bad, traction, full_burial)
-    dynamic = ca.Function("terrain_dynamic", [u, angle, plastic, p],
+    dynamic = ca.Function("terrain_dynamic", [u, angle, plastic, given],
                           [y, status, info, out["plastic_rate"]],
                           ["u", "angle", "plastic", "p"], ["y", "status", "info", "plastic_rate"])
     h = ca.MX.sym("h")
-    memory = ca.Function("terrain_memory", [u, plastic, p, h],
+    memory = ca.Function("terrain_memory", [u, plastic, given, h],
                          [fns.plastic_step(sinkage, plastic, speed, p, h)],
                          ["u", "plastic", "p", "h"], ["plastic_next"])
 
@@ -201,7 +211,7 @@ def terrain_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
         too_heavy, STATUS_LOAD, ca.if_else(converged, ca.if_else(
             _finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE), STATUS_UNCONVERGED)))
     info = ca.if_else(slip_bad, traction, steady["capacity"])
-    quasi = ca.Function("terrain_quasi_static", [u, p, guess], [y, status, info],
+    quasi = ca.Function("terrain_quasi_static", [u, given, guess], [y, status, info],
                         ["u", "p", "guess"], ["y", "status", "info"])
     return dynamic, quasi, memory
 
@@ -330,31 +340,40 @@ def rover_functions() -> tuple[ca.Function, ca.Function, ca.Function, ca.Functio
     return step, outputs, initial, rates
 
 
-# --- Terrain (a terrain map: no state, its outputs the soil at its input position) -------------
+# --- Terrain (a terrain map and the rut record of one track: model.ground) --------------------
 
 
 def ground_outputs(x, u, p, memory):
-    """GROUND_OUTPUTS (the ground.* variables), in that order, at the position u[0]."""
-    del x, memory  # the map has neither
-    return ground.soil_at(u[0], p)
+    """GROUND_OUTPUTS, in that order: each query point's soil (ground.outputs)."""
+    del memory  # the record is the state
+    return ground.outputs(x, u, p)
+
+
+def _ground_step(x, u, p, h):
+    del h  # the record keeps the rut left at each step, whatever its length
+    return ground.record(x, u, p), ()
 
 
 @lru_cache(maxsize=1)
 def ground_functions() -> tuple[ca.Function, ca.Function, ca.Function, ca.Function]:
-    """(ground_step, ground_outputs, ground_initial, ground_rates): a state model without
-    states, so that the map runs through the state models' machinery in both flavours."""
-    x, u = ca.SX.sym("x", 0), ca.SX.sym("u", len(ground.INPUTS))
-    p, h, memory = ca.SX.sym("p", len(ground.NAMES)), ca.SX.sym("h"), ca.SX.sym("memory", 0)
+    """(ground_step, ground_outputs, ground_initial, ground_rates): the rut record is the
+    state; the step records each query point's rut; it has no rates (model exchange has no
+    step: the record stays as it is)."""
+    # MX: the record's slot is read by a symbolic index, not by a switch over every slot
+    x, u = ca.MX.sym("x", len(ground.STATES)), ca.MX.sym("u", len(ground.INPUTS))
+    p, h, memory = ca.MX.sym("p", len(ground.NAMES)), ca.MX.sym("h"), ca.MX.sym("memory", 0)
     named = {name: p[k] for k, name in enumerate(ground.NAMES)}
-    y = ca.vertcat(*ground_outputs(x, [u[0]], named, memory))
-    empty = ca.SX(0, 1)
-    return (ca.Function("ground_step", [x, u, p, h], [empty, empty], ["x", "u", "p", "h"],
-                        ["x_next", "memory"]),
+    us = ca.vertsplit(u)
+    y = ca.vertcat(*ground_outputs(x, us, named, memory))
+    empty = ca.MX(0, 1)
+    x0 = ca.DM(ground.initial_record())
+    return (ca.Function("ground_step", [x, u, p, h], [ground.record(x, us, named), empty],
+                        ["x", "u", "p", "h"], ["x_next", "memory"]),
             ca.Function("ground_outputs", [x, u, p, memory], [y], ["x", "u", "p", "memory"],
                         ["y"]),
-            ca.Function("ground_initial", [p], [empty], ["p"], ["x0"]),
-            ca.Function("ground_rates", [x, u, p], [empty, empty], ["x", "u", "p"],
-                        ["xdot", "memory"]))
+            ca.Function("ground_initial", [p], [x0], ["p"], ["x0"]),
+            ca.Function("ground_rates", [x, u, p], [ca.MX.zeros(x.numel()), empty],
+                        ["x", "u", "p"], ["xdot", "memory"]))
 
 
 @dataclass(frozen=True)
@@ -415,7 +434,7 @@ STATE_MODELS = {
         rover_functions),
     "Terrain": StateModel(
         "Terrain", "ground", ground.STATES, ground.INPUTS, GROUND_OUTPUTS, ground.NAMES, 0,
-        None, 0.0, (), {}, lambda x, u, p, h: ((), ()), ground_outputs, lambda p: (),
-        lambda x: None, ground_functions),
+        None, 0.0, (), {}, _ground_step, ground_outputs,
+        lambda p: ground.initial_record(), lambda x: None, ground_functions),
 }
 """The state-space FMUs by model name."""

@@ -52,9 +52,9 @@ def compiled_or_vm(fn, resources: str | None = None):
             except (OSError, native.CompileError):
                 continue  # another platform or another version: the VM gives the same numbers
 
-    def vm(*args):
+    def vm(*args):  # fn.call: a list of outputs, also for a Function with one output
         return [np.asarray(x, dtype=float).ravel().tolist() if x.numel() > 1 else float(x)
-                for x in fn(*args)]
+                for x in fn.call(list(args))]
 
     return vm, "CasADi VM"
 

@@ -102,6 +102,10 @@ _TERRAIN_INPUT_ROWS = [
         "Velocity", min=-100.0, max=100.0),
     Var("load", "input", "Vertical load on the wheel (quasi-static mode)", "N", "Force",
         start=62.0, min=0.0, max=1.0e5),
+    Var("rut_met", "input", "Depth of the rut the wheel meets, recorded by a terrain with "
+        "memory (a Terrain.fmu query point's rut_met; 0: none): the contact takes the deeper "
+        "of it and soil.rut_depth (with model.soil_memory = 1)", "m", "Length", "mm",
+        start=0.0, min=0.0, max=1.0),
 ]
 _TERRAIN_INPUTS = tuple(v.name for v in _TERRAIN_INPUT_ROWS)
 
@@ -295,13 +299,33 @@ ROVER_IO: tuple[Var, ...] = (
 
 
 # --- Terrain: a terrain map's query point -----------------------------------------------------
-GROUND_IO: tuple[Var, ...] = (
-    Var("position", "input", "Position of the query point along the path (a wheel's axle: "
-        "RoverChassis' <wheel>.position)", "m", "Length", start=0.0, min=-1.0e6, max=1.0e6),
-    *(Var(ground_name(p.name), "output", "Soil at the query point (to a WheelTerrain's input of "
-          f"the same name, with soil_from_inputs): {p.description}", p.unit, p.quantity,
-          p.display_unit, depends_on=("position",)) for p in SOIL_ROWS),
-)
+QUERY_POINTS = ("q1", "q2")
+"""Terrain.fmu's query points: the wheels of one track, the leading one first (the names of
+:data:`wheelterrain.model.ground.QUERY`)."""
+_QUERY_ROLE = {"q1": "the leading wheel of the track", "q2": "the wheel behind it"}
+
+
+def query_ground(query: str) -> tuple[str, ...]:
+    """Terrain.fmu's ground.* outputs of query point ``query``: q1.ground.phi, ..."""
+    return tuple(f"{query}.{name}" for name in GROUND)
+
+
+GROUND_IO: tuple[Var, ...] = tuple(v for q in QUERY_POINTS for v in (
+    Var(f"{q}.position", "input", f"Position along the path of query point {q} "
+        f"({_QUERY_ROLE[q]}: RoverChassis' <wheel>.position, its axle)", "m", "Length",
+        start=0.0, min=-1.0e6, max=1.0e6),
+    Var(f"{q}.rut_left", "input", f"The rut the wheel at {q} leaves (its WheelTerrain's "
+        "rut_left): recorded at its position at each step (co-simulation; model exchange "
+        "records none), the deepest in each terrain.cell", "m", "Length", "mm", start=0.0,
+        min=0.0, max=1.0),
+    *(Var(f"{q}.{ground_name(p.name)}", "output", f"Soil of the map at query point {q} (to "
+          f"its WheelTerrain's input ground.*, with soil_from_inputs): {p.description}",
+          p.unit, p.quantity, p.display_unit, depends_on=(f"{q}.position",))
+      for p in SOIL_ROWS),
+    Var(f"{q}.rut_met", "output", f"The rut the wheel at {q} meets (to its WheelTerrain's "
+        "input rut_met): the deepest rut recorded in the cell terrain.lookahead ahead of its "
+        "position, 0 where no wheel has left one (or the record has moved on)", "m", "Length",
+        "mm", depends_on=(f"{q}.position",))))
 
 
 def _names(rows: tuple[Var, ...], causality: str, computed: bool = False) -> tuple[str, ...]:
@@ -328,7 +352,7 @@ ROVER_INPUTS = _names(ROVER_IO, "input")
 ROVER_OUTPUTS = _names(ROVER_IO, "output")
 """The order of rover_outputs' ``y``."""
 GROUND_OUTPUTS = _names(GROUND_IO, "output")
-"""The order of ground_outputs' ``y``: :data:`GROUND`."""
+"""The order of ground_outputs' ``y``: :func:`query_ground` of each query point."""
 
 
 def soil_from_ground(p: list[float], values: Mapping[str, float]) -> list[float]:

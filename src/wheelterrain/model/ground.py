@@ -1,4 +1,5 @@
-"""A terrain map along the path: the soil under a query point (a wheel's axle) at its position.
+"""A terrain along the path: the soil under a query point (a wheel's axle) at its position, and
+the ruts the wheels leave in it.
 
 The query-point pattern of vehicle co-simulation: the vehicle reports where each wheel is, the
 map answers with the ground there, and each wheel's contact model takes that ground as its
@@ -6,12 +7,27 @@ soil. Here the map is one soil (the ``soil.*`` rows) with a patch of another (th
 rows) on [``patch.start``, ``patch.end``) along the path: a soft patch under the front axle and
 then the rear in the rover's ``soft-patch`` scenario.
 
+The rut record (the soil's memory along a track): a Terrain answers the query points of one
+track, QUERY (the leading wheel, then the one behind it). Each step it records, at each query
+point's position, the rut that wheel leaves (WheelTerrain's ``rut_left``): the track is cut into
+cells of ``terrain.cell``, each keeping the deepest rut left in it. A wheel meets the rut
+``terrain.lookahead`` ahead of its axle (the front of its contact), WheelTerrain's input
+``rut_met`` (its contact takes the deeper of it and its soil's ``soil.rut_depth``), so the
+wheel behind runs in the rut of the wheel ahead, the query-point pattern of vehicle-terrain
+co-simulation. The record is a ring of RUT_CELLS cells (the track's last RUT_CELLS * cell
+metres), each holding the rut and the number of the cell it belongs to (:func:`cell_after`).
+
 Written once as plain arithmetic on numbers or CasADi symbols: Terrain.fmu (both flavours, a
-state model without states: its outputs are its inputs' image) and the in-process rover
-(:mod:`wheelterrain.cosim.rover`, evaluated at every step, as the FMU is) run :func:`soil_at`.
+state model whose state is the record) and the in-process rover (:mod:`wheelterrain.cosim.rover`,
+which replays the same record between its blocks of steps) run :func:`soil_at`,
+:func:`met`, :func:`outputs` and :func:`record`.
 """
 
 from __future__ import annotations
+
+import math
+
+import casadi as ca
 
 from wheelterrain.model.rig import pick
 from wheelterrain.parameters import GROUND_TABLE, TABLE
@@ -21,9 +37,19 @@ SOIL_NAMES = tuple(p.name for p in TABLE if p.name.startswith("soil."))
 PATCH_NAMES = tuple(f"patch.{n.split('.', 1)[1]}" for n in SOIL_NAMES)
 """The patch's rows, in the order of :data:`SOIL_NAMES`."""
 NAMES = (*SOIL_NAMES, *(p.name for p in GROUND_TABLE))
-"""The map's parameters: the soil rows, then the map's own (patch.start, patch.end, patch.*)."""
-STATES: tuple[str, ...] = ()
-INPUTS = ("position",)
+"""The map's parameters: the soil rows, then the map's own (patch.start, patch.end, the rut
+record's terrain.cell and terrain.lookahead, patch.*)."""
+QUERY = ("q1", "q2")
+"""A Terrain's query points: the wheels of one track, the leading one first."""
+RUT_CELLS = 256
+"""Cells of the rut record: it remembers the track's last RUT_CELLS * terrain.cell metres."""
+EMPTY = -1.0e15
+"""The cell number of a cell no wheel has left a rut in yet (no cell has this number:
+|position| <= 1e6 m, terrain.cell >= 1 mm)."""
+STATES: tuple[str, ...] = (*(f"rut[{k}]" for k in range(RUT_CELLS)),
+                           *(f"cell[{k}]" for k in range(RUT_CELLS)))
+"""The record: the rut of each ring slot [m], then the number of the cell it holds."""
+INPUTS = tuple(f"{q}.{n}" for q in QUERY for n in ("position", "rut_left"))
 
 
 def in_patch(position, p):
@@ -43,3 +69,92 @@ def defaults() -> dict[str, float]:
     """The map's parameters at their rows' defaults: one soil, no patch."""
     rows = {p.name: p for p in (*TABLE, *GROUND_TABLE)}
     return {name: float(rows[name].default) for name in NAMES}
+
+
+def initial_record() -> list[float]:
+    """The record before any wheel passed: no rut, every slot empty."""
+    return [0.0] * RUT_CELLS + [EMPTY] * RUT_CELLS
+
+
+def cell_number(position, p):
+    """The number of the cell of the track that ``position`` [m] lies in."""
+    return _floor(position / p["terrain.cell"])
+
+
+def _floor(x):
+    return math.floor(x) if isinstance(x, (int, float)) else ca.floor(x)
+
+
+def _slot(number):
+    """The ring slot that holds cell ``number``."""
+    return number - RUT_CELLS * _floor(number / RUT_CELLS)
+
+
+def cell_after(rut, cell, number, left):
+    """One slot of the record after a wheel left the rut ``left`` [m] in cell ``number``, the
+    slot holding ``rut`` for cell ``cell``: the deeper of the two where the slot holds that
+    cell, else (a cell the ring comes round to again) the new rut alone. ``(rut, cell)``."""
+    if not any(isinstance(v, (ca.SX, ca.MX)) for v in (rut, cell, number, left)):
+        rut, cell, number, left = (float(v) for v in (rut, cell, number, left))
+        return (max(left, rut) if cell == number else left), number
+    return ca.if_else(cell == number, ca.fmax(left, rut), left), number
+
+
+def recorded(x, number):
+    """The rut the record ``x`` (:data:`STATES`: a list of floats, or a CasADi MX vector)
+    holds for cell ``number`` [m]; 0 where no wheel has left one there (or the ring has come
+    round since). MX: the slot is read by a symbolic index (one lookup, not one switch a
+    slot)."""
+    ruts, cells = x[:RUT_CELLS], x[RUT_CELLS:]
+    if isinstance(number, (int, float)):
+        slot = int(_slot(number))
+        return float(ruts[slot]) if float(cells[slot]) == number else 0.0
+    slot = _slot(number)
+    return ca.if_else(cells[slot] == number, ruts[slot], 0)
+
+
+def record(x, u, p):
+    """The record after a step: each query point (in QUERY order) leaves its input rut_left at
+    its position (:func:`record_one`). ``x`` a list of floats or an MX vector, as returned."""
+    inputs = dict(zip(INPUTS, u, strict=True))
+    x = list(x) if isinstance(x, (list, tuple)) else x
+    for q in QUERY:
+        x = record_one(x, inputs[f"{q}.position"], inputs[f"{q}.rut_left"], p)
+    return x
+
+
+def record_one(x, position, left, p):
+    """The record ``x`` after a wheel at ``position`` left the rut ``left``: only the slot of its
+    cell changes (:func:`cell_after`). On floats that slot is written; on an MX vector it is
+    read by a symbolic index and written by a switch over the slots. Leaving the ruts r1, r2,
+    ... in one cell one after the other is leaving their deepest once (the in-process rover
+    replays its steps so)."""
+    number = cell_number(position, p)
+    if isinstance(number, (int, float)):
+        ruts, cells = list(x[:RUT_CELLS]), list(x[RUT_CELLS:])
+        slot = int(_slot(number))
+        ruts[slot], cells[slot] = cell_after(ruts[slot], cells[slot], number, left)
+        return ruts + cells
+    ruts, cells = x[:RUT_CELLS], x[RUT_CELLS:]
+    slot = _slot(number)
+    rut, cell = cell_after(ruts[slot], cells[slot], number, left)
+    hit = ca.DM(list(range(RUT_CELLS))) == slot
+    return ca.vertcat(ca.if_else(hit, ca.repmat(rut, RUT_CELLS, 1), ruts),
+                      ca.if_else(hit, ca.repmat(cell, RUT_CELLS, 1), cells))
+
+
+def met(x, position, p):
+    """The rut a wheel at ``position`` meets: the record's, terrain.lookahead ahead."""
+    return recorded(x, cell_number(position + p["terrain.lookahead"], p))
+
+
+def outputs(x, u, p) -> tuple:
+    """Every query point's outputs, QUERY order: the map's soil at its position
+    (:func:`soil_at`), then the rut it meets (:func:`met`). A wheel's contact takes the deeper
+    of the two ruts (WheelTerrain's rut_met input against its soil.rut_depth)."""
+    inputs = dict(zip(INPUTS, u, strict=True))
+    out = []
+    for q in QUERY:
+        position = inputs[f"{q}.position"]
+        out += (*soil_at(position, p), met(x, position, p))
+    return tuple(out)

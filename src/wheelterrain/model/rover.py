@@ -58,6 +58,10 @@ from wheelterrain.parameters import ROVER_TABLE
 
 WHEELS = ("front_left", "front_right", "rear_left", "rear_right")
 FRONT = ("front_left", "front_right")
+TRACKS = {"left": ("front_left", "rear_left"), "right": ("front_right", "rear_right")}
+"""The rover's tracks: the wheels that run in each other's ruts, the leading one first."""
+LEADING = {rear: front for front, rear in TRACKS.values()}
+"""The wheel whose rut each following wheel runs in."""
 ROVER_NAMES = tuple(p.name for p in ROVER_TABLE)
 CHASSIS_STATES = ("position", "speed", "heave", "heave_rate", "pitch", "pitch_rate",
                   "elapsed")
@@ -288,7 +292,9 @@ def steady_balance(terrain: Mapping, p: Mapping, slope: float, slip: float,
     loop reference gives them) on ``slope``: the wheel loads that satisfy the chassis' moment
     balance (load transfer by the centre of mass' height, the pulls below it and the motors'
     reactions, the pitch from the axles' sinkages), from the single-wheel steady states of
-    each wheel's ``terrain`` parameters (a mapping wheel -> ParameterSet).
+    each wheel's ``terrain`` parameters (a mapping wheel -> ParameterSet), each rear wheel in
+    the rut its front wheel leaves (:data:`TRACKS`; a soil with memory) and ``terrain`` says
+    so (the steady rover's soils: each rear wheel's with that rut).
 
     Returns the loads, each wheel's steady state, and ``surplus`` = sum of the pulls minus the
     weight's part along the slope and the towing force [N] (0 in steady motion; > 0 the rover
@@ -304,7 +310,10 @@ def steady_balance(terrain: Mapping, p: Mapping, slope: float, slip: float,
 
     def state(front_load: float) -> tuple[float, dict]:
         loads = {w: (front_load if w in FRONT else weight_n / 2 - front_load) for w in WHEELS}
-        out = {w: api.steady_state(terrain[w], loads[w], slip) for w in WHEELS}
+        out = {w: api.steady_state(terrain[w], loads[w], slip) for w in FRONT}
+        for w, ahead in LEADING.items():  # in the rut the wheel ahead leaves (soil memory)
+            out[w] = api.steady_state(in_rut(terrain[w], out[ahead]["rut_left"]), loads[w],
+                                      slip)
         zf = (out["front_left"]["sinkage"] + out["front_right"]["sinkage"]) / 2
         zr = (out["rear_left"]["sinkage"] + out["rear_right"]["sinkage"]) / 2
         sin_t = (zf - zr) / base
@@ -320,5 +329,16 @@ def steady_balance(terrain: Mapping, p: Mapping, slope: float, slip: float,
     front = brentq(lambda f: state(f)[0], lo, hi, xtol=1e-12, rtol=1e-13)
     _, out = state(front)
     surplus = sum(out[w]["drawbar_pull"] for w in WHEELS) - m * g * math.sin(slope) - towing
+    ground = {**{w: terrain[w] for w in FRONT},
+              **{w: in_rut(terrain[w], out[a]["rut_left"]) for w, a in LEADING.items()}}
     return {"loads": {w: out[w]["load"] for w in WHEELS}, "wheels": out, "surplus": surplus,
-            "slip": slip, "slope": slope}
+            "slip": slip, "slope": slope, "terrain": ground}
+
+
+def in_rut(params, rut: float):
+    """``params`` (a ParameterSet) with the soil in the rut ``rut`` [m] a wheel ahead left:
+    soil.rut_depth the deeper of its own and that (no change where the soil has no memory,
+    whose wheels leave no rut)."""
+    if rut <= params["soil.rut_depth"]:
+        return params
+    return params.with_values({"soil.rut_depth": rut})
