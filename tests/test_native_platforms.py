@@ -74,7 +74,8 @@ def _scripts(built):
     t = _vrs(built, "WheelTerrain")
     r = _vrs(built, "SingleWheelRig")
     terrain_out = ",".join(str(t[n]) for n in ("normal_force", "drawbar_pull", "torque",
-                                                 "entry_angle", "wheel_angle"))
+                                                 "entry_angle", "wheel_angle",
+                                                 "plastic_sinkage", "rut_left"))
     rig_out = ",".join(str(r[n]) for n in ("sinkage", "sinkage_rate", "wheel_speed",
                                              "carriage_speed", "motor_torque"))
     v = _vrs(built, "RoverChassis")
@@ -85,12 +86,15 @@ def _scripts(built):
                         for n, a, b in (("normal_force", 24.0, 1.0), ("drawbar_pull", 1.0, 0.5),
                                         ("torque", 0.1, 0.05)))
     g = _vrs(built, "Terrain")
-    ground_out = ",".join(str(g[n]) for n in ("ground.phi", "ground.k_phi", "ground.cohesion"))
+    ground_out = ",".join(str(g[n]) for n in ("q1.ground.phi", "q1.ground.k_phi",
+                                               "q1.ground.cohesion", "q2.rut_met"))
     return {
-        # the terrain map: the query point runs from 0 to 3 m across a patch on [1, 2) m
+        # the terrain map: the leading query point runs from 0 to 3 m across a patch on
+        # [1, 2) m leaving a rut, the other 0.3 m behind it meets that rut
         "Terrain": ("Terrain", 300, 1e-2, f"{g['patch.start']}=1,{g['patch.end']}=2,"
                     f"{g['patch.phi']}=0.3,{g['patch.k_phi']}=40,{g['patch.cohesion']}=200",
-                    f"{g['position']}=0+1", ground_out),
+                    f"{g['q1.position']}=0+1,{g['q1.rut_left']}=0.004+0.002,"
+                    f"{g['q2.position']}=-0.3+1", ground_out),
         # a wheel taking its soil from its ground.* inputs (another soil than its parameters)
         "WheelTerrain ground": ("WheelTerrain", 200, 2e-3,
                                 f"b{t['soil_from_inputs']}=1,{t['ground.phi']}=0.5,"
