@@ -139,24 +139,25 @@ class RoverFMUs:
             self.close()
             raise
         ch = self.instances[CHASSIS]
-        self._ch_out = ch.refs(f"{w}.{n}" for w in rover.WHEELS for n in TO_TERRAIN)
+        # per wheel TO_TERRAIN, then every wheel's position (one call)
+        self._ch_out = ch.refs([*(f"{w}.{n}" for w in rover.WHEELS for n in TO_TERRAIN),
+                                *(f"{w}.position" for w in rover.WHEELS)])
         self._ch_in = ch.refs(f"{w}.{n}" for w in rover.WHEELS for n in TO_CHASSIS)
         self._ch_record = ch.refs([*(f"{w}.{n}" for w in rover.WHEELS for n in
                                      ("motor_torque", "wheel_speed")), *CHASSIS_RECORD])
-        self._ter_in = {w: self.instances[w].refs(TO_TERRAIN) for w in rover.WHEELS}
+        # per wheel, one call: rut_met (and the map's soil), then TO_TERRAIN
+        self._ter_in = {w: self.instances[w].refs(["rut_met", *(GROUND if self.with_map
+                                                                 else []), *TO_TERRAIN])
+                        for w in rover.WHEELS}
         # per track, both query points at once: positions in; rut_met (and the map's soil)
         # out; rut_left in; and each wheel's rut_met (and soil) inputs
         self._tracks = {}
-        for track, pair in rover.TRACKS.items():
+        for track in rover.TRACKS:
             g = self.instances[track_component(track)]
             outs = [f"{q}.{n}" for q in QUERY_POINTS
                     for n in ("rut_met", *(GROUND if self.with_map else ()))]
-            self._tracks[track] = (ch.refs(f"{w}.position" for w in pair),
-                                   g.refs(f"{q}.position" for q in QUERY_POINTS), g.refs(outs),
+            self._tracks[track] = (g.refs(f"{q}.position" for q in QUERY_POINTS), g.refs(outs),
                                    g.refs(f"{q}.rut_left" for q in QUERY_POINTS))
-        self._rut_in = {w: self.instances[w].refs(["rut_met", *(GROUND if self.with_map
-                                                                else [])])
-                        for w in rover.WHEELS}
         self._ter_out = {w: self.instances[w].refs((*TO_CHASSIS, "slip", "contact_sinkage",
                                                     "rut_left"))
                          for w in rover.WHEELS}
@@ -168,23 +169,23 @@ class RoverFMUs:
         x = ch.getReal(self._ch_out)
         forces, per, met = [], {}, {}
         n = len(TO_TERRAIN)
+        position = dict(zip(rover.WHEELS, x[n * len(rover.WHEELS):], strict=True))
         for track, pair in rover.TRACKS.items():  # the ruts met (and the map's soil), at t
-            positions, where, outs, _ = self._tracks[track]
+            where, outs, _ = self._tracks[track]
             g = self.instances[track_component(track)].fmu
-            g.setReal(where, ch.getReal(positions))
+            g.setReal(where, [position[w] for w in pair])
             values = g.getReal(outs)
             size = len(values) // len(pair)
             met.update({w: values[j * size:(j + 1) * size] for j, w in enumerate(pair)})
         for k, w in enumerate(rover.WHEELS):
             t = self.instances[w].fmu
-            t.setReal(self._rut_in[w], met[w])
-            t.setReal(self._ter_in[w], x[k * n:(k + 1) * n])
+            t.setReal(self._ter_in[w], [*met[w], *x[k * n:(k + 1) * n]])
             y = t.getReal(self._ter_out[w])
             forces += y[:len(TO_CHASSIS)]
             per[w] = y
         for track, pair in rover.TRACKS.items():  # the ruts left, recorded at the step
             g = self.instances[track_component(track)].fmu
-            g.setReal(self._tracks[track][3], [per[w][-1] for w in pair])
+            g.setReal(self._tracks[track][2], [per[w][-1] for w in pair])
         ch.setReal(self._ch_in, forces)
         rec = ch.getReal(self._ch_record)
         row = []
