@@ -265,11 +265,12 @@ TABLE: tuple[Parameter, ...] = (
        "4 (1), the soft-soil reading of Abubakar et al.'s eq. 1", kind="enum",
        choices=MappingProxyType({0: "arc", 1: "patch"})),
     _P("model.soil_memory", "1", 1, 0, 1,
-       "Soil with memory: 1 = elastic-plastic, a wheel in a rut (soil.rut_depth > 0) meets "
-       "soil that answers elastically up to the pressure it has carried and plastically "
-       "beyond, and its contact begins at the rut's surface; 0 = the rut is ignored (every "
-       "wheel meets virgin soil: the results of the elastic soil, exactly). Identical where "
-       "soil.rut_depth = 0.",
+       "Soil with memory: 1 = elastic-plastic: a wheel in a rut (soil.rut_depth, or the "
+       "rut_met a terrain with memory gives) meets soil that answers elastically up to the "
+       "pressure it has carried and plastically beyond, its contact beginning at the rut's "
+       "surface; a wheel lifted from where it yielded (plastic_sinkage) unloads along the "
+       "same elastic line; it leaves a rut (rut_left). 0 = the elastic soil: ruts ignored, "
+       "none left, the same numbers as before the soil had memory, exactly.",
        "Wong, Theory of Ground Vehicles, ch. 2 (repetitive loading); Krenn & Hirzinger 2009 "
        "(SCM's elastic-plastic soil node)", kind="enum",
        choices=MappingProxyType({0: "off", 1: "elastic-plastic"})),
