@@ -83,8 +83,6 @@ def _coupled_forces(xs: list, p: dict, pt: ca.MX, angles, plastics=None) -> tupl
     return u, wheels
 
 
-TRACKS = rover.TRACKS
-"""The rover's tracks (a Terrain's query points q1, q2: the leading wheel, then the other)."""
 NEAR = 4
 """Cells of the rut record a wheel may meet within one block of steps, from the one before the
 cell it meets at the block's start (:func:`met_table`): the record is replayed between
@@ -119,9 +117,8 @@ def met_table(records: dict, positions: dict[str, float], g: Mapping[str, float]
     it meets at the block's start, then the record's ruts of NEAR cells from there."""
     out = []
     for w in rover.WHEELS:
-        track = next(t for t, pair in TRACKS.items() if w in pair)
         first = ground.cell_number(positions[w] + g["terrain.lookahead"], g) - 1
-        out += [float(first), *(ground.recorded(records[track], first + k)
+        out += [float(first), *(ground.recorded(records[rover.TRACK_OF[w]], first + k)
                                 for k in range(NEAR))]
     return out
 
@@ -131,10 +128,10 @@ def replay(records: dict, wheel_positions: dict, ruts: dict, g: Mapping[str, flo
     (the leading one first) left its rut at its position. Steps in one cell leave their
     deepest rut once (ground.record_one); within a block the leading and the following
     wheel never write the same slot (the record is longer than the wheelbase)."""
-    for track, pair in TRACKS.items():
+    for track, pair in rover.TRACKS.items():
         x = records[track]
         for w in pair:
-            numbers = np.floor(wheel_positions[w] / g["terrain.cell"])
+            numbers = ground.cell_number(wheel_positions[w], g)
             starts = np.concatenate(([0], np.flatnonzero(np.diff(numbers)) + 1))
             deepest = np.maximum.reduceat(ruts[w], starts)  # per run of steps in one cell
             for a, rut in zip(starts, deepest, strict=True):
@@ -300,7 +297,7 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
     pg = [g[n] for n in ground.NAMES]
     check_record(p, g)
     memory = {track: list(ruts0[track]) if ruts0 else ground.initial_record()
-              for track in TRACKS}  # Terrain.fmu's record, per track
+              for track in rover.TRACKS}  # Terrain.fmu's record, per track
     x = list(rover.initial_state(p)) + [0.0] * (2 * len(rover.WHEELS))  # angles, plastics
     if x0 is not None:
         x = [float(v) for v in x0]
@@ -337,7 +334,7 @@ def _remember(records: dict, rec: np.ndarray, met: list, p: Mapping[str, float],
     wheels, chassis = named_record(rec)
     positions = {w: rover.wheel_position(p, chassis["position"], w) for w in rover.WHEELS}
     for j, w in enumerate(rover.WHEELS):
-        numbers = np.floor((positions[w] + g["terrain.lookahead"]) / g["terrain.cell"])
+        numbers = ground.cell_number(positions[w] + g["terrain.lookahead"], g)
         first = met[j * (NEAR + 1)]
         if np.any(numbers < first) or np.any(numbers > first + NEAR - 1):
             raise WheelTerrainError(
@@ -525,7 +522,7 @@ def steady_ruts(balance: dict, p: Mapping[str, float], x, g: Mapping[str, float]
     the track behind each leading wheel holds its steady rut, back past the wheel behind."""
     records = {}
     position = x[rover.STATES.index("position")]
-    for track, (front, rear) in TRACKS.items():
+    for track, (front, rear) in rover.TRACKS.items():
         rut = balance["wheels"][front]["rut_left"]
         record = ground.initial_record()
         first = ground.cell_number(rover.wheel_position(p, position, rear), g) - 2
@@ -552,12 +549,14 @@ STALL_CAUSES = ("traction", "slip_sinkage", "stability", "motor_torque", "domain
 """What can end a slope or descent run (``stall_cause``), in the order they are tested."""
 
 
-def steady_cause(terrain: Mapping, p: Mapping[str, float], slope: float) -> str | None:
+def steady_cause(terrain: Mapping, p: Mapping[str, float], slope: float,
+                 slip: float | None = None) -> str | None:
     """Which steady condition fails on ``slope``, or None: no steady slip in
     [-0.999, STALL_SLIP] (``traction``: the wheels cannot hold the rover; downhill, cannot
     brake it), the force balance falls with slip there (``slip_sinkage``), or the motors
-    cannot give its torque (``motor_torque``, rover.motor_torque_limit)."""
-    i = steady_slip(terrain, p, slope)
+    cannot give its torque (``motor_torque``, rover.motor_torque_limit). ``slip``: the
+    slope's steady slip where the caller has it (:func:`steady_slip`)."""
+    i = steady_slip(terrain, p, slope) if slip is None else slip
     if i is None:
         return "traction"
     if not statically_stable(terrain, p, slope, i):
@@ -616,10 +615,12 @@ def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
         tolerance = max(tolerance, 1e-3)
 
     def verdict(slope: float) -> str | None:
-        cause = steady_cause(terrain, p, slope)
+        i = steady_slip(terrain, p, slope)
+        if i is None:
+            return "traction"
+        cause = steady_cause(terrain, p, slope, i)
         if cause is not None:
             return cause
-        i = steady_slip(terrain, p, slope)
         if memory:
             return None if holds(terrain, p, slope, i) else "stability"
         return "stability" if growth_rate(terrain, p, slope, i)["rate"] > 0 else None
@@ -728,6 +729,8 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
         raise ValueError(f"unknown gravity {gravity!r}; valid: {', '.join(GRAVITY)}")
     values = {**(rover_values or {}), "rover.gravity": GRAVITY[gravity]}
     p = {**rover.defaults(), **values}
+    soil = scenario_soil(name, terrain)
+    check_record(p, soil.map_values())  # every engine's Terrain, not only in process
     quiet = terrain_of(terrain.with_values(NO_RIPPLE))
     pred = None
     if name in ("slope", "descent"):
@@ -735,7 +738,6 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
     knee = max(math.degrees(pred["slope"]) - 1.0, 0.0) if name == "slope" else 15.0
     sc = scenarios(gravity, knee, p["rover.mass"] * p["rover.gravity"])[name]
     step = sc.step if step is None else step
-    soil = scenario_soil(name, terrain)
     stalled = (lambda last: last["front_left.slip"] >= STALL_SLIP) \
         if name in STALL_SCENARIOS else None
     run = engine or (lambda *a, **k: simulate(*a, **k))

@@ -73,10 +73,8 @@ COMPONENTS = (CHASSIS, *rover.WHEELS, *(track_component(t) for t in rover.TRACKS
 
 def query_of(wheel: str) -> tuple[str, str]:
     """(track component, query point) that answers for ``wheel``."""
-    for track, pair in rover.TRACKS.items():
-        if wheel in pair:
-            return track_component(track), QUERY_POINTS[pair.index(wheel)]
-    raise KeyError(wheel)
+    track = rover.TRACK_OF[wheel]
+    return track_component(track), QUERY_POINTS[rover.TRACKS[track].index(wheel)]
 
 
 def connections(with_map: bool = False) -> list[tuple[str, str, str, str]]:

@@ -425,13 +425,12 @@ class TerrainCore(_Core):
 
     def do_step(self, t: float, h: float) -> bool:
         """Check the step's inputs, advance the wheel angle and the plastic sinkage, as
-        fmi2_native.c does. Inputs not
-        evaluated since they were set are evaluated once, at the step's end (what the master
-        reads next: a set + doStep + get costs one evaluation); the terrain's refusals depend
-        on its inputs, not on the angle, and a refused step is not taken. Inputs already
-        evaluated (a master that reads before it steps) were checked then; the outputs at the
-        step's end are computed when first read, and a problem found then refuses the next
-        step."""
+        fmi2_native.c does. Inputs not evaluated since they were set are evaluated once, at
+        the step's end (what the master reads next: a set + doStep + get costs one
+        evaluation); the terrain's refusals depend on its inputs, not on its states, and a
+        refused step is not taken. Inputs already evaluated (a master that reads before it
+        steps) were checked then; the outputs at the step's end are computed when first read,
+        and a problem found then refuses the next step."""
         if not self.step_allowed(t, h):
             return False
         if self.dirty and not self._settings_invalid():

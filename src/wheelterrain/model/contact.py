@@ -408,11 +408,16 @@ class Rut:
         return ca.if_else(d >= self.layer, plastic, elastic)
 
 
+def _in_rut(P: _P) -> ca.SX:
+    """1 where the wheel meets a rut it remembers: model.soil_memory = 1, soil.rut_depth > 0."""
+    return ca.logic_and(P["model.soil_memory"] == 1, P["soil.rut_depth"] > 0)
+
+
 def rut(slip: ca.SX, P: _P) -> Rut:
     """The :class:`Rut` under the wheel at traction slip ``slip``."""
     n, modulus = _reece(slip, P)
     b = P["wheel.width"]
-    on = ca.logic_and(P["model.soil_memory"] == 1, P["soil.rut_depth"] > 0)
+    on = _in_rut(P)
     surface = ca.if_else(on, P["soil.rut_depth"], b)  # the stand-in where off
     layer = modulus * ca.exp(n * ca.log(surface / b)) / P["soil.unloading_stiffness"]
     return Rut(on, surface, layer, surface + layer, n, modulus, b)
@@ -422,8 +427,7 @@ def rut_surface(P: _P) -> ca.SX:
     """Depth [m] of the surface a wheel's contact begins at: the rut's (``soil.rut_depth``)
     with ``model.soil_memory`` = 1, else the original surface, 0. Sinkage is counted from the
     original surface; the contact's geometry from this one."""
-    on = ca.logic_and(P["model.soil_memory"] == 1, P["soil.rut_depth"] > 0)
-    return ca.if_else(on, P["soil.rut_depth"], 0)
+    return ca.if_else(_in_rut(P), P["soil.rut_depth"], 0)
 
 
 def rut_left(theta_f: ca.SX, ground: Rut, P: _P) -> ca.SX:
@@ -656,8 +660,9 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
     ground = rut(slip, P)  # in a rut: the elastic-plastic soil below its surface
     depth = ground.surface + z
     # the plastic work of the rut's deepening, b*int_y^depth p dz (the elastic part returns)
-    deepening = b * (ground.law(ca.fmax(depth, ground.yield_depth)) * ca.fmax(
-        depth, ground.yield_depth) - ground.law(ground.yield_depth) * ground.yield_depth) / (n + 1)
+    deepest = ca.fmax(depth, ground.yield_depth)
+    deepening = b * (ground.law(deepest) * deepest
+                     - ground.law(ground.yield_depth) * ground.yield_depth) / (n + 1)
     pressure = ca.if_else(ground.on, ground.pressure(z), pressure)
     compaction = ca.if_else(ground.on, deepening, compaction)
     normal_static = b * length * pressure

@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 
 import casadi as ca
+import numpy as np
 
 from wheelterrain.model.rig import pick
 from wheelterrain.parameters import GROUND_TABLE, TABLE
@@ -77,12 +78,15 @@ def initial_record() -> list[float]:
 
 
 def cell_number(position, p):
-    """The number of the cell of the track that ``position`` [m] lies in."""
+    """The number of the cell of the track that ``position`` [m] lies in (a float, a numpy
+    array of positions, or a CasADi symbol)."""
     return _floor(position / p["terrain.cell"])
 
 
 def _floor(x):
-    return math.floor(x) if isinstance(x, (int, float)) else ca.floor(x)
+    if isinstance(x, (int, float)):
+        return math.floor(x)
+    return np.floor(x) if isinstance(x, np.ndarray) else ca.floor(x)
 
 
 def _slot(number):

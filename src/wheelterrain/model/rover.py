@@ -62,6 +62,8 @@ TRACKS = {"left": ("front_left", "rear_left"), "right": ("front_right", "rear_ri
 """The rover's tracks: the wheels that run in each other's ruts, the leading one first."""
 LEADING = {rear: front for front, rear in TRACKS.values()}
 """The wheel whose rut each following wheel runs in."""
+TRACK_OF = {w: track for track, pair in TRACKS.items() for w in pair}
+"""Each wheel's track."""
 ROVER_NAMES = tuple(p.name for p in ROVER_TABLE)
 CHASSIS_STATES = ("position", "speed", "heave", "heave_rate", "pitch", "pitch_rate",
                   "elapsed")
