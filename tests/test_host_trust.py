@@ -7,7 +7,8 @@
 - FMU states owned by the guard: a truncated, overwritten, foreign or freed state is fmi2Error
   and the instance goes on;
 - a host's misuse of doStep is fmi2Error; fmi2Terminated only where the FMU cannot go on;
-- an unzip folder named with a literal %20 is refused with a message, not a crash.
+- an unzip folder named with a literal %20 is refused with a message, not a crash;
+- after fmi2Fatal every call but fmi2FreeInstance is refused, not a crash.
 The C host's exit without fmi2FreeInstance is in tests/test_c_host.py.
 """
 
@@ -290,6 +291,63 @@ def test_an_unzip_folder_named_with_a_literal_percent_20_is_refused_with_a_messa
     assert run.returncode == 0, (run.returncode, run.stderr[-2000:])
     assert "refused:" in run.stdout
     assert "which pythonfmu 0.7 reads as a space" in run.stdout + run.stderr
+
+
+
+# --- fmi2Fatal: a Python exception escaped the slave --------------------------------------
+
+AFTER_FATAL = """
+import ctypes, sys
+from fmpy.fmi1 import FMICallException
+from wheelterrain.fmu.instance import Instance
+inst = Instance(sys.argv[1], sys.argv[2], "x", log=True).start({})
+try:
+    inst.fmu.doStep(0.0, 1e-3)
+except FMICallException as err:
+    print("first", err.status)
+for name, call in [("step", lambda: inst.fmu.doStep(0.0, 1e-3)),
+                   ("get", lambda: inst.get(["normal_force"])),
+                   ("state", lambda: inst.fmu.getFMUstate()),
+                   ("set", lambda: inst.set({"carriage_speed": 0.03}))]:
+    try:
+        call()
+        print(name, 0)
+    except FMICallException as err:
+        print(name, err.status)
+terminated = ctypes.c_int(-1)
+print("terminated", inst.fmu.fmi2GetBooleanStatus(inst.fmu.component, 3,
+                                                   ctypes.byref(terminated)), terminated.value)
+print("said", sum("an earlier call ended in fmi2Fatal" in m and "injected fault" in m
+                  for _, m in inst.log))
+inst.fmu.freeInstance()
+print("freed", 1)
+"""
+
+
+def test_after_a_fatal_step_every_call_is_refused_and_the_host_survives(fmu_dir, unzipped,
+                                                                       tmp_path):
+    """A Python exception in the slave's doStep is fmi2Fatal; pythonfmu's next call then
+    crashed the host (SIGSEGV). The guard refuses every call after fmi2Fatal but
+    fmi2FreeInstance, with the reason, and answers fmi2Terminated = true. The fault is put in
+    a copy of the FMU's own slave; in a fresh process, so a crash fails here."""
+    folder = tmp_path / "faulty"
+    shutil.copytree(unzipped["WheelTerrain"], folder)
+    slaves = list((folder / "resources").glob("wheelterrain_slave*.py"))
+    assert len(slaves) == 1
+    text = slaves[0].read_text()
+    step = "return self.core.do_step(current_time, step_size)"
+    assert step in text
+    slaves[0].write_text(text.replace(step, 'raise RuntimeError("injected fault")'))
+    run = subprocess.run([sys.executable, "-c", AFTER_FATAL, str(fmu_dir / "WheelTerrain.fmu"),
+                          str(folder)], capture_output=True, text=True, timeout=120,
+                         check=False)
+    assert run.returncode == 0, (run.returncode, run.stderr[-2000:])
+    lines = dict(line.split(" ", 1) for line in run.stdout.splitlines())
+    assert lines["first"] == "4", run.stdout  # fmi2Fatal
+    assert lines["step"] == lines["get"] == lines["state"] == lines["set"] == str(ERROR)
+    assert lines["terminated"] == "0 1"  # fmi2OK, true
+    assert int(lines["said"]) == 4
+    assert lines["freed"] == "1"
 
 
 ENGINES_AFTER_FMPY = """

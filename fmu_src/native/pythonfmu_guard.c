@@ -21,6 +21,8 @@
  *   - FMU states: the guard owns them (a pointer it did not make is refused); serialized
  *     states carry this model's GUID, their length and a checksum, so another model's, a
  *     truncated or an overwritten state is refused before pythonfmu reads it;
+ *   - fmi2Fatal (a Python exception escaped the slave): every later call but fmi2FreeInstance
+ *     is refused with the reason (pythonfmu's next call crashed the host);
  *   - process exit: a host that exits without freeing its instances (a C host whose
  *     interpreter pythonfmu started) gets them freed before CasADi's static destructors run.
  * Compiled with the generated guard_vars.h (GUARD_NAME, GUARD_GUID, GUARD_VARS: the same
@@ -75,6 +77,7 @@ typedef struct Guard {
     fmi2CallbackFunctions cb;     /* the host's */
     fmi2CallbackFunctions py_cb;  /* what pythonfmu gets: its messages pass through the guard */
     int logging_on;               /* the host's debug logging flag */
+    int fatal;                    /* a call ended in fmi2Fatal: only fmi2FreeInstance is legal */
     char name[128];
     unsigned char invalid[GUARD_N_VARS];
     double refused[GUARD_N_VARS]; /* the refused value, for the message */
@@ -254,10 +257,24 @@ static const char *mode_name(int mode) {
     }
 }
 
-/* The guard of ``c`` if the call is legal in its mode; else NULL (logged). */
+/* The status pythonfmu returned, remembered when fmi2Fatal (a Python exception escaped the
+   slave: its state is unknown, and pythonfmu's next call crashed the host). */
+static fmi2Status kept(Guard *g, fmi2Status status) {
+    if (status == fmi2Fatal) g->fatal = 1;
+    return status;
+}
+
+/* The guard of ``c`` if the call is legal in its mode; else NULL (logged). After fmi2Fatal no
+   call but fmi2FreeInstance reaches pythonfmu (FMI 2, 2.1.3: the instance cannot go on). */
 static Guard *legal(fmi2Component c, const char *function, int modes) {
     Guard *g = (Guard *)c;
     if (g == NULL) return NULL;
+    if (g->fatal) {
+        GUARD_ERROR(g, "%s: %s: an earlier call ended in fmi2Fatal (%s); the instance cannot "
+                    "go on: free it (fmi2FreeInstance) and instantiate a new one", GUARD_NAME,
+                    function, g->reason[0] ? g->reason : "no reason given");
+        return NULL;
+    }
     if (g->mode & modes) return g;
     GUARD_ERROR(g, "%s: %s: illegal call sequence (the instance is in %s)", GUARD_NAME,
                 function, mode_name(g->mode));
@@ -434,8 +451,8 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n,
     if (g == NULL) return fmi2Error;
     g->logging_on = on;
     /* logging off for the host: pythonfmu still logs every category to the guard (relay) */
-    return on ? F.set_debug_logging(g->real, on, n, categories)
-              : F.set_debug_logging(g->real, fmi2True, 0, NULL);
+    return on ? kept(g, F.set_debug_logging(g->real, on, n, categories))
+              : kept(g, F.set_debug_logging(g->real, fmi2True, 0, NULL));
 }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
@@ -448,8 +465,8 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
         return fmi2Error;
     }
     g->time = startTime;
-    return F.setup_experiment(g->real, toleranceDefined, tolerance, startTime, stopTimeDefined,
-                              stopTime);
+    return kept(g, F.setup_experiment(g->real, toleranceDefined, tolerance, startTime,
+                                      stopTimeDefined, stopTime));
 }
 
 /* ``status`` of a call that moves the instance to ``mode`` when it succeeds. */
@@ -460,7 +477,8 @@ static fmi2Status moved(Guard *g, fmi2Status status, int mode) {
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
     Guard *g = legal(c, "fmi2EnterInitializationMode", M_INSTANTIATED);
-    return g ? moved(g, F.enter_initialization(g->real), M_INITIALIZATION) : fmi2Error;
+    return g ? moved(g, kept(g, F.enter_initialization(g->real)), M_INITIALIZATION)
+             : fmi2Error;
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
@@ -475,19 +493,19 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
             return fmi2Error;
         }
     }
-    return moved(g, F.exit_initialization(g->real), M_STEP_COMPLETE);
+    return moved(g, kept(g, F.exit_initialization(g->real)), M_STEP_COMPLETE);
 }
 
 fmi2Status fmi2Terminate(fmi2Component c) {
     Guard *g = legal(c, "fmi2Terminate", M_STEP_COMPLETE);
-    return g ? moved(g, F.terminate(g->real), M_TERMINATED) : fmi2Error;
+    return g ? moved(g, kept(g, F.terminate(g->real)), M_TERMINATED) : fmi2Error;
 }
 
 fmi2Status fmi2Reset(fmi2Component c) {
     Guard *g = legal(c, "fmi2Reset", M_ANY);
     fmi2Status status;
     if (g == NULL) return fmi2Error;
-    status = moved(g, F.reset(g->real), M_INSTANTIATED);
+    status = moved(g, kept(g, F.reset(g->real)), M_INSTANTIATED);
     if (status <= fmi2Warning) {
         memset(g->invalid, 0, sizeof g->invalid);
         g->time = 0.0;
@@ -500,7 +518,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
     fmi2Status NAME(fmi2Component c, const fmi2ValueReference vr[], size_t n, TYPE value[]) { \
         Guard *g = legal(c, #NAME, M_GETTABLE);                                              \
         if (g == NULL || !references_ok(g, #NAME, vr, n, GTYPE, 0)) return fmi2Error;        \
-        return F.FIELD(g->real, vr, n, value);                                               \
+        return kept(g, F.FIELD(g->real, vr, n, value));                                      \
     }
 GETTER(fmi2GetInteger, fmi2Integer, G_INTEGER, get_integer)
 GETTER(fmi2GetBoolean, fmi2Boolean, G_BOOLEAN, get_boolean)
@@ -516,7 +534,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
     Guard *g = legal(c, "fmi2GetReal", M_GETTABLE);
     fmi2Status status;
     if (g == NULL || !references_ok(g, "fmi2GetReal", vr, n, G_REAL, 0)) return fmi2Error;
-    status = F.get_real(g->real, vr, n, value);
+    status = kept(g, F.get_real(g->real, vr, n, value));
     if (status > fmi2Warning) return status;
     for (size_t i = 0; i < n; i++) {
         const GuardVar *v = &GUARD_VARS[vr[i]];
@@ -555,7 +573,7 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
         fmi2Status status;                                                                   \
         if (g == NULL || !references_ok(g, #NAME, vr, n, GTYPE, 1)) return fmi2Error;        \
         for (size_t i = 0; i < n; i++) ok &= value_ok(g, vr[i], (double)value[i]);           \
-        status = F.FIELD(g->real, vr, n, value);                                             \
+        status = kept(g, F.FIELD(g->real, vr, n, value));                                    \
         return ok ? status : fmi2Error;                                                      \
     }
 SETTER(fmi2SetReal, fmi2Real, G_REAL, set_real)
@@ -566,7 +584,7 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
                           const fmi2Boolean value[]) {
     Guard *g = legal(c, "fmi2SetBoolean", M_SETTABLE);
     if (g == NULL || !references_ok(g, "fmi2SetBoolean", vr, n, G_BOOLEAN, 1)) return fmi2Error;
-    return F.set_boolean(g->real, vr, n, value);
+    return kept(g, F.set_boolean(g->real, vr, n, value));
 }
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t n,
@@ -636,7 +654,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
         GUARD_ERROR(g, "fmi2GetFMUstate: out of memory");
         return fmi2Error;
     }
-    status = F.get_state(g->real, &s->real);
+    status = kept(g, F.get_state(g->real, &s->real));
     if (status > fmi2Warning) {
         if (*state == NULL) drop_state(s);
         return status;
@@ -652,7 +670,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
     GuardState *s;
     fmi2Status status;
     if (g == NULL || (s = known_state(g, "fmi2SetFMUstate", state)) == NULL) return fmi2Error;
-    status = F.set_state(g->real, s->real);
+    status = kept(g, F.set_state(g->real, s->real));
     if (status <= fmi2Warning) {
         g->time = s->time;
         g->terminated = s->terminated;
@@ -667,7 +685,7 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state) {
     if (g == NULL || state == NULL) return fmi2Error;
     if (*state == NULL) return fmi2OK; /* nothing to free */
     if ((s = known_state(g, "fmi2FreeFMUstate", *state)) == NULL) return fmi2Error;
-    status = F.free_state(g->real, &s->real);
+    status = kept(g, F.free_state(g->real, &s->real));
     drop_state(s);
     *state = NULL;
     return status;
@@ -705,7 +723,7 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_
     fmi2Status status;
     if (g == NULL || size == NULL) return fmi2Error;
     if ((s = known_state(g, "fmi2SerializedFMUstateSize", state)) == NULL) return fmi2Error;
-    status = F.state_size(g->real, s->real, size);
+    status = kept(g, F.state_size(g->real, s->real, size));
     if (status <= fmi2Warning) *size += STATE_HEADER;
     return status;
 }
@@ -718,7 +736,7 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte b
     fmi2Status status;
     if (g == NULL || (s = known_state(g, "fmi2SerializeFMUstate", state)) == NULL)
         return fmi2Error;
-    if (F.state_size(g->real, s->real, &body) > fmi2Warning) return fmi2Error;
+    if (kept(g, F.state_size(g->real, s->real, &body)) > fmi2Warning) return fmi2Error;
     if (bytes == NULL || size < body + STATE_HEADER) {
         GUARD_ERROR(g, "fmi2SerializeFMUstate: %u bytes given for a state of %u bytes (see "
                     "fmi2SerializedFMUstateSize)", (unsigned)size,
@@ -729,7 +747,7 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte b
     put_u64(bytes + STATE_ID, (unsigned long long)body);
     memcpy(bytes + STATE_ID + 16, &s->time, 8);
     put_u64(bytes + STATE_ID + 24, (unsigned long long)s->terminated);
-    status = F.serialize(g->real, s->real, bytes + STATE_HEADER, body);
+    status = kept(g, F.serialize(g->real, s->real, bytes + STATE_HEADER, body));
     put_u64(bytes + STATE_ID + 8, checksum(bytes + STATE_ID + 16, 16 + body));
     return status;
 }
@@ -767,10 +785,10 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size
         return fmi2Error;
     }
     if (reused && s->real != NULL) {
-        F.free_state(g->real, &s->real);
+        kept(g, F.free_state(g->real, &s->real));
         s->real = NULL;
     }
-    status = F.deserialize(g->real, bytes + STATE_HEADER, (size_t)body, &s->real);
+    status = kept(g, F.deserialize(g->real, bytes + STATE_HEADER, (size_t)body, &s->real));
     if (status > fmi2Warning) {
         drop_state(s);
         if (reused) *state = NULL;
@@ -833,7 +851,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet
         return fmi2Error;
     }
     g->reason[0] = '\0';
-    status = F.do_step(g->real, t, h, noSetPrior);
+    status = kept(g, F.do_step(g->real, t, h, noSetPrior));
     if (status <= fmi2Warning) {
         g->time = t + h;
         g->terminated = 0;
@@ -856,7 +874,7 @@ fmi2Status fmi2CancelStep(fmi2Component c) {
 #define STATUS_QUERY(NAME, TYPE, FIELD)                                                      \
     fmi2Status NAME(fmi2Component c, const fmi2StatusKind s, TYPE *value) {                  \
         Guard *g = legal(c, #NAME, M_ANY);                                                   \
-        return g ? F.FIELD(g->real, s, value) : fmi2Error;                                   \
+        return g ? kept(g, F.FIELD(g->real, s, value)) : fmi2Error;                          \
     }
 STATUS_QUERY(fmi2GetStatus, fmi2Status, get_status)
 STATUS_QUERY(fmi2GetIntegerStatus, fmi2Integer, get_integer_status)
@@ -866,15 +884,20 @@ STATUS_QUERY(fmi2GetStringStatus, fmi2String, get_string_status)
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
     Guard *g = legal(c, "fmi2GetRealStatus", M_ANY);
     if (g == NULL || value == NULL) return fmi2Error;
-    if (s != fmi2LastSuccessfulTime) return F.get_real_status(g->real, s, value);
+    if (s != fmi2LastSuccessfulTime) return kept(g, F.get_real_status(g->real, s, value));
     *value = g->time;
     return fmi2OK;
 }
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
-    Guard *g = legal(c, "fmi2GetBooleanStatus", M_ANY);
+    Guard *g = (Guard *)c;
+    if (g != NULL && g->fatal && s == fmi2Terminated && value != NULL) {
+        *value = fmi2True; /* the one question a host may still ask after fmi2Fatal */
+        return fmi2OK;
+    }
+    g = legal(c, "fmi2GetBooleanStatus", M_ANY);
     if (g == NULL || value == NULL) return fmi2Error;
-    if (s != fmi2Terminated) return F.get_boolean_status(g->real, s, value);
+    if (s != fmi2Terminated) return kept(g, F.get_boolean_status(g->real, s, value));
     *value = g->terminated ? fmi2True : fmi2False;
     return fmi2OK;
 }
