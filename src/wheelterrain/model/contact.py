@@ -830,9 +830,7 @@ def _contact(z, z_rate, slip, wheel_angle, P: _P, nodes: tuple[int, int], ripple
     d <= p_mean/K_u, a fraction of a millimetre, is small against the sinkage, so the geometry
     stays that of z_y). The damper acts while the wheel is in contact. Where z >= z_p (and
     with ``model.soil_memory`` = 0) this is the contact without it, exactly."""
-    yielded = z
-    if plastic is not None:
-        yielded = ca.if_else(P["model.soil_memory"] == 1, ca.fmax(plastic, z), z)
+    yielded = _yield_sinkage(z, plastic, P)
     below = yielded - rut_surface(P)  # depth below the surface the contact begins at
     theta_f = _entry_angle(below, P)
     if form is None:
@@ -849,6 +847,14 @@ def _contact(z, z_rate, slip, wheel_angle, P: _P, nodes: tuple[int, int], ripple
     damping = ca.if_else(below > 0, P["soil.damping"] * z_rate, 0)
     out["normal_force"] = ca.fmax(out["normal_force"] + damping, 0)
     return out
+
+
+def _yield_sinkage(z, plastic, P: _P):
+    """z_y: the sinkage the soil under the wheel has yielded to, max(z_p, z) with
+    ``model.soil_memory`` = 1; z without memory (or without a plastic sinkage)."""
+    if plastic is None:
+        return z
+    return ca.if_else(P["model.soil_memory"] == 1, ca.fmax(plastic, z), z)
 
 
 def _imprint_decay(yielded, speed, P: _P):
@@ -907,6 +913,51 @@ def lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> tuple[ca.Function, t
         forms.append(ca.Function(f"contact_{name}", sym, [ca.vertcat(
             *(out[name_] for name_ in CONTACT_OUTPUTS))], list(CONTACT_INPUTS), ["out"],
             {"cse": True}))
+    return case_fn, tuple(forms)
+
+
+EXPORT_INPUTS = {
+    True: (*CONTACT_INPUTS[:4], "plastic_sinkage", "carriage_speed", "p"),
+    False: ("sinkage", "slip", "p"),
+}
+"""The inputs of :func:`export_kernels`' Functions: the dynamic contact with memory (True), the
+quasi-static one (False)."""
+
+
+@lru_cache(maxsize=4)
+def export_kernels(memory: bool, nodes: tuple[int, int] = DEFAULT_NODES
+                   ) -> tuple[ca.Function, tuple]:
+    """The contact as plain SX Functions, one per form, for code that is not CasADi's (the
+    Modelica library): ``(case, forms)`` as :func:`lane_kernels`, ``case`` giving the form
+    (ARC, ARC_REVERSAL, PATCH) and ``forms[case]`` the contact with that form's kernel in place
+    of the switch.
+
+    ``memory=True``: the contact of ``build().contact_memory`` (ripple on), inputs
+    EXPORT_INPUTS[True], outputs CONTACT_OUTPUTS and MEMORY_OUTPUTS. ``memory=False``: the
+    quasi-static contact of the steady state (ripple-free, no sinkage rate, no memory), inputs
+    EXPORT_INPUTS[False], outputs CONTACT_OUTPUTS: its ``normal_force_static`` equal to the
+    load is the steady state's equation for the sinkage."""
+    sym = [ca.SX.sym(name) for name in EXPORT_INPUTS[memory][:-1]]
+    sym.append(ca.SX.sym("p", len(NAMES)))
+    P = _P(sym[-1])
+    if memory:
+        z, z_rate, slip, angle, plastic, speed = sym[:6]
+    else:
+        (z, slip), z_rate, angle, plastic, speed = sym[:2], 0, 0, None, None
+    case, switch = _forms(nodes, memory)
+    theta_f = _entry_angle(_yield_sinkage(z, plastic, P) - rut_surface(P), P)
+    names = list(EXPORT_INPUTS[memory])
+    case_fn = ca.Function("contact_case", sym, [case(theta_f, slip, P.p)], names, ["case"],
+                          {"cse": True})
+    rows = CONTACT_OUTPUTS + (MEMORY_OUTPUTS if memory else ())
+    forms = []
+    for name in FORMS:
+        kernel = switch.find_function(name + ("" if memory else "_static"))
+        out = _contact(z, z_rate, slip, angle, P, nodes, memory, form=kernel, plastic=plastic)
+        if memory:
+            out["plastic_rate"] = plastic_rate(z, z_rate, plastic, speed, P)
+        forms.append(ca.Function(f"contact_{name}", sym, [ca.vertcat(*(out[k] for k in rows))],
+                                 names, ["out"], {"cse": True}))
     return case_fn, tuple(forms)
 
 
