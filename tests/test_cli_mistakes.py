@@ -190,7 +190,7 @@ def test_build_into_a_folder_it_cannot_make_is_one_line(tmp_path):
     blocker = tmp_path / "a-file"
     blocker.write_text("")
     result = CliRunner().invoke(main, ["build", "--out", str(blocker / "fmus")])
-    _one_line_exit_2(result, "cannot write the FMUs to")
+    _one_line_exit_2(result, "cannot write to")
 
 
 # a run that lasts (the Moon's pull test at a 0.1 ms step: about 40 s on a quiet 2-core

@@ -19,7 +19,7 @@ RANK = {
     "parameters": 1, "compiled": 1,          # the parameter table; CasADi Functions as C
     "presets": 2,
     "model": 3,
-    "fmu": 4,
+    "fmu": 4, "modelica": 4,                 # the FMUs; the Modelica library
     "cosim": 5,
     "control": 6, "fit": 6, "plots": 6,
     "cli": 7,

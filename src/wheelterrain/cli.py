@@ -397,10 +397,12 @@ def _platforms(fmu) -> str:
 @main.command(epilog=EPILOG)
 @click.option("--out", default="build", show_default=True, type=click.Path(file_okay=False),
               help="Directory for the FMUs (the native flavour goes to OUT/native).")
-@click.option("--flavor", type=click.Choice(["pythonfmu", "native", "all"]), default="pythonfmu",
-              show_default=True, help="Which FMUs to build.")
+@click.option("--flavor", type=click.Choice(["pythonfmu", "native", "modelica", "all"]),
+              default="pythonfmu", show_default=True,
+              help="Which FMUs to build, or the Modelica library (all: every one).")
 def build(out: str, flavor: str) -> None:
-    """Build the FMUs: WheelTerrain, SingleWheelRig, RoverChassis and Terrain (a terrain map).
+    """Build the FMUs: WheelTerrain, SingleWheelRig, RoverChassis and Terrain (a terrain map),
+    or the WheelTerrain Modelica library.
 
     \b
     pythonfmu (OUT/): for Python hosts (fmpy); the host needs numpy and casadi, the
@@ -412,6 +414,11 @@ def build(out: str, flavor: str) -> None:
     Both have the same modelDescription (names, units, structure). Try one alone:
       fmpy simulate build/WheelTerrain.fmu --output-file wheel.csv --start-values
         quasi_static true soil.phi 0.45
+    modelica (OUT/WheelTerrain/): a Modelica library generated from the same CasADi
+      Functions and parameter table: the contact as pure functions with derivatives,
+      records, components on MSL flanges, examples with reference results. Its
+      examples SteadyC2 and SlipRamp need no Modelica Standard Library; the rest need
+      MSL 4.x on the MODELICAPATH. Try it with rumoca (pip install rumoca).
     """
     from pathlib import Path
 
@@ -423,6 +430,13 @@ def build(out: str, flavor: str) -> None:
 
     try:
         paths = []
+        if flavor in ("modelica", "all"):
+            from wheelterrain.modelica import library
+
+            folder = library.write(Path(out))
+            count = sum(1 for _ in folder.rglob("*.mo"))
+            click.echo(f"wrote {folder} (Modelica library, {count} files; open "
+                       f"{folder / 'package.mo'} in a Modelica tool)")
         if flavor in ("pythonfmu", "all"):
             paths += build_pythonfmu(out)
         # --flavor all builds what this machine can; --flavor native without a compiler is
@@ -444,7 +458,7 @@ def build(out: str, flavor: str) -> None:
         click.echo(f"error: {err}", err=True)
         sys.exit(EXIT_USAGE)
     except OSError as err:  # e.g. --out in a read-only folder
-        click.echo(f"error: cannot write the FMUs to {out}: {err.strerror or err}"
+        click.echo(f"error: cannot write to {out}: {err.strerror or err}"
                    f"{f' ({err.filename})' if err.filename else ''}", err=True)
         sys.exit(EXIT_USAGE)
 

@@ -1,0 +1,524 @@
+"""The WheelTerrain Modelica library, generated from the model's CasADi Functions and the one
+parameter table (``wheelterrain build --flavor modelica``).
+
+What it writes (a directory-structured library, ``package.mo`` and ``package.order`` at every
+level), and where each part comes from:
+
+- ``Functions``: the contact (with the soil's memory, ripple on: the WheelTerrain FMU's) and
+  the quasi-static contact (the steady state's), one function per contact form
+  (:func:`wheelterrain.model.contact.export_kernels`), each with its derivative function
+  (CasADi's forward mode, ``annotation(derivative(zeroDerivative=p))``), a function choosing
+  the form as the model's switch does, the two slips (:mod:`wheelterrain.fmu.functions`), and
+  ``Index``: the position of each output in the functions' output vectors. No Modelica Standard
+  Library needed.
+- ``Data``: every preset as a parameter vector in table order (no MSL needed).
+- ``Records``: the parameter table as records with ``Modelica.Units.SI`` types, ranges,
+  descriptions and sources; every preset a record constant; ``parameterVector``.
+- ``Components``: ``QuasiStaticWheel`` (no MSL) and ``Contact`` on MSL flanges (Rotational
+  hub, Translational axle and vertical), the soil's memory a state.
+- ``Examples``: ``SteadyC2``, ``SlipRamp`` (no MSL) and ``RigC1`` ... ``RigC4`` (the paper's
+  rig from MSL components), with ``experiment`` annotations; reference results in
+  ``Resources/Reference`` written by the Python model.
+- ``UsersGuide``: conventions, slips, citations, the name map, what was tested in which tool.
+
+The output is deterministic: the same bytes on every run.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+import string
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from wheelterrain import __version__, presets
+from wheelterrain.model import contact, slip
+from wheelterrain.modelica import reference, translate
+from wheelterrain.modelica.translate import Port
+from wheelterrain.parameters import NAMES, RIG_TABLE, TABLE, Parameter
+
+LIBRARY = "WheelTerrain"
+MSL_VERSION = "4.1.0"
+FORM_NAMES = {"arc": "Arc", "arc_reversal": "ArcReversal", "patch": "Patch"}
+GROUPS = {"wheel": "wheel", "grouser": "grouser", "soil": "soil", "ripple": "ripple",
+          "model": "options"}
+"""Table group -> the Parameters record's component ('model' is a Modelica keyword)."""
+KEYWORDS = frozenset((
+    "algorithm", "and", "annotation", "block", "break", "class", "connect", "connector",
+    "constant", "constrainedby", "der", "discrete", "each", "else", "elseif", "elsewhen",
+    "encapsulated", "end", "enumeration", "equation", "expandable", "extends", "external",
+    "false", "final", "flow", "for", "function", "if", "import", "impure", "in", "initial",
+    "inner", "input", "loop", "model", "not", "operator", "or", "outer", "output", "package",
+    "parameter", "partial", "protected", "public", "pure", "record", "redeclare", "replaceable",
+    "return", "stream", "then", "true", "type", "when", "while", "within"))
+
+
+def modelica_name(table_name: str) -> str:
+    """The Records.Parameters component of a table row: 'soil.phi' -> 'soil.phi',
+    'model.contact_form' -> 'options.contact_form' (a keyword gets a trailing underscore)."""
+    group, _, field_ = table_name.partition(".")
+    field_ = field_ + "_" if field_ in KEYWORDS else field_
+    return f"{GROUPS[group]}.{field_}"
+
+
+def preset_constant(name: str) -> str:
+    """'rashid-patch' -> 'rashidPatch', 'paper-table2-arc' -> 'paperTable2Arc'."""
+    words = name.replace("_", "-").split("-")
+    return words[0] + "".join(w[:1].upper() + w[1:] for w in words[1:])
+
+
+def preset_record(name: str) -> str:
+    """'rashid-patch' -> 'RashidPatch': the preset's record in Records.Presets."""
+    const = preset_constant(name)
+    return const[:1].upper() + const[1:]
+
+
+@dataclass
+class Library:
+    """The library as files: relative path -> text."""
+
+    files: dict[str, str] = field(default_factory=dict)
+
+    def add(self, path: str, text: str) -> None:
+        if path in self.files:
+            raise ValueError(f"{path} written twice")
+        self.files[path] = text
+
+    def package(self, where: str, name: str, description: str, order: Sequence[str],
+                annotation: str = "") -> None:
+        """``where/name/package.mo`` and ``package.order`` (``where`` '' for the top)."""
+        folder = f"{where}/{name}" if where else name
+        within = _within(where)
+        ann = f"\n  annotation({annotation});" if annotation else ""
+        self.add(f"{folder}/package.mo",
+                 f'{within}package {name} "{description}"{ann}\nend {name};\n')
+        self.add(f"{folder}/package.order", "".join(f"{n}\n" for n in order))
+
+    def write(self, out: Path) -> list[Path]:
+        written = []
+        for rel, text in sorted(self.files.items()):
+            path = out / rel
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(text, encoding="utf-8", newline="\n")
+            written.append(path)
+        return written
+
+
+def _within(where: str) -> str:
+    return f"within {where.replace('/', '.')};\n" if where else "within ;\n"
+
+
+def _class_file(lib: Library, where: str, name: str, text: str) -> None:
+    lib.add(f"{where}/{name}.mo", _within(where) + text)
+
+
+def _vector(values: Sequence[float]) -> str:
+    return "{" + ", ".join(translate.literal(float(v)) for v in values) + "}"
+
+
+def _doc(text: str) -> str:
+    """A Modelica string literal's content: quotes and backslashes escaped."""
+    return text.replace("\\", "\\\\").replace('"', '\\"')
+
+
+# ---- Functions ----------------------------------------------------------------------------
+
+INPUT_DOC = {
+    "sinkage": "sinkage of the contact circle below the undisturbed surface [m]",
+    "sinkage_rate": "d(sinkage)/dt [m/s]",
+    "slip": "traction slip i = (omega*R_ref - V)/(omega*R_ref) [1]",
+    "wheel_angle": "wheel angle, the grouser ripple's phase [rad]",
+    "plastic_sinkage": "the deepest the wheel has pressed the soil under it (its memory) [m]",
+    "carriage_speed": "the axle's forward speed V [m/s]",
+    "wheel_speed": "the wheel's angular velocity omega [rad/s]",
+    "slip_paper": "the paper's slip s = (omega*R_ref - V)/V [1]",
+    "p": "the parameters in table order (Data, Records.parameterVector)",
+}
+
+
+def _ports(names: Sequence[str]) -> list[Port]:
+    return [Port(n, len(NAMES) if n == "p" else 1, description=INPUT_DOC[n]) for n in names]
+
+
+def _derivative(f: ca.Function, names: Sequence[str]) -> ca.Function:
+    """The forward directional derivative of ``f`` (one output) with respect to every input
+    but ``p``: inputs (the inputs, then der_<input> for each but p), output der_out."""
+    xs = [ca.SX.sym(n, f.nnz_in(k)) for k, n in enumerate(names)]
+    seeds = [ca.SX.sym("der_" + n) for n in names if n != "p"]
+    moving = [x for n, x in zip(names, xs, strict=True) if n != "p"]
+    y = f(*xs)
+    dy = ca.jtimes(y, ca.vertcat(*moving), ca.vertcat(*seeds))
+    return ca.Function(f.name() + "_der", [*xs, *seeds], [dy], {"cse": True})
+
+
+@dataclass(frozen=True)
+class Exported:
+    """One generated function: its Modelica name, the CasADi Function it reproduces, its
+    ports and its derivative's CasADi Function (None for an integer-valued one)."""
+
+    name: str
+    function: ca.Function
+    inputs: tuple[str, ...]
+    outputs: tuple[Port, ...]
+    description: str
+    derivative: ca.Function | None
+
+
+@lru_cache(maxsize=1)
+def exported() -> tuple[Exported, ...]:
+    """Every function the library's Functions package reproduces from CasADi, in order."""
+    from wheelterrain.fmu import functions as fmu_functions
+
+    out: list[Exported] = []
+    for memory, stem, what in ((True, "contact", "the contact with the soil's memory, grouser "
+                                "ripple on (the WheelTerrain FMU's)"),
+                               (False, "quasiStatic", "the quasi-static contact of the steady "
+                                "state (ripple-free, no sinkage rate, no memory)")):
+        names = contact.EXPORT_INPUTS[memory]
+        case, forms = contact.export_kernels(memory)
+        out.append(Exported(f"{stem}Case", case, names, (Port("case", description=(
+            "the form that applies: 0 arc, 1 arc with shear reversal, 2 patch")),),
+            f"Which contact form applies, {what}", None))
+        rows = contact.CONTACT_OUTPUTS + (contact.MEMORY_OUTPUTS if memory else ())
+        for form, kernel in zip(contact.FORMS, forms, strict=True):
+            out.append(Exported(
+                stem + FORM_NAMES[form], kernel, names,
+                (Port("y", len(rows), description="the outputs, Index order"),),
+                f"{what.capitalize()} in the {form.replace('_', ' ')} form",
+                _derivative(kernel, names)))
+    wheel_speed, carriage_speed, p = ca.SX.sym("wheel_speed"), ca.SX.sym(
+        "carriage_speed"), ca.SX.sym("p", len(NAMES))
+    # the paper's slip is left out: it is NaN with the axle at rest, and Modelica has no NaN
+    traction, _, _ = fmu_functions.slips(wheel_speed, carriage_speed,
+                                         fmu_functions.slip_radius(p))
+    f = ca.Function("tractionSlip", [wheel_speed, carriage_speed, p], [traction], {"cse": True})
+    names = ("wheel_speed", "carriage_speed", "p")
+    out.append(Exported("tractionSlip", f, names, (Port("slip", description="[1]"),),
+                        "Traction slip i from the wheel's and the axle's speeds (0 with both at "
+                        "rest; a rim slower than 1e-9 m/s counts as that)",
+                        _derivative(f, names)))
+    s = ca.SX.sym("slip_paper")
+    f = ca.Function("tractionFromPaper", [s], [slip.traction_from_paper(s)], {"cse": True})
+    out.append(Exported("tractionFromPaper", f, ("slip_paper",),
+                        (Port("slip", description="traction slip i = s/(1 + s) [1]"),),
+                        "Traction slip from the paper's slip", _derivative(f, ("slip_paper",))))
+    return tuple(out)
+
+
+def _functions(lib: Library) -> None:
+    where = f"{LIBRARY}/Functions"
+    order: list[str] = []
+    internal: list[str] = []
+    for e in exported():
+        inputs = _ports(e.inputs)
+        annotation = ""
+        if e.derivative is not None:
+            zero = "(zeroDerivative=p)" if "p" in e.inputs else ""
+            annotation = f"derivative{zero}={e.name}Der"
+        pieces = f"{LIBRARY}.Functions.Internal.{e.name[0].upper()}{e.name[1:]}"
+        text, parts = translate.functions(e.function, e.name, inputs, e.outputs,
+                                          e.description, annotation, pieces=pieces)
+        _class_file(lib, where, e.name, text)
+        order.append(e.name)
+        _internal(lib, internal, pieces, parts, e.name)
+        if e.derivative is not None:
+            seeds = [Port("der_" + n, description=f"d({n})/dt") for n in e.inputs if n != "p"]
+            outs = [Port("der_" + p.name, p.size, description=f"d({p.name})/dt")
+                    for p in e.outputs]
+            dname = f"{e.name}Der"
+            text, parts = translate.functions(
+                e.derivative, dname, [*inputs, *seeds], outs,
+                f"Derivative of {e.name} (CasADi's forward mode)", "",
+                pieces=pieces + "Der")
+            _class_file(lib, where, dname, text)
+            order.append(dname)
+            _internal(lib, internal, pieces + "Der", parts, dname)
+    for stem, memory in (("contact", True), ("quasiStatic", False)):
+        order += _dispatch(lib, where, stem, memory)
+    _index(lib, where)
+    order.append("Index")
+    lib.package(f"{LIBRARY}/Functions", "Internal", "Pieces of the long generated functions "
+                "(not to be called: each runs a stretch of its function's instructions)",
+                internal)
+    order.append("Internal")
+    lib.package(LIBRARY, "Functions", "The model's functions, generated instruction by "
+                "instruction from its CasADi Functions (no Modelica Standard Library needed)",
+                order)
+
+
+def _internal(lib: Library, internal: list[str], pieces: str, parts: list[str],
+              owner: str) -> None:
+    if not parts:
+        return
+    name = pieces.rsplit(".", 1)[1]
+    text = f'package {name} "The pieces of {owner}, in order"\n'
+    text += "".join(parts)
+    text += f"end {name};\n"
+    _class_file(lib, f"{LIBRARY}/Functions/Internal", name, text)
+    internal.append(name)
+
+
+def _dispatch(lib: Library, where: str, stem: str, memory: bool) -> list[str]:
+    """``stem`` and ``stemDer``: the form ``stemCase`` picks, as the model's switch does (only
+    that form is evaluated)."""
+    names = contact.EXPORT_INPUTS[memory]
+    rows = len(contact.CONTACT_OUTPUTS) + (len(contact.MEMORY_OUTPUTS) if memory else 0)
+    args = ", ".join(names)
+    moving = [n for n in names if n != "p"]
+    written = []
+    for der in (False, True):
+        name = stem + ("Der" if der else "")
+        inputs = _ports(names)
+        if der:
+            inputs += [Port("der_" + n, description=f"d({n})/dt") for n in moving]
+        out = Port("der_y" if der else "y", rows, description="the outputs, Index order")
+        call = args + (", " + ", ".join("der_" + n for n in moving) if der else "")
+        suffix = "Der" if der else ""
+        what = ("Derivative of " + stem) if der else (
+            "The contact with the soil's memory (the WheelTerrain FMU's)" if memory
+            else "The quasi-static contact (the steady state's)")
+        lines = [f'function {name} "{what}: the form {stem}Case picks"']
+        lines += [p.declaration("input") for p in inputs]
+        lines.append(out.declaration("output"))
+        lines += ["protected", f"  Integer form = integer({stem}Case({args}));", "algorithm"]
+        branches = [(contact.PATCH, "Patch"), (contact.ARC_REVERSAL, "ArcReversal")]
+        keyword = "if"
+        for number, form in branches:
+            lines.append(f"  {keyword} form == {number} then")
+            lines.append(f"    {out.name} := {stem}{form}{suffix}({call});")
+            keyword = "elseif"
+        lines += ["  else", f"    {out.name} := {stem}Arc{suffix}({call});", "  end if;"]
+        ann = "Inline=false" + ("" if der else f", derivative(zeroDerivative=p)={stem}Der")
+        lines += [f"  annotation({ann});", f"end {name};"]
+        _class_file(lib, where, name, "\n".join(lines) + "\n")
+        written.append(name)
+    return written
+
+
+def _index(lib: Library, where: str) -> None:
+    lines = ['package Index "Where each output sits in the output vectors of contact, '
+             'quasiStatic and their forms (the CasADi outputs\' names)"']
+    for k, name in enumerate(contact.CONTACT_OUTPUTS + contact.MEMORY_OUTPUTS):
+        scope = "contact only" if name in contact.MEMORY_OUTPUTS else "both"
+        lines.append(f'  constant Integer {name} = {k + 1} "({scope})";')
+    lines.append("end Index;")
+    _class_file(lib, where, "Index", "\n".join(lines) + "\n")
+
+
+# ---- Data and Records ---------------------------------------------------------------------
+
+def _preset_vectors() -> dict[str, np.ndarray]:
+    return {name: presets.load(name).vector() for name in presets.available()}
+
+
+def _data(lib: Library) -> None:
+    lines = ['package Data "The presets as parameter vectors in table order (no Modelica Standard '
+             'Library needed)"']
+    for name, values in _preset_vectors().items():
+        const = preset_constant(name)
+        lines.append(_wrap_call(f"  constant Real {const}[{len(NAMES)}] = {_vector(values)}"))
+        lines.append(f'    "The preset {name} (Records.Parameters names the values)";')
+    lines.append("end Data;")
+    _class_file(lib, LIBRARY, "Data", "\n".join(lines) + "\n")
+
+
+def _type(row: Parameter) -> str:
+    if row.kind != "real":
+        return "Integer"
+    if row.quantity:
+        return f"Modelica.Units.SI.{row.quantity}"
+    return "Real"
+
+
+def _modifiers(row: Parameter) -> str:
+    mods = []
+    if row.kind == "real" and not row.quantity:
+        mods.append(f'unit="{row.unit}"')
+    for key, value in (("min", row.min), ("max", row.max)):
+        if math.isfinite(value):
+            mods.append(f"{key}={_number(row, value)}")
+    return f"({', '.join(mods)})" if mods else ""
+
+
+def _number(row: Parameter, value: float) -> str:
+    return str(int(value)) if row.kind != "real" else translate.literal(value)
+
+
+def _row_doc(row: Parameter) -> str:
+    text = row.description
+    if row.choices:
+        text += " (" + ", ".join(f"{k} {v}" for k, v in sorted(row.choices.items())) + ")"
+    return _doc(f"{text} [{row.unit}] Source: {row.source}")
+
+
+def _records(lib: Library) -> None:
+    where = f"{LIBRARY}/Records"
+    order = []
+    groups: dict[str, list[Parameter]] = {}
+    for row in TABLE:
+        groups.setdefault(row.name.partition(".")[0], []).append(row)
+    for group, rows in groups.items():
+        record = GROUPS[group].capitalize()
+        lines = [f'record {record} "The table\'s {group}.* parameters"']
+        for row in rows:
+            field_ = modelica_name(row.name).partition(".")[2]
+            lines.append(f"  parameter {_type(row)} {field_}{_modifiers(row)} = "
+                         f'{_number(row, row.default)}\n    "{_row_doc(row)}";')
+        lines.append(f"end {record};")
+        _class_file(lib, where, record, "\n".join(lines) + "\n")
+        order.append(record)
+    lines = ['record Parameters "Every parameter of the wheel-soil model, as the table names '
+             'them (UsersGuide.NameMap)"']
+    for group in groups:
+        lines.append(f'  {GROUPS[group].capitalize()} {GROUPS[group]} "the {group}.* rows";')
+    lines.append("end Parameters;")
+    _class_file(lib, where, "Parameters", "\n".join(lines) + "\n")
+    order.insert(0, "Parameters")
+
+    lines = ['function parameterVector "The parameters in table order, as the functions take '
+             'them"', "  input Parameters parameters;",
+             f"  output Real p[{len(NAMES)}];", "algorithm"]
+    lines.append("  p := {" + ", ".join(f"parameters.{modelica_name(n)}" for n in NAMES) + "};")
+    lines.append("end parameterVector;")
+    text = "\n".join(_wrap_call(line) for line in lines) + "\n"
+    _class_file(lib, where, "parameterVector", text)
+    order.append("parameterVector")
+
+    lines = ['package Presets "Every preset as a record: Parameters with the preset\'s values"']
+    for name, values in _preset_vectors().items():
+        by_group: dict[str, list[str]] = {}
+        for table_name, value in zip(NAMES, values, strict=True):
+            group, _, field_ = modelica_name(table_name).partition(".")
+            row = TABLE[NAMES.index(table_name)]
+            by_group.setdefault(group, []).append(f"{field_}={_number(row, value)}")
+        mods = ",\n    ".join(f"{g}({', '.join(v)})" for g, v in by_group.items())
+        description = _doc(presets.read(name).get("description", name))
+        lines.append(f"  record {preset_record(name)} = Parameters(\n    {mods})\n"
+                     f'    "{name}: {description}";')
+    lines.append("end Presets;")
+    _class_file(lib, where, "Presets", "\n".join(lines) + "\n")
+    order.append("Presets")
+    lib.package(LIBRARY, "Records", "The parameter table as records (Modelica.Units.SI types, "
+                "ranges, sources) and the presets", order)
+
+
+def _wrap_call(line: str, width: int = 100) -> str:
+    if len(line) <= width:
+        return line
+    pieces = line.split(", ")
+    out, current = [], ""
+    for piece in pieces:
+        candidate = f"{current}, {piece}" if current else piece
+        if len(candidate) > width and current:
+            out.append(current + ",")
+            current = "    " + piece
+        else:
+            current = candidate
+    out.append(current)
+    return "\n".join(out)
+
+
+# ---- Components and Examples --------------------------------------------------------------
+
+def _template(name: str, **values) -> str:
+    """The Modelica text of templates/<name>.mo with ${...} filled in."""
+    text = resources.files("wheelterrain.modelica").joinpath("templates", f"{name}.mo")
+    return string.Template(text.read_text(encoding="utf-8")).substitute(values)
+
+
+def _components(lib: Library) -> None:
+    where = f"{LIBRARY}/Components"
+    rows = len(contact.CONTACT_OUTPUTS)
+    _class_file(lib, where, "QuasiStaticWheel", _template(
+        "QuasiStaticWheel", N=len(NAMES), QUASI_ROWS=rows))
+    _class_file(lib, where, "Contact", _template(
+        "Contact", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS)))
+    lib.package(LIBRARY, "Components", "The wheel on the soil as components",
+                ["QuasiStaticWheel", "Contact"])
+
+
+def _examples(lib: Library) -> None:
+    where = f"{LIBRARY}/Examples"
+    load = translate.literal(reference.STEADY_LOAD)
+    _class_file(lib, where, "SteadyC2", _template("SteadyC2", steady_load=load))
+    _class_file(lib, where, "SlipRamp", _template(
+        "SlipRamp", steady_load=load, ramp_start=translate.literal(reference.RAMP[0]),
+        ramp_rate=translate.literal(reference.RAMP[1])))
+    rig = {row.name.replace(".", "_"): translate.literal(row.default) for row in RIG_TABLE}
+    _class_file(lib, where, "Rig", _template(
+        "Rig", sinkage_start=translate.literal(reference.RIG_SINKAGE_START), **rig))
+    order = ["SteadyC2", "SlipRamp", "Rig"]
+    for case, s in reference.RIG_CASES.items():
+        text = (f'model Rig{case} "The rig at the paper\'s {case}: slip s = {s}"\n'
+                f"  extends Rig(slip_paper={translate.literal(s)});\n"
+                f"  annotation(experiment(StartTime=0, StopTime={reference.RIG_STOP}, "
+                f"Interval={reference.RIG_INTERVAL}, Tolerance=1e-8),\n"
+                f'    Documentation(info="<html><p>Reference: Resources/Reference/Rig{case}.csv '
+                f'(the Python model\'s rig in continuous time).</p></html>"));\n'
+                f"end Rig{case};\n")
+        _class_file(lib, where, f"Rig{case}", text)
+        order.append(f"Rig{case}")
+    lib.package(LIBRARY, "Examples", "Examples with experiment annotations; reference results "
+                "in Resources/Reference", order)
+
+
+# ---- the package, the guide, the reference results ----------------------------------------
+
+def _users_guide(lib: Library) -> None:
+    rows = "".join(
+        f"<tr><td>{html.escape(n)}</td><td>{html.escape(modelica_name(n))}</td>"
+        f"<td>{html.escape(TABLE[k].unit)}</td></tr>" for k, n in enumerate(NAMES))
+    outputs = "".join(f"<tr><td>{k + 1}</td><td>{html.escape(n)}</td></tr>" for k, n in
+                      enumerate(contact.CONTACT_OUTPUTS + contact.MEMORY_OUTPUTS))
+    info = string.Template(resources.files("wheelterrain.modelica").joinpath(
+        "templates", "UsersGuide.html").read_text(encoding="utf-8")).substitute(
+        version=__version__, outputs=outputs, rows=rows, msl=MSL_VERSION)
+    text = (f'package UsersGuide "Conventions, slips, the name map, what was tested"\n'
+            f'  annotation(Documentation(info="{_doc(info)}"));\nend UsersGuide;\n')
+    _class_file(lib, LIBRARY, "UsersGuide", text)
+
+
+def build_library() -> Library:
+    """The whole library as files (relative path -> text)."""
+    lib = Library()
+    lib.package("", LIBRARY, "Rigid-wheel terramechanics for planetary rover wheels with "
+                "grousers on loose soil (generated by wheelterrain)",
+                ["UsersGuide", "Functions", "Data", "Records", "Components", "Examples"],
+                f'version="{__version__}", uses(Modelica(version="{MSL_VERSION}"))')
+    _users_guide(lib)
+    _functions(lib)
+    _data(lib)
+    _records(lib)
+    _components(lib)
+    _examples(lib)
+    for name, text in reference.files().items():
+        lib.add(f"{LIBRARY}/Resources/Reference/{name}", text)
+    return lib
+
+
+def write(out: Path) -> Path:
+    """Write the library to ``out``/WheelTerrain (replacing what is there) and return that
+    folder."""
+    import shutil
+    import tempfile
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    lib = build_library()
+    staging = Path(tempfile.mkdtemp(prefix=".WheelTerrain-", dir=out))
+    try:
+        lib.write(staging)
+        target = out / LIBRARY
+        if target.exists():
+            shutil.rmtree(target)
+        (staging / LIBRARY).rename(target)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return out / LIBRARY

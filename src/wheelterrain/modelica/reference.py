@@ -1,0 +1,107 @@
+"""Reference results of the Modelica library's examples, computed by the Python model
+(``Resources/Reference/<Example>.csv``): what a Modelica tool's run of each example should give.
+
+- SteadyC2 and SlipRamp: the project's steady state (:func:`wheelterrain.model.api.steady_state`)
+  at the examples' loads and slips.
+- RigC1 ... RigC4: the paper's rig in continuous time (:func:`wheelterrain.model.rig.rates`, the
+  rig's model-exchange equations) on the contact with the soil's memory (``contact_memory``),
+  integrated by CasADi's CVODES at tolerances far below the comparison's (1e-12 relative): the
+  same equations the Modelica rig states with MSL components.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from collections.abc import Sequence
+
+import casadi as ca
+import numpy as np
+
+from wheelterrain import presets
+from wheelterrain.fmu import functions as fmu_functions
+from wheelterrain.model import api, contact, rig
+from wheelterrain.model.slip import traction_from_paper
+from wheelterrain.parameters import RIG_TABLE
+
+STEADY_LOAD = 62.0
+"""N: the rig's load in the paper's C1-C4 (Table III), the steady examples' load."""
+RAMP = (-0.5, 1.3)
+"""SlipRamp's traction slip: RAMP[0] + RAMP[1]*time, time in [0, 1] s."""
+RAMP_TIMES = tuple(round(0.05 * k, 2) for k in range(21))
+RIG_CASES = {"C1": 0.0, "C2": 0.25, "C3": 0.5, "C4": 0.75}
+"""The paper's rig cases and their slips s (Abubakar et al., Table III)."""
+RIG_STOP, RIG_INTERVAL = 4.0, 0.01
+RIG_SINKAGE_START = 0.01
+RIG_COLUMNS = ("time", "sinkage", "sinkage_rate", "wheel_speed", "speed_error_integral",
+               "wheel_angle", "plastic_sinkage", "normal_force", "drawbar_pull", "torque")
+
+
+def steady_rows(slips: Sequence[float], times: Sequence[float] | None = None) -> list[dict]:
+    """The steady state of the default preset at STEADY_LOAD and each traction slip."""
+    params = presets.load()
+    rows = []
+    for k, slip in enumerate(slips):
+        s = api.steady_state(params, STEADY_LOAD, float(slip))
+        row = {"time": times[k]} if times is not None else {}
+        row.update(slip=float(slip), sinkage=s["sinkage"], drawbar_pull=s["drawbar_pull"],
+                   torque=s["torque"])
+        rows.append(row)
+    return rows
+
+
+def ramp_slips() -> list[float]:
+    return [RAMP[0] + RAMP[1] * t for t in RAMP_TIMES]
+
+
+def rig_trajectory(slip_paper: float, stop: float = RIG_STOP,
+                   interval: float = RIG_INTERVAL) -> np.ndarray:
+    """The rig at the paper's slip ``slip_paper`` from rest in the soil at RIG_SINKAGE_START
+    (wheel at its reference speed, no memory yet): one row per output time, RIG_COLUMNS."""
+    p = ca.DM(presets.load().vector())
+    rp = {row.name: row.default for row in RIG_TABLE}
+    rp["rig.slip_paper"] = slip_paper
+    rp["rig.slip_radius"] = float(fmu_functions.slip_radius(p))  # the contact's own R_ref
+    x = ca.SX.sym("x", len(rig.RIG_STATES))
+    angle, plastic = ca.SX.sym("wheel_angle"), ca.SX.sym("plastic_sinkage")
+    omega_ref, speed = rig.references(rp)
+    slip = fmu_functions.slips(x[2], speed, rp["rig.slip_radius"])[0]
+    out = dict(zip((*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS),
+                   contact.build().contact_memory(x[0], x[1], slip, angle, plastic, speed, p),
+                   strict=True))
+    forces = [out[k] for k in rig.FORCE_INPUTS]
+    rates = rig.rates(x, [*forces, 0, 0], rp)
+    state = ca.vertcat(x[:4], angle, plastic)
+    ode = {"x": state, "ode": ca.vertcat(*rates[:4], x[2], out["plastic_rate"])}
+    times = np.round(np.arange(0, stop + interval / 2, interval), 10)
+    integrator = ca.integrator("rig", "cvodes", ode, 0.0, times[1:].tolist(),
+                               {"abstol": 1e-14, "reltol": 1e-12, "max_num_steps": 10**7})
+    start = [RIG_SINKAGE_START, 0.0, omega_ref, 0.0, 0.0, 0.0]
+    states = np.column_stack([start, np.array(integrator(x0=start)["xf"])]).T
+    outputs = ca.Function("outputs", [state], forces)
+    force_rows = np.array([[float(v) for v in outputs(s)] for s in states])
+    return np.column_stack([times, states, force_rows])
+
+
+def _csv(columns: Sequence[str], rows) -> str:
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(columns)
+    for row in rows:
+        writer.writerow([repr(float(v)) for v in row])
+    return buffer.getvalue()
+
+
+def files() -> dict[str, str]:
+    """Resources/Reference/<Example>.csv -> text, for every example."""
+    out = {}
+    c2 = steady_rows([traction_from_paper(0.25)])
+    out["SteadyC2.csv"] = _csv(("slip", "sinkage", "drawbar_pull", "torque"),
+                               [[r[k] for k in ("slip", "sinkage", "drawbar_pull", "torque")]
+                                for r in c2])
+    ramp = steady_rows(ramp_slips(), RAMP_TIMES)
+    columns = ("time", "slip", "sinkage", "drawbar_pull", "torque")
+    out["SlipRamp.csv"] = _csv(columns, [[r[k] for k in columns] for r in ramp])
+    for case, s in RIG_CASES.items():
+        out[f"Rig{case}.csv"] = _csv(RIG_COLUMNS, rig_trajectory(s))
+    return out

@@ -1,0 +1,23 @@
+block QuasiStaticWheel "A wheel at steady state on the soil: the sinkage at which the static normal force carries the load (no Modelica Standard Library needed)"
+  parameter Real p[${N}] = WheelTerrain.Data.rashidPatch
+    "the parameters in table order (WheelTerrain.Data, Records.parameterVector)";
+  parameter Real sinkage_start(unit="m") = 0.01
+    "where the tool's solver starts looking for the sinkage";
+  input Real load(unit="N") "the vertical load on the wheel";
+  input Real slip(unit="1") "traction slip i";
+  output Real sinkage(unit="m", start=sinkage_start, fixed=false)
+    "the steady sinkage: the static normal force equals the load";
+  output Real drawbar_pull(unit="N") "the net forward force of the soil on the wheel";
+  output Real torque(unit="N.m") "the torque the soil resists the wheel's turning with";
+  output Real entry_angle(unit="rad") "where the contact begins";
+  output Real exit_angle(unit="rad") "where it ends";
+  output Real y[${QUASI_ROWS}] "every output of quasiStatic, Functions.Index order";
+equation
+  y = WheelTerrain.Functions.quasiStatic(sinkage, slip, p);
+  y[WheelTerrain.Functions.Index.normal_force_static] = load;
+  drawbar_pull = y[WheelTerrain.Functions.Index.drawbar_pull];
+  torque = y[WheelTerrain.Functions.Index.torque];
+  entry_angle = y[WheelTerrain.Functions.Index.entry_angle];
+  exit_angle = y[WheelTerrain.Functions.Index.exit_angle];
+  annotation(Documentation(info="<html><p>The quasi-static wheel of <code>wheelterrain steady</code>: an implicit equation for the sinkage, solved by the tool. The contact is ripple-free with no sinkage rate and no memory.</p></html>"));
+end QuasiStaticWheel;

@@ -1,0 +1,38 @@
+model Rig "The paper's single-wheel rig on MSL components: a speed-controlled wheel on a carriage at the set slip, carrying the load"
+  import SI = Modelica.Units.SI;
+  parameter Real slip_paper = 0 "the paper's slip s the carriage is set to";
+  parameter SI.Force load = ${rig_load} "rig.load";
+  parameter SI.Mass mass = ${rig_mass} "rig.mass: moves with the wheel vertically";
+  parameter SI.MomentOfInertia wheel_inertia = ${rig_wheel_inertia} "rig.wheel_inertia";
+  parameter SI.AngularVelocity speed_bandwidth = ${rig_speed_bandwidth} "rig.speed_bandwidth: both poles of the speed loop";
+  parameter SI.Velocity rim_speed = ${rig_rim_speed} "rig.rim_speed";
+  parameter SI.Length sinkage_start = ${sinkage_start} "where the wheel starts (the reference results start there)";
+  WheelTerrain.Components.Contact contact "the wheel on the soil: the default preset";
+  final parameter SI.Length slip_radius = contact.parameters.wheel.radius + contact.parameters.options.slip_radius_factor*contact.parameters.grouser.height "R_ref";
+  final parameter SI.AngularVelocity omega_ref = rim_speed/slip_radius;
+  Modelica.Mechanics.Rotational.Components.Inertia wheel(J=wheel_inertia, phi(start=0, fixed=true), w(start=omega_ref, fixed=true));
+  Modelica.Mechanics.Rotational.Sources.Torque motor;
+  Modelica.Mechanics.Rotational.Sensors.SpeedSensor speed;
+  Modelica.Blocks.Sources.Constant reference(k=omega_ref);
+  Modelica.Blocks.Math.Feedback error;
+  Modelica.Blocks.Continuous.PI controller(k=2*speed_bandwidth*wheel_inertia, T=2/speed_bandwidth, initType=Modelica.Blocks.Types.Init.InitialState, x_start=0);
+  Modelica.Mechanics.Translational.Sources.Speed carriage(exact=true, s(start=0, fixed=true));
+  Modelica.Blocks.Sources.Constant carriage_speed(k=rim_speed/(1 + slip_paper));
+  Modelica.Mechanics.Translational.Components.Mass body(m=mass, s(start=-sinkage_start, fixed=true), v(start=0, fixed=true));
+  Modelica.Mechanics.Translational.Sources.ConstantForce weight(f_constant=-load);
+  SI.Force drawbar_pull = contact.drawbar_pull;
+  SI.Length sinkage = contact.sinkage;
+  SI.Force normal_force = contact.normal_force;
+equation
+  connect(reference.y, error.u1);
+  connect(speed.w, error.u2);
+  connect(error.y, controller.u);
+  connect(controller.y, motor.tau);
+  connect(motor.flange, wheel.flange_a);
+  connect(wheel.flange_b, contact.hub);
+  connect(speed.flange, wheel.flange_b);
+  connect(carriage_speed.y, carriage.v_ref);
+  connect(carriage.flange, contact.axle);
+  connect(body.flange_a, contact.vertical);
+  connect(weight.flange, body.flange_b);
+end Rig;
