@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -101,3 +102,21 @@ def test_report_states_the_pull_floor_from_its_figures(monkeypatch, floor, sinka
     assert verdict in text
     assert text.count("| chosen |") == 1
     assert text.count("| every |") == 1
+
+
+def test_modelica_examples_runs_the_slip_ramp_in_rumoca_and_draws_it(tmp_path):
+    """Without MSL the script runs SlipRamp alone, says why RigC2 was not run, and prints and
+    writes the measured difference from the Python model."""
+    pytest.importorskip("rumoca")
+    out, figures = tmp_path / "examples.png", tmp_path / "figures.json"
+    env = {k: v for k, v in os.environ.items() if k != "MODELICAPATH"}
+    run = subprocess.run([sys.executable, str(ROOT / "validation" / "modelica_examples.py"),
+                          "--out", str(out), "--json", str(figures)], capture_output=True,
+                         text=True, check=True, env=env, timeout=900)
+    assert "put the Modelica Standard Library 4.x on MODELICAPATH" in run.stderr
+    result = json.loads(figures.read_text())
+    assert set(result) == {"SlipRamp"}
+    assert 0 <= result["SlipRamp"]["sinkage"] < 1e-8
+    assert 0 <= result["SlipRamp"]["drawbar_pull"] < 1e-8
+    assert f"sinkage {result['SlipRamp']['sinkage']:.1e}" in run.stdout
+    assert out.stat().st_size > 10_000

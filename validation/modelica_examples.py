@@ -1,0 +1,104 @@
+"""The Modelica library's examples in a Modelica tool (rumoca) against the Python model.
+
+    python validation/modelica_examples.py [--out validation/report/modelica_examples.png]
+                                           [--stop 4] [--json FILE]
+
+Builds the library (as `wheelterrain build --flavor modelica`) into a temporary folder, runs
+Examples.SlipRamp (no Modelica Standard Library needed) and, where MSL 4.x is on MODELICAPATH,
+Examples.RigC2 (MSL flanges and blocks) with rumoca; prints the largest relative difference
+from the reference results the library ships (Resources/Reference, written by the Python
+model) and plots both.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from wheelterrain import plots
+from wheelterrain.modelica import library, reference
+
+
+def _reference(folder: Path, name: str) -> dict[str, np.ndarray]:
+    with (folder / "WheelTerrain" / "Resources" / "Reference" / f"{name}.csv").open() as f:
+        rows = list(csv.reader(f))
+    data = np.array(rows[1:], dtype=float)
+    return {c: data[:, k] for k, c in enumerate(rows[0])}
+
+
+def _msl() -> Path | None:
+    for entry in os.environ.get("MODELICAPATH", "").split(os.pathsep):
+        if entry and (Path(entry) / "Modelica" / "package.mo").is_file():
+            return Path(entry)
+    return None
+
+
+def _relative(got, want) -> float:
+    return float(np.max(np.abs(np.asarray(got) - want)) / np.max(np.abs(want)))
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--out", type=Path,
+                        default=Path("validation/report/modelica_examples.png"))
+    parser.add_argument("--stop", type=float, default=reference.RIG_STOP,
+                        help="how long to run RigC2 [s]")
+    parser.add_argument("--json", type=Path, default=None)
+    args = parser.parse_args()
+    import rumoca
+
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        library.write(root / "lib")
+        session = rumoca.Session(roots=[str(root / "lib")])
+        model = session.loads("model Run\n  extends WheelTerrain.Examples.SlipRamp;\nend Run;\n",
+                              model="Run")
+        result = model.simulate((0.0, 1.0), dt=0.05)
+        ref = _reference(root / "lib", "SlipRamp")
+        ramp = {"name": f"rumoca {rumoca.version()}", "python": ref,
+                "tool": {k: np.asarray(result[k]) for k in ("sinkage", "drawbar_pull")}}
+        figures = {"SlipRamp": {k: _relative(ramp["tool"][k], ref[k])
+                                for k in ("sinkage", "drawbar_pull")}}
+        rig = None
+        msl = _msl()
+        if msl is None:
+            print("RigC2 not run: put the Modelica Standard Library 4.x on MODELICAPATH",
+                  file=sys.stderr)
+        else:
+            path = root / "path"
+            path.mkdir()
+            for name in ("Modelica", "ModelicaServices", "Complex.mo"):
+                (path / name).symlink_to(msl / name)
+            (path / "WheelTerrain").symlink_to(root / "lib" / "WheelTerrain")
+            model = rumoca.Session(roots=[str(path)]).loads(
+                "model Run\n  extends WheelTerrain.Examples.RigC2;\nend Run;\n", model="Run")
+            result = model.simulate((0.0, args.stop), dt=reference.RIG_INTERVAL,
+                                    config=rumoca.SimConfig(solver="rk-like", rtol=1e-10,
+                                                            atol=1e-12))
+            ref = _reference(root / "lib", "RigC2")
+            n = len(result.time)
+            tool = {"time": np.asarray(result.time)}
+            tool.update({k: np.asarray(result[k]) for k in ("sinkage", "drawbar_pull")})
+            rig = {"name": ramp["name"], "tool": tool,
+                   "python": {k: v[:n] for k, v in ref.items()}}
+            figures["RigC2"] = {k: _relative(tool[k], ref[k][:n])
+                                for k in ("sinkage", "drawbar_pull")}
+    for name, errors in figures.items():
+        print(f"{name}: largest difference from the Python model, relative to the largest "
+              "value: " + ", ".join(f"{k} {v:.1e}" for k, v in errors.items()))
+    plots.modelica_examples(ramp, rig, args.out)
+    print(f"wrote {args.out}")
+    if args.json:
+        args.json.write_text(json.dumps(figures, indent=2) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
