@@ -140,9 +140,31 @@ def _probe_model(points) -> str:
         lines += [f"  parameter Real P{tag}[{len(chosen)}, {len(NAMES)}] = {P};",
                   f"  parameter Real X{tag}[{len(chosen)}, 6] = {X};"]
     lines.append(f"  parameter Real S[6] = {library._vector(SEED)};")
+    rover_points = _rover_points()
+    for key, tag in VECTOR_ARGUMENTS.items():
+        rows = [np.atleast_1d(pt[key]) for pt in rover_points]
+        dims = f"[{len(rows)}, {rows[0].size}]" if rows[0].size > 1 else f"[{len(rows)}]"
+        value = ("{" + ", ".join(library._vector(r) for r in rows) + "}" if rows[0].size > 1
+                 else library._vector([r[0] for r in rows]))
+        lines.append(f"  parameter Real {tag}{dims} = {value};")
+        seed = _vector_seed(key, rows[0].size)
+        lines.append(f"  parameter Real S{tag}{f'[{seed.size}]' if seed.size > 1 else ''} = "
+                     f"{library._vector(seed) if seed.size > 1 else library._vector(seed)[1:-1]};")
+    vector_values = []
+    for e in _vectorial():
+        size = e.outputs[0].size
+        args = ", ".join(f"{VECTOR_ARGUMENTS[k]}[i{', :' if k != 'position' else ''}]"
+                         for k in e.inputs)
+        seeds = ", ".join(f"S{VECTOR_ARGUMENTS[k]}" for k in e.inputs
+                          if k not in library.PARAMETER_INPUTS)
+        lines += [f"  Real {e.name}_v[{len(rover_points)}, {size}];",
+                  f"  Real {e.name}_d[{len(rover_points)}, {size}];"]
+        vector_values += [f"    {e.name}_v[i, :] = {ROOT}.Functions.{e.name}({args});",
+                          f"    {e.name}_d[i, :] = {ROOT}.Functions.{e.name}Der({args}, "
+                          f"{seeds});"]
     values, derivatives = [], []
     n, m = len(points), len(_derivative_points(points))
-    for e in library.exported():
+    for e in _scalar():
         size = e.outputs[0].size
         dims, dims_d, row = ((f"[{n}, {size}]", f"[{m}, {size}]", "[i, :]") if size > 1 else
                              (f"[{n}]", f"[{m}]", "[i]"))
@@ -164,10 +186,57 @@ def _probe_model(points) -> str:
                            f"{_arguments(names, 'D')}, {seeds});")
     return "\n".join([*lines, "equation", f"  for i in 1:{n} loop", *values, "  end for;",
                       f"  for i in 1:{m} loop", *derivatives, "  end for;",
+                      f"  for i in 1:{len(rover_points)} loop", *vector_values, "  end for;",
                       "end Probe;"]) + "\n"
 
 
 SEED = [0.3, -0.7, 0.11, 0.5, 0.2, -0.05]
+
+
+def _scalar() -> list:
+    """The exported functions of scalar inputs and p: evaluated at :func:`_points`."""
+    return [e for e in library.exported() if set(e.inputs) <= {*_COLUMN, "p"}]
+
+
+def _vectorial() -> list:
+    """The exported functions of the chassis' and the map's vectors: at :func:`_rover_points`."""
+    return [e for e in library.exported() if e not in _scalar()]
+
+
+VECTOR_ARGUMENTS = {"x": "XR", "u": "UR", "r": "RR", "position": "POS", "g": "G"}
+
+
+def _rover_points() -> list[dict]:
+    """Chassis states, inputs and parameters covering the speed loop, a commanded speed, a
+    torque command at the motor's limit, the slope ramp before and after its switch and its
+    bound; map positions before, on and after a patch."""
+    from wheelterrain.model import ground, rover
+
+    rng = np.random.default_rng(3)
+    base = rover.defaults()
+    variants = [{}, {"rover.drive": 1, "rover.ramp_time": 10.0, "rover.slope_rate": 0.01,
+                     "rover.slope_rate_after": -0.0175, "rover.slope_bound": 0.2},
+                {"rover.drive": 2, "rover.motor_torque_limit": 0.05, "rover.towing_rate": 2.0},
+                {"rover.gravity": 1.62}]
+    soils = {**ground.defaults(), "patch.start": 0.5, "patch.end": 0.8}
+    for soil, patch in zip(ground.SOIL_NAMES, ground.PATCH_NAMES, strict=True):
+        soils[patch] = soils[soil] * 0.7
+    points = []
+    for k, variant in enumerate(variants):
+        values = {**base, **variant}
+        state = np.array(reference.rover_start())
+        state += 0.01 * rng.standard_normal(state.size)
+        state[rover.STATES.index("elapsed")] = (5.0, 30.0, 40.0, 0.0)[k]
+        points.append({
+            "x": state, "u": 5.0 * rng.standard_normal(len(rover.INPUTS)),
+            "r": np.array([values[n] for n in rover.ROVER_NAMES]),
+            "position": (0.1, 0.5, 0.79, 0.8)[k],
+            "g": np.array([soils[n] for n in ground.NAMES])})
+    return points
+
+
+def _vector_seed(name: str, size: int) -> np.ndarray:
+    return np.linspace(-0.9, 1.1, size) if size > 1 else np.array([0.37])
 _COLUMN = {name: k for k, name in enumerate(contact.EXPORT_INPUTS[True][:-1])}
 _COLUMN.update(wheel_speed=2, slip_paper=2)  # the slips' inputs: taken from columns of X
 
@@ -214,7 +283,7 @@ def test_every_generated_function_is_its_casadi_function_bit_for_bit(probed):
     points, result = probed
     vectors = {name: presets.load(name).vector() for name in presets.available()}
     moving = _derivative_points(points)
-    for e in library.exported():
+    for e in _scalar():
         size = e.outputs[0].size
         substituted = bool(translate.operations(e.function) & set(translate.SUBSTITUTED))
         got = _values(result, f"{e.name}_v", len(points), size)
@@ -229,6 +298,19 @@ def test_every_generated_function_is_its_casadi_function_bit_for_bit(probed):
                 for name, x in moving])
             d_sub = bool(translate.operations(e.derivative) & set(translate.SUBSTITUTED))
             _same(got, ref, d_sub, e.name + "Der")
+    rover_points = _rover_points()
+    for e in _vectorial():
+        size = e.outputs[0].size
+        got = _values(result, f"{e.name}_v", len(rover_points), size)
+        ref = np.array([np.array(e.function(*(pt[k] for k in e.inputs)), dtype=float).ravel()
+                        for pt in rover_points])
+        _same(got, ref, False, e.name)
+        got = _values(result, f"{e.name}_d", len(rover_points), size)
+        seeds = [_vector_seed(k, np.atleast_1d(rover_points[0][k]).size) for k in e.inputs
+                 if k not in library.PARAMETER_INPUTS]
+        ref = np.array([np.array(e.derivative(*(pt[k] for k in e.inputs), *seeds),
+                                 dtype=float).ravel() for pt in rover_points])
+        _same(got, ref, False, e.name + "Der")
 
 
 def test_the_dispatchers_run_the_form_the_case_picks_and_every_form_is_reached(probed):
@@ -281,20 +363,22 @@ def test_the_export_kernels_are_the_models_contact_and_steady_state():
 def test_each_derivative_function_is_the_casadi_jacobian_times_the_seed():
     rng = np.random.default_rng(7)
     p = presets.load("paper-table2-arc").vector()
-    for e in library.exported():
-        if e.derivative is None:
-            continue
-        for _, x in _derivative_points(_points())[20:36:3]:
-            args = _casadi_arguments(e.inputs, x, p)
-            moving = [k for k, n in enumerate(e.inputs) if n != "p"]
-            seeds = rng.standard_normal(len(moving))
-            symbols = [ca.SX.sym(n, e.function.nnz_in(k)) for k, n in enumerate(e.inputs)]
-            jac = ca.Function("j", symbols, [ca.jacobian(e.function(*symbols), ca.vertcat(
-                *(symbols[k] for k in moving)))])
-            ref = np.array(jac(*args), dtype=float) @ seeds
-            got = np.array(e.derivative(*args, *seeds), dtype=float).ravel()
-            scale = np.abs(np.array(jac(*args), dtype=float)) @ np.abs(seeds)
-            assert np.all(np.abs(got - ref) <= 1e-12 * np.maximum(scale, 1e-300)), e.name
+    cases = [(e, _casadi_arguments(e.inputs, x, p)) for e in _scalar() if e.derivative
+             for _, x in _derivative_points(_points())[20:36:3]]
+    cases += [(e, [pt[k] for k in e.inputs]) for e in _vectorial() for pt in _rover_points()]
+    for e, args in cases:
+        moving = [k for k, n in enumerate(e.inputs) if n not in library.PARAMETER_INPUTS]
+        sizes = [e.function.nnz_in(k) for k in moving]
+        seeds = rng.standard_normal(sum(sizes))
+        split = np.split(seeds, np.cumsum(sizes)[:-1])
+        symbols = [ca.SX.sym(n, e.function.nnz_in(k)) for k, n in enumerate(e.inputs)]
+        jac = ca.Function("j", symbols, [ca.jacobian(e.function(*symbols), ca.vertcat(
+            *(symbols[k] for k in moving)))])
+        matrix = np.array(jac(*args), dtype=float)
+        got = np.array(e.derivative(*args, *split), dtype=float).ravel()
+        scale = np.abs(matrix) @ np.abs(seeds)
+        assert np.all(np.abs(got - matrix @ seeds) <= 1e-12 * np.maximum(scale, 1e-300)), \
+            e.name
 
 
 # ---- the examples that need no MSL ------------------------------------------------------------
@@ -336,6 +420,29 @@ def test_a_slip_ramp_of_the_quasi_static_wheel_matches_the_steady_state(built):
         assert np.all(np.abs(got - ref[key]) <= 1e-8 * np.abs(ref[key]) + 1e-12), key
     assert ref["slip"][0] == reference.RAMP[0]
     assert ref["drawbar_pull"][0] < 0 < ref["drawbar_pull"][-1]  # braking to driving
+
+
+def test_the_rover_of_four_wheels_follows_the_python_models_trajectory(built):
+    """Examples.Rover (RoverChassis and four Wheels, no MSL) against the Python model's rover
+    in model exchange (Resources/Reference/Rover.csv: the RoverChassis FMU's rates on four
+    contacts with memory, CVODES at 1e-12) over its first second: 1e-8 of each quantity's
+    largest value (rumoca at 1e-10)."""
+    model = _load_example([built], "Rover")
+    assert model.structure().is_balanced
+    result = model.simulate((0.0, 1.0), dt=reference.ROVER_INTERVAL, config=rumoca.SimConfig(
+        solver="rk-like", rtol=1e-10, atol=1e-12))
+    ref = _reference(built, "Rover")
+    n = len(result.time)
+    assert n == 101
+    checked = {"speed": "speed", "pitch": "pitch"}
+    for k, wheel in enumerate(("front_left", "front_right", "rear_left", "rear_right")):
+        checked[f"chassis.sinkage[{k + 1}]"] = f"{wheel}.sinkage"
+        checked[f"chassis.wheel_speed[{k + 1}]"] = f"{wheel}.wheel_speed"
+        checked[f"{wheel}.drawbar_pull"] = f"{wheel}.drawbar_pull"
+        checked[f"{wheel}.normal_force"] = f"{wheel}.normal_force"
+    for key, column in checked.items():
+        got, want = np.asarray(result[key]), ref[column][:n]
+        assert np.max(np.abs(got - want)) <= 1e-8 * np.max(np.abs(want)), key
 
 
 # ---- with the Modelica Standard Library --------------------------------------------------------

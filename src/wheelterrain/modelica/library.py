@@ -39,7 +39,7 @@ import casadi as ca
 import numpy as np
 
 from wheelterrain import __version__, presets
-from wheelterrain.model import contact, slip
+from wheelterrain.model import contact, ground, rover, slip
 from wheelterrain.modelica import reference, translate
 from wheelterrain.modelica.translate import Port
 from wheelterrain.parameters import NAMES, RIG_TABLE, TABLE, Parameter
@@ -140,19 +140,37 @@ INPUT_DOC = {
     "wheel_speed": "the wheel's angular velocity omega [rad/s]",
     "slip_paper": "the paper's slip s = (omega*R_ref - V)/V [1]",
     "p": "the parameters in table order (Data, Records.parameterVector)",
+    "r": "the rover's parameters in table order (Data.rover)",
+    "x": "the chassis' state (Index.rover_states order)",
+    "u": "the chassis' inputs (Index.rover_inputs order)",
+    "position": "where the point is along the path [m]",
+    "g": "the terrain map's parameters in table order (Data.terrain)",
 }
 
 
+PARAMETER_INPUTS = ("p", "r", "g")
+"""Inputs that are parameter vectors: the table's (p), the rover's (r), the terrain map's (g);
+zero derivative in every derivative annotation."""
+
+
+def _sizes() -> dict[str, int]:
+    return {"p": len(NAMES), "r": len(rover.ROVER_NAMES), "x": len(rover.STATES),
+            "u": len(rover.INPUTS), "g": len(ground.NAMES)}
+
+
 def _ports(names: Sequence[str]) -> list[Port]:
-    return [Port(n, len(NAMES) if n == "p" else 1, description=INPUT_DOC[n]) for n in names]
+    sizes = _sizes()
+    return [Port(n, sizes.get(n, 1), description=INPUT_DOC[n]) for n in names]
 
 
 def _derivative(f: ca.Function, names: Sequence[str]) -> ca.Function:
     """The forward directional derivative of ``f`` (one output) with respect to every input
-    but ``p``: inputs (the inputs, then der_<input> for each but p), output der_out."""
+    but the parameter vectors: inputs (the inputs, then der_<input> for each of those), output
+    der_<output>."""
     xs = [ca.SX.sym(n, f.nnz_in(k)) for k, n in enumerate(names)]
-    seeds = [ca.SX.sym("der_" + n) for n in names if n != "p"]
-    moving = [x for n, x in zip(names, xs, strict=True) if n != "p"]
+    seeds = [ca.SX.sym("der_" + n, f.nnz_in(k)) for k, n in enumerate(names)
+             if n not in PARAMETER_INPUTS]
+    moving = [x for n, x in zip(names, xs, strict=True) if n not in PARAMETER_INPUTS]
     y = f(*xs)
     dy = ca.jtimes(y, ca.vertcat(*moving), ca.vertcat(*seeds))
     return ca.Function(f.name() + "_der", [*xs, *seeds], [dy], {"cse": True})
@@ -209,7 +227,43 @@ def exported() -> tuple[Exported, ...]:
     out.append(Exported("tractionFromPaper", f, ("slip_paper",),
                         (Port("slip", description="traction slip i = s/(1 + s) [1]"),),
                         "Traction slip from the paper's slip", _derivative(f, ("slip_paper",))))
+    out += _rover_functions()
     return tuple(out)
+
+
+def _rover_functions() -> list[Exported]:
+    """The RoverChassis FMU's chassis (its model-exchange rates and each wheel's sinkage and
+    sinkage rate) and the Terrain FMU's soil map."""
+    sizes = _sizes()
+    x, u, r = (ca.SX.sym(n, sizes[n]) for n in ("x", "u", "r"))
+    xs = tuple(x[k] for k in range(sizes["x"]))
+    named = rover.named(r)
+    inputs = {n: u[k] for k, n in enumerate(rover.INPUTS)}
+    rates = ca.Function("roverRates", [x, u, r], [ca.vertcat(*rover.rates(xs, inputs, named))],
+                        {"cse": True})
+    kinematics = []
+    for wheel in rover.WHEELS:
+        kinematics += rover.wheel_kinematics(xs, named, wheel)
+    wheels = ca.Function("roverWheels", [x, r], [ca.vertcat(*kinematics)], {"cse": True})
+    position, g = ca.SX.sym("position"), ca.SX.sym("g", sizes["g"])
+    soil = ground.soil_at(position, {n: g[k] for k, n in enumerate(ground.NAMES)})
+    soil_at = ca.Function("soilAt", [position, g], [ca.vertcat(*soil)], {"cse": True})
+    return [
+        Exported("roverRates", rates, ("x", "u", "r"),
+                 (Port("dx", sizes["x"], description="d(x)/dt"),),
+                 "The chassis' state derivative (the RoverChassis FMU's model exchange)",
+                 _derivative(rates, ("x", "u", "r"))),
+        Exported("roverWheels", wheels, ("x", "r"),
+                 (Port("y", 2 * len(rover.WHEELS), description=(
+                     "each wheel's sinkage and sinkage rate, Index.rover_wheels order")),),
+                 "Each wheel's sinkage and sinkage rate from the chassis' state",
+                 _derivative(wheels, ("x", "r"))),
+        Exported("soilAt", soil_at, ("position", "g"),
+                 (Port("soil", len(ground.SOIL_NAMES), description=(
+                     "the soil.* parameters there, table order")),),
+                 "The terrain map's soil at a position (the Terrain FMU's)",
+                 _derivative(soil_at, ("position", "g"))),
+    ]
 
 
 def _functions(lib: Library) -> None:
@@ -220,8 +274,8 @@ def _functions(lib: Library) -> None:
         inputs = _ports(e.inputs)
         annotation = ""
         if e.derivative is not None:
-            zero = "(zeroDerivative=p)" if "p" in e.inputs else ""
-            annotation = f"derivative{zero}={e.name}Der"
+            zero = ", ".join(f"zeroDerivative={n}" for n in e.inputs if n in PARAMETER_INPUTS)
+            annotation = f"derivative{f'({zero})' if zero else ''}={e.name}Der"
         pieces = f"{LIBRARY}.Functions.Internal.{e.name[0].upper()}{e.name[1:]}"
         text, parts = translate.functions(e.function, e.name, inputs, e.outputs,
                                           e.description, annotation, pieces=pieces)
@@ -229,7 +283,8 @@ def _functions(lib: Library) -> None:
         order.append(e.name)
         _internal(lib, internal, pieces, parts, e.name)
         if e.derivative is not None:
-            seeds = [Port("der_" + n, description=f"d({n})/dt") for n in e.inputs if n != "p"]
+            seeds = [Port("der_" + p.name, p.size, description=f"d({p.name})/dt")
+                     for p in inputs if p.name not in PARAMETER_INPUTS]
             outs = [Port("der_" + p.name, p.size, description=f"d({p.name})/dt")
                     for p in e.outputs]
             dname = f"{e.name}Der"
@@ -308,6 +363,19 @@ def _index(lib: Library, where: str) -> None:
     for k, name in enumerate(contact.CONTACT_OUTPUTS + contact.MEMORY_OUTPUTS):
         scope = "contact only" if name in contact.MEMORY_OUTPUTS else "both"
         lines.append(f'  constant Integer {name} = {k + 1} "({scope})";')
+    for package, names, what in (("RoverState", rover.STATES, "roverRates' x and dx"),
+                                 ("RoverInput", rover.INPUTS, "roverRates' u"),
+                                 ("RoverWheel", [f"{w}.{q}" for w in rover.WHEELS
+                                                 for q in ("sinkage", "sinkage_rate")],
+                                  "roverWheels' y")):
+        lines.append(f'  package {package} "Positions in {what}"')
+        for k, name in enumerate(names):
+            lines.append(f"    constant Integer {name.replace('.', '_')} = {k + 1};")
+        lines.append(f"  end {package};")
+    lines.append('  package Soil "Positions in soilAt\'s soil"')
+    for k, name in enumerate(ground.SOIL_NAMES):
+        lines.append(f"    constant Integer {name.split('.', 1)[1]} = {k + 1};")
+    lines.append("  end Soil;")
     lines.append("end Index;")
     _class_file(lib, where, "Index", "\n".join(lines) + "\n")
 
@@ -325,6 +393,16 @@ def _data(lib: Library) -> None:
         const = preset_constant(name)
         lines.append(_wrap_call(f"  constant Real {const}[{len(NAMES)}] = {_vector(values)}"))
         lines.append(f'    "The preset {name} (Records.Parameters names the values)";')
+    for const, values, doc in (
+            ("rover", [rover.defaults()[n] for n in rover.ROVER_NAMES],
+             "The rover's parameters at the table's defaults (the rover.* rows, table order)"),
+            ("roverStart", reference.rover_start(),
+             "The rover at the start of Examples.Rover: level, wheels at their reference speed, "
+             "the chassis 1 mm in the soil"),
+            ("terrain", [ground.defaults()[n] for n in ground.NAMES],
+             "The terrain map's parameters at the table's defaults (one soil, no patch)")):
+        lines.append(_wrap_call(f"  constant Real {const}[{len(values)}] = {_vector(values)}"))
+        lines.append(f'    "{doc}";')
     lines.append("end Data;")
     _class_file(lib, LIBRARY, "Data", "\n".join(lines) + "\n")
 
@@ -440,8 +518,96 @@ def _components(lib: Library) -> None:
         "QuasiStaticWheel", N=len(NAMES), QUASI_ROWS=rows))
     _class_file(lib, where, "Contact", _template(
         "Contact", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS)))
+    _class_file(lib, where, "Wheel", _template(
+        "Wheel", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS)))
+    _class_file(lib, where, "RoverChassis", _rover_chassis())
     lib.package(LIBRARY, "Components", "The wheel on the soil as components",
-                ["QuasiStaticWheel", "Contact"])
+                ["QuasiStaticWheel", "Contact", "Wheel", "RoverChassis"])
+
+
+def _state(name: str) -> str:
+    return f"x[{rover.STATES.index(name) + 1}]"
+
+
+def _rover_chassis() -> str:
+    """The RoverChassis FMU's chassis as a block: its state, its rates, each wheel's
+    kinematics; inputs and outputs per wheel in rover.WHEELS order."""
+    sizes, n = _sizes(), len(rover.WHEELS)
+    wheels = ", ".join(rover.WHEELS)
+    per_wheel = {"normal_force": "N", "drawbar_pull": "N", "torque": "N.m",
+                 "wheel_speed_command": "rad/s", "motor_torque_command": "N.m"}
+    u = []
+    for name in rover.INPUTS:
+        wheel, _, quantity = name.rpartition(".")
+        u.append(f"{quantity}[{rover.WHEELS.index(wheel) + 1}]" if wheel else quantity)
+    kinematics = []
+    for k in range(n):
+        kinematics += [f"sinkage[{k + 1}]", f"sinkage_rate[{k + 1}]"]
+    lines = [
+        'block RoverChassis "The RoverChassis FMU\'s chassis (its model exchange): a rigid body '
+        'in the plane of travel on four driven wheels (no Modelica Standard Library needed)"',
+        f"  parameter Real r[{sizes['r']}] = {LIBRARY}.Data.rover "
+        '"the rover\'s parameters in table order";',
+        f"  parameter Real x_start[{sizes['x']}] = {LIBRARY}.Data.roverStart "
+        '"the state at the start (Index.RoverState order)";',
+        '  input Real slope(unit="rad") "the terrain\'s slope (the rover.* ramp adds to it)";',
+        '  input Real towing_force(unit="N") "a force holding the rover back";']
+    for name, unit in per_wheel.items():
+        lines.append(f'  input Real {name}[{n}](each unit="{unit}") "per wheel: {wheels}";')
+    lines += [
+        f'  output Real sinkage[{n}](each unit="m") "per wheel";',
+        f'  output Real sinkage_rate[{n}](each unit="m/s") "per wheel";',
+        f'  output Real wheel_speed[{n}](each unit="rad/s") "per wheel";',
+        '  output Real speed(unit="m/s") "the chassis\' speed along the terrain";',
+        '  output Real position(unit="m") "the chassis\' reference point along the path";',
+        '  output Real pitch(unit="rad") "nose down positive";',
+        f"  Real x[{sizes['x']}](start=x_start, each fixed=true) "
+        '"the state, Index.RoverState order";',
+        "protected",
+        f"  Real u[{sizes['u']}];",
+        "equation"]
+    lines += _wrap_lines(f"  u = {{{', '.join(u)}}};")
+    lines.append(f"  der(x) = {LIBRARY}.Functions.roverRates(x, u, r);")
+    lines += _wrap_lines(f"  {{{', '.join(kinematics)}}} = "
+                         f"{LIBRARY}.Functions.roverWheels(x, r);")
+    speeds = ", ".join(_state(f"{w}.wheel_speed") for w in rover.WHEELS)
+    lines += [f"  wheel_speed = {{{speeds}}};", f"  speed = {_state('speed')};",
+              f"  position = {_state('position')};", f"  pitch = {_state('pitch')};",
+              "end RoverChassis;"]
+    return "\n".join(lines) + "\n"
+
+
+def _rover_example() -> str:
+    n = len(rover.WHEELS)
+    lines = [
+        'model Rover "The rover on level ground at the commanded rim speed: four Wheels on a '
+        'RoverChassis, the default preset\'s soil (no Modelica Standard Library needed)"',
+        f"  parameter Real p[{len(NAMES)}] = {LIBRARY}.Data.rashidPatch "
+        '"every wheel\'s soil and model";',
+        f"  {LIBRARY}.Components.RoverChassis chassis(slope=0, towing_force=0,",
+        f"    wheel_speed_command=zeros({n}), motor_torque_command=zeros({n}));"]
+    lines += [f"  {LIBRARY}.Components.Wheel {w}(p=p);" for w in rover.WHEELS]
+    lines += ['  Real speed(unit="m/s") = chassis.speed;',
+              '  Real pitch(unit="rad") = chassis.pitch;', "equation"]
+    for k, w in enumerate(rover.WHEELS, start=1):
+        lines += [f"  {w}.sinkage = chassis.sinkage[{k}];",
+                  f"  {w}.sinkage_rate = chassis.sinkage_rate[{k}];",
+                  f"  {w}.wheel_speed = chassis.wheel_speed[{k}];",
+                  f"  {w}.carriage_speed = chassis.speed;"]
+        lines += [f"  chassis.{q}[{k}] = {w}.{q};"
+                  for q in ("normal_force", "drawbar_pull", "torque")]
+    lines += [f"  annotation(experiment(StartTime=0, StopTime={reference.ROVER_STOP}, "
+              f"Interval={reference.ROVER_INTERVAL}, Tolerance=1e-8),",
+              '    Documentation(info="<html><p>Reference: Resources/Reference/Rover.csv (the '
+              "Python model: the RoverChassis FMU's model-exchange rates on four contacts with "
+              'memory). Model exchange records no rut along the track (as the FMUs\' model '
+              'exchange): the rear wheels do not meet the front wheels\' rut here.</p></html>"));',
+              "end Rover;"]
+    return "\n".join(lines) + "\n"
+
+
+def _wrap_lines(line: str) -> list[str]:
+    return _wrap_call(line).split("\n")
 
 
 def _examples(lib: Library) -> None:
@@ -454,7 +620,8 @@ def _examples(lib: Library) -> None:
     rig = {row.name.replace(".", "_"): translate.literal(row.default) for row in RIG_TABLE}
     _class_file(lib, where, "Rig", _template(
         "Rig", sinkage_start=translate.literal(reference.RIG_SINKAGE_START), **rig))
-    order = ["SteadyC2", "SlipRamp", "Rig"]
+    _class_file(lib, where, "Rover", _rover_example())
+    order = ["SteadyC2", "SlipRamp", "Rover", "Rig"]
     for case, s in reference.RIG_CASES.items():
         text = (f'model Rig{case} "The rig at the paper\'s {case}: slip s = {s}"\n'
                 f"  extends Rig(slip_paper={translate.literal(s)});\n"

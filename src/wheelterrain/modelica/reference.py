@@ -20,7 +20,7 @@ import numpy as np
 
 from wheelterrain import presets
 from wheelterrain.fmu import functions as fmu_functions
-from wheelterrain.model import api, contact, rig
+from wheelterrain.model import api, contact, rig, rover
 from wheelterrain.model.slip import traction_from_paper
 from wheelterrain.parameters import RIG_TABLE
 
@@ -83,6 +83,71 @@ def rig_trajectory(slip_paper: float, stop: float = RIG_STOP,
     return np.column_stack([times, states, force_rows])
 
 
+ROVER_STOP, ROVER_INTERVAL = 10.0, 0.01
+ROVER_HEAVE_START = 1e-3
+"""m: the chassis starts this deep in the soil (all four wheels in contact; at exactly zero
+sinkage on fresh soil the contact's derivative is infinite)."""
+ROVER_COLUMNS = ("time", "speed", "position", "heave", "pitch",
+                 *(f"{w}.{q}" for q in ("sinkage", "drawbar_pull", "normal_force",
+                                        "wheel_speed") for w in rover.WHEELS))
+
+
+def rover_start() -> list[float]:
+    """Examples.Rover's start (rover.STATES order): rover.initial_state at the table's
+    defaults, the chassis ROVER_HEAVE_START in the soil."""
+    state = list(rover.initial_state(rover.defaults()))
+    state[rover.STATES.index("heave")] = ROVER_HEAVE_START
+    return state
+
+
+def rover_trajectory(stop: float = ROVER_STOP, interval: float = ROVER_INTERVAL) -> np.ndarray:
+    """The rover on level ground (Examples.Rover): the RoverChassis FMU's model-exchange rates
+    on four contacts with the soil's memory (each wheel's angle and plastic sinkage states), the
+    default preset's soil and the rover's defaults, integrated by CVODES at 1e-12: one row per
+    output time, ROVER_COLUMNS."""
+    p = ca.DM(presets.load().vector())
+    r = rover.defaults()
+    radius = fmu_functions.slip_radius(p)
+    x = ca.SX.sym("x", len(rover.STATES))
+    angles, plastics = ca.SX.sym("angle", len(rover.WHEELS)), ca.SX.sym(
+        "plastic", len(rover.WHEELS))
+    xs = tuple(x[k] for k in range(len(rover.STATES)))
+    speed = xs[rover.STATES.index("speed")]
+    u = {"slope": 0.0, "towing_force": 0.0}
+    extra, report = [], {}
+    fns = contact.build()
+    for k, wheel in enumerate(rover.WHEELS):
+        z, z_rate = rover.wheel_kinematics(xs, r, wheel)
+        omega = xs[rover.STATES.index(f"{wheel}.wheel_speed")]
+        slip = fmu_functions.slips(omega, speed, radius)[0]
+        out = dict(zip((*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS),
+                       fns.contact_memory(z, z_rate, slip, angles[k], plastics[k], speed, p),
+                       strict=True))
+        for name in rover.WHEEL_FORCES:
+            u[f"{wheel}.{name}"] = out[name]
+        u[f"{wheel}.wheel_speed_command"] = 0.0
+        u[f"{wheel}.motor_torque_command"] = 0.0
+        extra.append(out["plastic_rate"])
+        report.update({f"{wheel}.sinkage": z, f"{wheel}.drawbar_pull": out["drawbar_pull"],
+                       f"{wheel}.normal_force": out["normal_force"],
+                       f"{wheel}.wheel_speed": omega})
+    rates = rover.rates(xs, u, r)
+    omegas = [xs[rover.STATES.index(f"{w}.wheel_speed")] for w in rover.WHEELS]
+    state = ca.vertcat(x, angles, plastics)
+    ode = {"x": state, "ode": ca.vertcat(*rates, *omegas, *extra)}
+    times = np.round(np.arange(0, stop + interval / 2, interval), 10)
+    integrator = ca.integrator("rover", "cvodes", ode, 0.0, times[1:].tolist(),
+                               {"abstol": 1e-14, "reltol": 1e-12, "max_num_steps": 10**7})
+    start = [*rover_start(), *[0.0] * (2 * len(rover.WHEELS))]
+    states = np.column_stack([start, np.array(integrator(x0=start)["xf"])]).T
+    report.update(speed=speed, position=xs[rover.STATES.index("position")],
+                  heave=xs[rover.STATES.index("heave")], pitch=xs[rover.STATES.index("pitch")])
+    columns = ca.Function("columns", [state], [ca.vertcat(*(report[c] for c in
+                                                           ROVER_COLUMNS[1:]))])
+    rows = np.array([np.array(columns(s), dtype=float).ravel() for s in states])
+    return np.column_stack([times, rows])
+
+
 def _csv(columns: Sequence[str], rows) -> str:
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
@@ -104,4 +169,5 @@ def files() -> dict[str, str]:
     out["SlipRamp.csv"] = _csv(columns, [[r[k] for k in columns] for r in ramp])
     for case, s in RIG_CASES.items():
         out[f"Rig{case}.csv"] = _csv(RIG_COLUMNS, rig_trajectory(s))
+    out["Rover.csv"] = _csv(ROVER_COLUMNS, rover_trajectory())
     return out

@@ -1,0 +1,27 @@
+block Wheel "The WheelTerrain FMU's contact as a block (its model exchange): the wheel's angle and the soil's memory its states (no Modelica Standard Library needed)"
+  parameter Real p[${N}] = WheelTerrain.Data.rashidPatch
+    "the parameters in table order (WheelTerrain.Data, Records.parameterVector)";
+  input Real sinkage(unit="m") "of the contact circle below the undisturbed surface";
+  input Real sinkage_rate(unit="m/s") "d(sinkage)/dt";
+  input Real wheel_speed(unit="rad/s") "the wheel's angular velocity";
+  input Real carriage_speed(unit="m/s") "the axle's forward speed";
+  output Real normal_force(unit="N") "the soil's force on the wheel, up";
+  output Real drawbar_pull(unit="N") "the soil's net force on the wheel, forward";
+  output Real torque(unit="N.m") "the torque the soil resists the wheel's turning with";
+  output Real slip(unit="1") "traction slip";
+  output Real rut_left(unit="m") "the rut the wheel leaves";
+  Real wheel_angle(unit="rad", start=0, fixed=true) "the grouser ripple's phase";
+  Real plastic_sinkage(unit="m", start=0, fixed=true) "the deepest the wheel has pressed the soil under it";
+  output Real y[${CONTACT_ROWS}] "every output of Functions.contact, Functions.Index order";
+equation
+  der(wheel_angle) = wheel_speed;
+  slip = WheelTerrain.Functions.tractionSlip(wheel_speed, carriage_speed, p);
+  assert(slip >= -1 and slip <= 1, "Wheel: the traction slip left the model's range [-1, 1]");
+  y = WheelTerrain.Functions.contact(sinkage, sinkage_rate, slip, wheel_angle, plastic_sinkage, carriage_speed, p);
+  der(plastic_sinkage) = y[WheelTerrain.Functions.Index.plastic_rate];
+  normal_force = y[WheelTerrain.Functions.Index.normal_force];
+  drawbar_pull = y[WheelTerrain.Functions.Index.drawbar_pull];
+  torque = y[WheelTerrain.Functions.Index.torque];
+  rut_left = y[WheelTerrain.Functions.Index.rut_left];
+  annotation(Documentation(info="<html><p>The WheelTerrain FMU's model exchange as a block: the same inputs, the same contact, its states wheel_angle and plastic_sinkage.</p></html>"));
+end Wheel;
