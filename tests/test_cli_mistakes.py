@@ -303,8 +303,12 @@ def test_validate_data_that_no_form_can_predict_exits_3_with_no_coverage(tmp_pat
     assert result.exit_code == 3, result.output
     assert "no model form could predict" in result.output
     rows = json.loads((tmp_path / "out.json").read_text())["rows"]
-    assert rows
-    for row in rows:
+    forms = [row for row in rows if row["model"] != "line"]
+    assert forms
+    for row in forms:
         assert row["error"]
         assert row["drawbar_pull_mae"] is None
         assert row["interval_coverage"] is None
+    line = [row for row in rows if row["model"] == "line"]  # the baseline has no interval
+    assert len(line) == 1
+    assert line[0]["interval_coverage"] is None

@@ -95,9 +95,8 @@ def test_intervals_have_their_nominal_coverage_on_synthetic_data(shipped):
     assert 0.83 <= np.mean(inside) <= 0.96, np.mean(inside)
 
 
-def test_default_form_has_the_best_leave_one_dataset_out_pull(shipped):
+def test_leave_one_dataset_out_rows_are_whole(shipped):
     rows = cw.lodo_rows(shipped)
-    assert cw.best_form(rows) == cw.DEFAULT_FORM
     for r in rows:
         assert r["protocol"] == "leave-one-dataset-out"
         assert r["points"] == len(r["judged_on"]) > 0
@@ -167,16 +166,28 @@ def test_cli_validate_data_json_rows(tmp_path):
     run = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "validate", "--data",
                           str(path), "--json"], capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr
-    rows = json.loads(run.stdout)["rows"]
-    assert rows[0]["model"] == cw.DEFAULT_FORM
-    assert sorted(r["model"] for r in rows) == sorted(f.name for f in cw.FORMS)
+    result = json.loads(run.stdout)
+    rows = result["rows"]
+    assert rows[0]["model"] == "line"  # the baseline first, then the default form
+    assert rows[1]["model"] == cw.DEFAULT_FORM
+    assert sorted(r["model"] for r in rows) == sorted(["line", *(f.name for f in cw.FORMS)])
     for r in rows:
         assert r["protocol"] == "user-data"
         assert r["dataset"] == "my-wheel"
         assert r["points"] == 6
         assert r["drawbar_pull_mae"] >= 0
         assert r["sinkage_mae"] >= 0
+        assert r["drawbar_pull_mae_per_load"] == pytest.approx(r["drawbar_pull_mae"] / 80.0)
+        assert r["sinkage_mae_per_radius"] >= 0
         assert "my-wheel" not in r["trained_on"]
+    line = rows[0]["drawbar_pull_mae"]
+    assert result["beats_the_line"] == {"my-wheel": [r["model"] for r in rows[1:]
+                                                     if r["drawbar_pull_mae"] < line]}
+    text = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "validate", "--data",
+                           str(path)], capture_output=True, text=True, timeout=600, check=True)
+    assert "my-wheel: " in text.stdout
+    assert "line " in text.stdout
+    assert "pull/W" in text.stdout
 
 
 def test_mechanisms_act_as_documented(shipped):
@@ -210,3 +221,56 @@ def test_steady_interval_brackets_the_prediction():
     for key in ("drawbar_pull", "sinkage"):
         lo, hi = out["interval"][key]
         assert lo < out[key] < hi
+
+
+# ---- nested leave-one-dataset-out: every choice inside the fold ---------------------------
+
+NESTED_KEYS = {"protocol", "dataset", "model", "drawbar_pull_mae", "sinkage_mae",
+               "drawbar_pull_mae_per_load", "sinkage_mae_per_radius", "interval_coverage",
+               "trained_on"}
+
+
+@pytest.fixture
+def few_candidates(monkeypatch):
+    """Three candidates (two without constants, one with), so the rule runs in seconds."""
+    monkeypatch.setattr(cw, "CANDIDATES", (cw.BY_FORM["classical"], cw.BY_FORM["patch"],
+                                           cw.BY_FORM["arc-cross"]))
+
+
+def test_a_held_out_data_set_cannot_change_its_own_folds_choice(shipped, few_candidates):
+    """Corrupting the held-out data set moves neither the rule's scores nor its choice nor
+    the constants of its fold; a fold that trains on the corrupted set does move."""
+    held = shipped[2].name
+    dirty_sets = [(_corrupted(ds) if ds.name == held else ds) for ds in shipped]
+    clean = cw.nested_fold(shipped, held, starts=1)
+    dirty = cw.nested_fold(dirty_sets, held, starts=1)
+    assert dirty["selection"] == clean["selection"]
+    assert dirty["model"] == clean["model"]
+    assert dirty["fitted"] == clean["fitted"]
+    assert dirty["drawbar_pull_mae"] != clean["drawbar_pull_mae"]  # judged on what it got
+    other = shipped[0].name
+    assert cw.nested_fold(dirty_sets, other, starts=1)["selection"] != \
+        cw.nested_fold(shipped, other, starts=1)["selection"]
+
+
+def test_nested_rows_carry_the_contract_and_the_line_beside(shipped, few_candidates):
+    rows = cw.nested_rows(shipped[:3], starts=1)
+    assert {r["model"] for r in rows if r["model"] == "line"} == {"line"}
+    assert len(rows) == 2 * 3
+    for r in rows:
+        assert set(r) >= NESTED_KEYS, NESTED_KEYS - set(r)
+        assert r["protocol"] == cw.NESTED
+        assert r["dataset"] not in r["trained_on"]
+        assert r["drawbar_pull_mae_per_load"] == pytest.approx(np.mean(
+            [abs(e["drawbar_pull"]) / p.load for e, p in zip(
+                r["errors"].values(), next(ds for ds in shipped
+                                           if ds.name == r["dataset"]).points, strict=True)]))
+        if r["model"] != "line":
+            assert r["model"] in {f.name for f in cw.CANDIDATES}
+            assert r["selection"]["rule"] == cw.SELECTION
+
+
+@pytest.mark.slow
+def test_the_rule_on_every_shipped_data_set_picks_the_default_form(shipped):
+    chosen, scores = cw.choose(shipped)
+    assert chosen == cw.DEFAULT_FORM, scores

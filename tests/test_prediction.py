@@ -13,7 +13,8 @@ from wheelterrain import model, presets
 from wheelterrain.cli import main
 from wheelterrain.fit import calibration, prediction
 
-PROTOCOLS = {"all-case", "leave-one-out", "c2-only", "transfer", "leave-one-dataset-out"}
+PROTOCOLS = {"all-case", "leave-one-out", "c2-only", "transfer", "leave-one-dataset-out",
+             "nested-leave-one-dataset-out"}
 
 
 @pytest.fixture(scope="module")
@@ -46,6 +47,21 @@ def test_validate_prints_every_contract_row(validate_json):
     for name in presets.available():
         for protocol in ("all-case", "leave-one-out", "c2-only", "transfer"):
             assert (name, protocol) in have, (name, protocol)
+    # the headline first: the nested rows, the line beside, in both units
+    nested = [r for r in rows if r["protocol"] == "nested-leave-one-dataset-out"]
+    assert rows[:len(nested)] == nested
+    assert len(nested) == 12
+    assert sum(r["model"] == "line" for r in nested) == 6
+    for r in nested:
+        assert r["drawbar_pull_mae_per_load"] >= 0
+        assert r["sinkage_mae_per_radius"] >= 0
+        assert r["dataset"] not in r["trained_on"]
+    judged = validate_json["default_form_rule"]["judged_by"]
+    assert judged["rule"]["datasets"] == judged["line"]["datasets"] == 6
+    picks = [r for r in nested if r["model"] != "line"]
+    assert judged["rule"]["drawbar_pull_mae"] == pytest.approx(
+        sum(r["drawbar_pull_mae"] for r in picks) / 6)
+    assert judged["rule"]["forms"] == sorted({r["model"] for r in picks})
     paper = next(r for r in rows if r["model"] == "paper-table2" and r["protocol"] == "all-case")
     assert paper["free"] == []
     assert paper["tuned_on"] == ["C2"]  # Table II was tuned on C2 by the paper's authors

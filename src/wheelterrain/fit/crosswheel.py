@@ -199,6 +199,13 @@ class Fold:
         errs = [abs(p[key] - p["measured"][key]) for p in self.points if p.get(key) is not None]
         return float(np.mean(errs)) if errs and len(errs) == len(self.points) else None
 
+    def mae_per_scale(self, key: str) -> float | None:
+        """The mean absolute error as a share of the load (pull) or of the wheel's radius
+        (sinkage): comparable across wheels and loads."""
+        errs = [abs(p[key] - p["measured"][key]) / p["scale"][key] for p in self.points
+                if p.get(key) is not None]
+        return float(np.mean(errs)) if errs and len(errs) == len(self.points) else None
+
     def coverage(self) -> float | None:
         inside = [p["inside"][k] for p in self.points for k in ("drawbar_pull", "sinkage")
                   if p.get("inside")]
@@ -211,6 +218,8 @@ class Fold:
         row = {"model": self.form, "protocol": "leave-one-dataset-out", "dataset": self.dataset,
                "points": len(self.points), "free": sorted(self.constants),
                "drawbar_pull_mae": self.mae("drawbar_pull"), "sinkage_mae": self.mae("sinkage"),
+               "drawbar_pull_mae_per_load": self.mae_per_scale("drawbar_pull"),
+               "sinkage_mae_per_radius": self.mae_per_scale("sinkage"),
                # a row with no figures (a point the form cannot predict) has no coverage either
                "interval_coverage": None if self.error else self.coverage(),
                "in_sample": False, "fitted": self.constants,
@@ -223,13 +232,20 @@ class Fold:
         return row
 
 
+def _scale(pt: Point) -> dict[str, float]:
+    """What each output's error is a share of: the load for the pull, the radius for the
+    sinkage."""
+    return {"drawbar_pull": pt.load, "sinkage": pt.values["wheel.radius"]}
+
+
 def judge(form: Form, constants: dict[str, float], discrepancy: Discrepancy, held: Dataset,
           intervals: bool = True) -> Fold:
     """``form`` with ``constants`` predicting every point of ``held``, with intervals."""
     fold = Fold(form.name, held.name, constants, discrepancy)
     for pt in held.points:
         entry = {"case": pt.case, "load": pt.load, "slip": pt.slip,
-                 "measured": {"drawbar_pull": pt.drawbar_pull, "sinkage": pt.sinkage}}
+                 "measured": {"drawbar_pull": pt.drawbar_pull, "sinkage": pt.sinkage},
+                 "scale": _scale(pt)}
         try:
             state = steady(form, pt, constants)
         except WheelTerrainError as err:
@@ -262,29 +278,19 @@ def leave_one_dataset_out(form: Form, sets: Sequence[Dataset], starts: int = 3,
 
 
 DEFAULT_FORM = "patch-cross"
-"""The form with the lowest mean leave-one-dataset-out drawbar-pull error over the shipped data
-sets (`wheelterrain validate`; tests/test_crosswheel.py reruns the ranking): the form
-`validate --data` lists first and `steady --interval` learns its discrepancy beside."""
+"""The form the selection rule (:func:`choose`, :data:`SELECTION`) picks on all the shipped
+data sets (tests/test_crosswheel.py reruns it); judged by the nested protocol's figures
+(`wheelterrain validate`, ``default_form_rule``). The form `validate --data` lists first."""
 
 
-def best_form(rows: Sequence[dict]) -> str:
-    """The form whose leave-one-dataset-out rows have the lowest mean pull MAE (a form with a
-    failed fold cannot win)."""
-    by_form: dict[str, list] = {}
-    for r in rows:
-        if r["protocol"] == "leave-one-dataset-out":
-            by_form.setdefault(r["model"], []).append(r["drawbar_pull_mae"])
-    scores = {f: (np.mean(v) if all(x is not None for x in v) else math.inf)
-              for f, v in by_form.items() if f in BY_FORM}
-    return min(scores, key=scores.get)
-
-
-def line_rows(sets: Sequence[Dataset]) -> list[dict]:
+def line_rows(sets: Sequence[Dataset], judged: Sequence[Dataset] | None = None) -> list[dict]:
     """The simple baseline held out data set by data set: pull/load = a + b*i and
     sinkage/R = a + b*i (dimensionless, so that one line spans wheels and loads), least squares
-    on the other data sets' points; no physics, no soil values, no interval."""
+    on the other data sets' points; no physics, no soil values, no interval. ``judged``: the
+    data sets to predict (a user's), each from ``sets`` less any of its name; default
+    ``sets`` themselves."""
     rows = []
-    for held in sets:
+    for held in (sets if judged is None else judged):
         train = [p for ds in sets if ds.name != held.name for p in ds.points]
         slips = np.array([p.slip for p in train])
         fits = {"drawbar_pull": np.polyfit(slips, [p.drawbar_pull / p.load for p in train], 1),
@@ -294,14 +300,96 @@ def line_rows(sets: Sequence[Dataset]) -> list[dict]:
         errors = {p.case: {k: float(np.polyval(c, p.slip) * scale[k](p) - getattr(p, k))
                            for k, c in fits.items()} for p in held.points}
         mae = {k: float(np.mean([abs(e[k]) for e in errors.values()])) for k in fits}
+        share = {k: float(np.mean([abs(errors[p.case][k]) / _scale(p)[k] for p in held.points]))
+                 for k in fits}
         rows.append({"model": "line", "protocol": "leave-one-dataset-out",
                      "dataset": held.name, "points": len(held.points), "free": ["a", "b"],
                      "drawbar_pull_mae": mae["drawbar_pull"], "sinkage_mae": mae["sinkage"],
+                     "drawbar_pull_mae_per_load": share["drawbar_pull"],
+                     "sinkage_mae_per_radius": share["sinkage"],
                      "interval_coverage": None, "in_sample": False,
                      "fitted": {k: [float(x) for x in c] for k, c in fits.items()},
                      "judged_on": [p.case for p in held.points], "data": held.name,
                      "errors": errors})
     return rows
+
+
+CANDIDATES: tuple[Form, ...] = (
+    *FORMS,
+    Form("patch-cross-no-bulldozing", "patch-cross without the bulldozing share",
+         _PATCH, tuple(n for n in CROSS if n != "model.bulldozing")),
+    Form("arc-cross-bulldozing", "arc-cross with the bulldozing share fitted too", _TIPS,
+         (*BY_FORM["arc-cross"].free, "model.bulldozing")),
+)
+"""Every form the selection rule chooses among: the shipped forms and the two mechanism
+variants that were compared when they were built (bulldozing on or off)."""
+BY_CANDIDATE = {f.name: f for f in CANDIDATES}
+NESTED = "nested-leave-one-dataset-out"
+SELECTION = "drawbar_pull_mae_per_load"
+"""The rule, written once: on the training data sets alone, each candidate is held out data
+set by data set (its constants fitted on the others); the candidate with the lowest mean,
+over those inner data sets, of its pull MAE as a share of the load wins (ties: the earlier in
+CANDIDATES, the one with fewer constants first). A candidate that cannot predict an inner
+data set cannot win."""
+
+
+def _inner_score(form: Form, sets: Sequence[Dataset], starts: int) -> float:
+    """``form``'s mean held-out pull MAE per load over ``sets``, each held out in turn."""
+    scores = []
+    for held in sets:
+        train = [ds for ds in sets if ds.name != held.name]
+        constants = fit_constants(form, train, starts)
+        share = judge(form, constants, Discrepancy(0.0, 0.0), held,
+                      intervals=False).mae_per_scale("drawbar_pull")
+        if share is None:
+            return math.inf
+        scores.append(share)
+    return float(np.mean(scores))
+
+
+def choose(sets: Sequence[Dataset], starts: int = 3,
+           progress: Callable[[str], None] | None = None) -> tuple[str, dict[str, float]]:
+    """The :data:`SELECTION` rule on ``sets`` only: (the chosen candidate, every candidate's
+    score)."""
+    scores = {}
+    for form in CANDIDATES:
+        scores[form.name] = _inner_score(form, sets, starts)
+        if progress:
+            progress(f"rule: {form.name} on {len(sets)} data sets")
+    return min(scores, key=lambda name: scores[name]), scores
+
+
+def nested_rows(sets: Sequence[Dataset], starts: int = 3,
+                progress: Callable[[str], None] | None = None) -> list[dict]:
+    """Nested leave-one-dataset-out: for each held-out data set, the rule (:func:`choose`)
+    picks a form on the other data sets alone, that form's constants are fitted on them, and it
+    predicts the held-out one with intervals. The line's rows beside, under the same protocol
+    (it has nothing to choose)."""
+    rows = []
+    for row in line_rows(sets):
+        rows.append({**row, "protocol": NESTED,
+                     "trained_on": [ds.name for ds in sets if ds.name != row["dataset"]]})
+        if progress:
+            progress(f"line without {row['dataset']}")
+    for held in sets:
+        rows.append(nested_fold(sets, held.name, starts))
+        if progress:
+            progress(f"rule and {rows[-1]['model']} without {held.name}")
+    return rows
+
+
+def nested_fold(sets: Sequence[Dataset], held_name: str, starts: int = 3,
+                progress: Callable[[str], None] | None = None) -> dict:
+    """The nested row of the data set ``held_name``: the rule and the fit on the others."""
+    held = next(ds for ds in sets if ds.name == held_name)
+    train = [ds for ds in sets if ds.name != held_name]
+    chosen, scores = choose(train, starts, progress)
+    form = BY_CANDIDATE[chosen]
+    constants = fit_constants(form, train, starts)
+    row = judge(form, constants, Discrepancy.learn(form, constants, train), held).as_row()
+    row.update(protocol=NESTED, trained_on=[ds.name for ds in train],
+               selection={"rule": SELECTION, "scores": scores})
+    return row
 
 
 def lodo_rows(sets: Sequence[Dataset], starts: int = 3,
@@ -319,6 +407,10 @@ def user_rows(user: Sequence[Dataset], shipped: Sequence[Dataset], starts: int =
     any that bears the user's data set's name (a shipped data set given back is judged held
     out, so its row reproduces the leave-one-dataset-out row); never on the user's data."""
     rows = []
+    for row in line_rows(shipped, user):
+        row.update(protocol="user-data", trained_on=[s.name for s in shipped
+                                                     if s.name != row["dataset"]])
+        rows.append(row)
     for form in sorted(FORMS, key=lambda f: f.name != DEFAULT_FORM):
         fits: dict[tuple[str, ...], tuple] = {}
         for ds in user:
@@ -333,6 +425,19 @@ def user_rows(user: Sequence[Dataset], shipped: Sequence[Dataset], starts: int =
         if progress:
             progress(form.name)
     return rows
+
+
+def verdicts(rows: Sequence[dict]) -> dict[str, list[str]]:
+    """Per data set, the forms whose pull MAE is below the line's there (rows of one protocol:
+    user data or nested)."""
+    line = {r["dataset"]: r["drawbar_pull_mae"] for r in rows if r["model"] == "line"}
+    out: dict[str, list[str]] = {name: [] for name in line}
+    for r in rows:
+        if r["model"] == "line" or r["dataset"] not in line:
+            continue
+        if r.get("drawbar_pull_mae") is not None and r["drawbar_pull_mae"] < line[r["dataset"]]:
+            out[r["dataset"]].append(r["model"])
+    return out
 
 
 def preset_form(ps: ParameterSet) -> Form:

@@ -223,8 +223,10 @@ def step_count() -> int:
     """How many rows :func:`run` reports progress for: the line's three protocols, per
     shipped preset three protocols and two transfer wheels, and per cross-wheel form and the
     cross-wheel line one fold per shipped data set."""
+    sets = len(datasets.shipped())
     return (3 + 5 * len(presets.available())
-            + (len(crosswheel.FORMS) + 1) * len(datasets.shipped()))
+            + (len(crosswheel.FORMS) + 1) * sets  # leave-one-dataset-out
+            + 2 * sets)  # nested: the line's and the rule's row per data set
 
 
 def run(progress: Callable[[str], None] | None = None, starts: int = 4) -> dict:
@@ -269,11 +271,40 @@ def run(progress: Callable[[str], None] | None = None, starts: int = 4) -> dict:
             # nothing is refitted: the preset's values, that soil's own
             add({"model": name, "protocol": "transfer", "free": [], "in_sample": False,
                  "data": f"{label} ({DING_SOURCE})", "fitted": {}, **t})
-    for row in crosswheel.lodo_rows(datasets.shipped(), starts=min(starts, 3)):
+    shipped = datasets.shipped()
+    for row in crosswheel.lodo_rows(shipped, starts=min(starts, 3)):
         add(row)
+    # the headline: every choice made inside each fold (nested), first in the rows
+    nested = crosswheel.nested_rows(shipped, starts=min(starts, 3), progress=progress)
+    default, scores = crosswheel.choose(shipped, starts=min(starts, 3))
+    rows[:0] = nested
     return {"rows": rows, "load": LOAD, "transfer_load": DING_LOAD,
-            "default_form": crosswheel.best_form(rows),
-            "units": {"drawbar_pull_mae": "N", "sinkage_mae": "m", "torque_mae": "N.m"}}
+            "default_form": default,
+            "default_form_rule": {"rule": crosswheel.SELECTION, "scores": scores,
+                                  "judged_by": nested_summary(nested)},
+            "units": {"drawbar_pull_mae": "N", "sinkage_mae": "m", "torque_mae": "N.m",
+                      "drawbar_pull_mae_per_load": "1", "sinkage_mae_per_radius": "1"}}
+
+
+def nested_summary(rows: Sequence[dict]) -> dict:
+    """The means over data sets of the nested rows, per model ('rule': the forms the folds'
+    rule chose; 'line'): what judges the selection rule, in N and mm and as shares of the load
+    and the radius."""
+    out = {}
+    for label, chosen in (("rule", [r for r in rows if r["protocol"] == crosswheel.NESTED
+                                    and r["model"] != "line"]),
+                          ("line", [r for r in rows if r["protocol"] == crosswheel.NESTED
+                                    and r["model"] == "line"])):
+        if not chosen:
+            continue
+        entry = {"datasets": len(chosen), "forms": sorted({r["model"] for r in chosen})}
+        for key in ("drawbar_pull_mae", "sinkage_mae", "drawbar_pull_mae_per_load",
+                    "sinkage_mae_per_radius", "interval_coverage"):
+            values = [r[key] for r in chosen]
+            entry[key] = (None if any(v is None for v in values)
+                          else float(sum(values) / len(values)))
+        out[label] = entry
+    return out
 
 
 def format_table(result: dict) -> str:
@@ -286,16 +317,32 @@ def format_table(result: dict) -> str:
         if r.get("tuned_on"):  # Table II: tuned by the paper's authors on C2
             label += f" (values tuned on {', '.join(r['tuned_on'])} by the paper's authors)"
         data_name = r["data"].split(" (")[0] if r["protocol"] == "transfer" else label
-        if r["protocol"] in ("leave-one-dataset-out", "user-data"):
+        if r["protocol"] in ("leave-one-dataset-out", "user-data", crosswheel.NESTED):
             cover = r["interval_coverage"]
+            share = r.get("drawbar_pull_mae_per_load")
+            per_load = "" if share is None else (
+                f"pull/W {share:.3f}, z/R {r['sinkage_mae_per_radius']:.3f}; ")
             data_name = (f"{'held-out' if r['protocol'] != 'user-data' else 'user data'} "
-                         f"{r['dataset']} ({r['points']} points, 90 % interval covers "
-                         + ("-" if cover is None else f"{100 * cover:.0f} %") + ")")
+                         f"{r['dataset']} ({r['points']} points, {per_load}90 % interval "
+                         "covers " + ("-" if cover is None else f"{100 * cover:.0f} %") + ")")
         if r.get("error"):
             figures = f"{'failed':>12} {'':16} | {r['error']}"
         else:
             figures = (f"{r['drawbar_pull_mae']:12.2f} {1e3 * r['sinkage_mae']:16.2f} | "
                        f"{data_name}")
-        protocol = {"leave-one-dataset-out": "leave-data-out"}.get(r["protocol"], r["protocol"])
+        protocol = {"leave-one-dataset-out": "leave-data-out",
+                    crosswheel.NESTED: "nested"}.get(r["protocol"], r["protocol"])
         lines.append(f"{r['model']:18} {protocol:14} {len(r['free']):4d} | {figures}")
+    judged = result.get("default_form_rule", {}).get("judged_by", {})
+    if "rule" in judged and "line" in judged:
+        rule, line = judged["rule"], judged["line"]
+        lines.append("")
+        lines.append(
+            f"nested (every choice made inside each fold; rule: lowest mean held-out pull/W): "
+            f"the rule's forms {', '.join(rule['forms'])} give pull {rule['drawbar_pull_mae']:.2f}"
+            f" N (pull/W {rule['drawbar_pull_mae_per_load']:.3f}), sinkage "
+            f"{1e3 * rule['sinkage_mae']:.1f} mm (z/R {rule['sinkage_mae_per_radius']:.3f}); "
+            f"the line {line['drawbar_pull_mae']:.2f} N ({line['drawbar_pull_mae_per_load']:.3f}),"
+            f" {1e3 * line['sinkage_mae']:.1f} mm ({line['sinkage_mae_per_radius']:.3f}). "
+            f"On all data sets the rule picks {result['default_form']}.")
     return "\n".join(lines)
