@@ -16,7 +16,7 @@ from wheelterrain import model
 from wheelterrain.errors import DataError
 from wheelterrain.fit import crosswheel as cw
 from wheelterrain.fit import datasets
-from wheelterrain.parameters import ParameterSet
+from wheelterrain.parameters import BY_NAME, ParameterSet
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -268,6 +268,17 @@ def test_nested_rows_carry_the_contract_and_the_line_beside(shipped, few_candida
         if r["model"] != "line":
             assert r["model"] in {f.name for f in cw.CANDIDATES}
             assert r["selection"]["rule"] == cw.SELECTION
+            assert set(r["at_bound"]) <= set(r["fitted"])
+
+
+def test_a_constant_at_an_end_of_its_plausible_range_is_reported():
+    n1, ratio, bulldozing = (BY_NAME[n].plausible for n in (
+        "soil.n1", "model.interface_ratio", "model.bulldozing"))
+    fold = cw.Fold("patch-cross", "x", {"soil.n1": n1[1], "model.interface_ratio": ratio[0],
+                                         "model.bulldozing": (bulldozing[0] + bulldozing[1]) / 2},
+                   cw.Discrepancy(0.0, 0.0))
+    assert fold.at_bound() == ["model.interface_ratio", "soil.n1"]
+    assert fold.as_row()["at_bound"] == ["model.interface_ratio", "soil.n1"]
 
 
 @pytest.mark.slow

@@ -311,7 +311,9 @@ TABLE: tuple[Parameter, ...] = (
        "(2R/0.5 m)**exponent. 0 = the flat-plate (Bekker/Reece) law.",
        "Meirion-Griffith & Spenko 2011, J. Terramechanics 48(2):149-155 (the flat-plate "
        "assumption fails below ~50 cm diameter; pressure-sinkage with a power of the diameter)",
-       plausible=(-1.0, 1.0, "Meirion-Griffith & Spenko 2011: exponent of the diameter")),
+       plausible=(0.0, 1.0, "Meirion-Griffith & Spenko 2011: flat-plate models under-predict "
+                  "the sinkage of wheels below ~50 cm (a softer soil under a smaller wheel), so "
+                  "the exponent is >= 0; the upper bound 1 is not from the source")),
 )
 
 # --- the single-wheel rig (SingleWheelRig.fmu) ------------------------------------------------

@@ -298,6 +298,13 @@ def nested_summary(rows: Sequence[dict]) -> dict:
         if not chosen:
             continue
         entry = {"datasets": len(chosen), "forms": sorted({r["model"] for r in chosen})}
+        if label == "rule":  # constants that end at a bound in most folds
+            counts: dict[str, int] = {}
+            for r in chosen:
+                for name in r.get("at_bound", []):
+                    counts[name] = counts.get(name, 0) + 1
+            entry["at_bound_in_most_folds"] = sorted(
+                n for n, c in counts.items() if c > len(chosen) / 2)
         for key in ("drawbar_pull_mae", "sinkage_mae", "drawbar_pull_mae_per_load",
                     "sinkage_mae_per_radius", "interval_coverage"):
             values = [r[key] for r in chosen]
@@ -344,5 +351,7 @@ def format_table(result: dict) -> str:
             f"{1e3 * rule['sinkage_mae']:.1f} mm (z/R {rule['sinkage_mae_per_radius']:.3f}); "
             f"the line {line['drawbar_pull_mae']:.2f} N ({line['drawbar_pull_mae_per_load']:.3f}),"
             f" {1e3 * line['sinkage_mae']:.1f} mm ({line['sinkage_mae_per_radius']:.3f}). "
-            f"On all data sets the rule picks {result['default_form']}.")
+            f"On all data sets the rule picks {result['default_form']}. Constants at a bound of "
+            f"their plausible range in most folds: "
+            f"{', '.join(rule['at_bound_in_most_folds']) or 'none'}.")
     return "\n".join(lines)
