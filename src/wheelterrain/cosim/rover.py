@@ -27,7 +27,7 @@ import casadi as ca
 import numpy as np
 
 from wheelterrain import compiled
-from wheelterrain.errors import WheelTerrainError
+from wheelterrain.errors import ParameterError, WheelTerrainError
 from wheelterrain.fmu import functions
 from wheelterrain.model import contact, ground, rover
 from wheelterrain.parameters import NAMES, ParameterSet
@@ -145,16 +145,17 @@ def check_record(p: Mapping[str, float], g: Mapping[str, float]) -> None:
     must be longer than a track (the wheelbase and the lookahead, two cells to spare)."""
     cell, ahead = g["terrain.cell"], g["terrain.lookahead"]
     if ahead < 3 * cell:
-        raise WheelTerrainError(
-            f"terrain.lookahead = {ahead:g} m is less than three cells of terrain.cell = "
+        raise ParameterError(
+            "terrain.lookahead", ahead, f"m is less than three cells of terrain.cell = "
             f"{cell:g} m: a wheel would meet the rut it leaves itself; make it at least "
             f"{3 * cell:g} m")
     span = p["rover.wheelbase"] + ahead + 2 * cell
     if span >= ground.RUT_CELLS * cell:
-        raise WheelTerrainError(
-            f"the rut record holds {ground.RUT_CELLS} cells of terrain.cell = {cell:g} m "
-            f"({ground.RUT_CELLS * cell:g} m), less than the wheelbase and lookahead "
-            f"({span:g} m): make terrain.cell at least {span / ground.RUT_CELLS:.3g} m")
+        raise ParameterError(
+            "terrain.cell", cell, f"m is too short: the rut record holds {ground.RUT_CELLS} "
+            f"cells ({ground.RUT_CELLS * cell:g} m), less than the wheelbase and lookahead "
+            f"({span:g} m); make terrain.cell (a Terrain FMU parameter) at least "
+            f"{span / ground.RUT_CELLS:.3g} m, or rover.wheelbase shorter")
 
 
 N_CMD = len(rover.WHEELS) * len(rover.WHEEL_COMMANDS)
