@@ -295,6 +295,27 @@ def multipass(runs: list[dict], path: Path, title: str) -> None:
     _save(fig, path)
 
 
+def _tool_against_python(ax, x: str, run: dict, marks: tuple[dict, dict], title: str) -> None:
+    """Drawbar pull (left axis) and sinkage (right axis) against ``x``: the Python model as
+    lines, the tool's run (``run["tool"]``, named ``run["name"]``) with ``marks`` (pull,
+    sinkage) over them."""
+    other = ax.twinx()
+    py, tool = run["python"], run["tool"]
+    tool_x = tool.get(x, py[x])
+    ax.plot(py[x], py["drawbar_pull"], "-", color="C0", label="drawbar pull, Python")
+    ax.plot(tool_x, tool["drawbar_pull"], label=f"drawbar pull, {run['name']}", **marks[0])
+    other.plot(py[x], 1e3 * np.asarray(py["sinkage"]), "-", color="C1", label="sinkage, Python")
+    other.plot(tool_x, 1e3 * np.asarray(tool["sinkage"]), label=f"sinkage, {run['name']}",
+               **marks[1])
+    ax.set_xlabel({"slip": "traction slip", "time": "time [s]"}[x])
+    ax.set_ylabel("drawbar pull [N]", color="C0")
+    other.set_ylabel("sinkage [mm]", color="C1")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    lines, more = ax.get_legend_handles_labels(), other.get_legend_handles_labels()
+    ax.legend(lines[0] + more[0], lines[1] + more[1], fontsize=8, loc="lower right")
+
+
 def modelica_examples(ramp: dict, rig: dict | None, path: Path) -> None:
     """The Modelica library's examples run by a Modelica tool against the Python model: the
     quasi-static wheel's slip ramp (left: drawbar pull and sinkage against slip) and, where
@@ -302,43 +323,14 @@ def modelica_examples(ramp: dict, rig: dict | None, path: Path) -> None:
     ``ramp``/``rig``: {"tool": {column: values}, "python": {column: values}, "name": str}."""
     fig, axes = plt.subplots(1, 2 if rig else 1, figsize=(11 if rig else 6, 4.2),
                              squeeze=False)
-    left = axes[0, 0]
-    twin = left.twinx()
-    py, tool = ramp["python"], ramp["tool"]
-    left.plot(py["slip"], py["drawbar_pull"], "-", color="C0", label="drawbar pull, Python")
-    left.plot(py["slip"], tool["drawbar_pull"], "o", color="C0", mfc="none",
-              label=f"drawbar pull, {ramp['name']}")
-    twin.plot(py["slip"], 1e3 * np.asarray(py["sinkage"]), "-", color="C1",
-              label="sinkage, Python")
-    twin.plot(py["slip"], 1e3 * np.asarray(tool["sinkage"]), "s", color="C1", mfc="none",
-              label=f"sinkage, {ramp['name']}")
-    left.set_xlabel("traction slip")
-    left.set_ylabel("drawbar pull [N]", color="C0")
-    twin.set_ylabel("sinkage [mm]", color="C1")
-    left.set_title("Examples.SlipRamp (no MSL)")
-    left.grid(alpha=0.3)
-    lines = left.get_legend_handles_labels()
-    more = twin.get_legend_handles_labels()
-    left.legend(lines[0] + more[0], lines[1] + more[1], fontsize=8, loc="lower right")
+    _tool_against_python(axes[0, 0], "slip", ramp, (
+        {"marker": "o", "ls": "none", "color": "C0", "mfc": "none"},
+        {"marker": "s", "ls": "none", "color": "C1", "mfc": "none"}),
+        "Examples.SlipRamp (no MSL)")
     if rig:
-        right = axes[0, 1]
-        other = right.twinx()
-        py, tool = rig["python"], rig["tool"]
-        right.plot(py["time"], py["drawbar_pull"], "-", color="C0", label="drawbar pull, Python")
-        right.plot(tool["time"], tool["drawbar_pull"], ":", color="k", lw=1.2,
-                   label=f"drawbar pull, {rig['name']}")
-        other.plot(py["time"], 1e3 * np.asarray(py["sinkage"]), "-", color="C1",
-                   label="sinkage, Python")
-        other.plot(tool["time"], 1e3 * np.asarray(tool["sinkage"]), ":", color="C3", lw=1.2,
-                   label=f"sinkage, {rig['name']}")
-        right.set_xlabel("time [s]")
-        right.set_ylabel("drawbar pull [N]", color="C0")
-        other.set_ylabel("sinkage [mm]", color="C1")
-        right.set_title("Examples.RigC2 (MSL flanges and blocks)")
-        right.grid(alpha=0.3)
-        lines = right.get_legend_handles_labels()
-        more = other.get_legend_handles_labels()
-        right.legend(lines[0] + more[0], lines[1] + more[1], fontsize=8, loc="lower right")
+        _tool_against_python(axes[0, 1], "time", rig, (
+            {"ls": ":", "color": "k", "lw": 1.2}, {"ls": ":", "color": "C3", "lw": 1.2}),
+            "Examples.RigC2 (MSL flanges and blocks)")
     fig.suptitle("The generated Modelica library, simulated by rumoca, against the Python model")
     fig.tight_layout()
     _save(fig, path)

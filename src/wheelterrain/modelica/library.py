@@ -487,20 +487,9 @@ def _records(lib: Library) -> None:
                 "ranges, sources) and the presets", order)
 
 
-def _wrap_call(line: str, width: int = 100) -> str:
-    if len(line) <= width:
-        return line
-    pieces = line.split(", ")
-    out, current = [], ""
-    for piece in pieces:
-        candidate = f"{current}, {piece}" if current else piece
-        if len(candidate) > width and current:
-            out.append(current + ",")
-            current = "    " + piece
-        else:
-            current = candidate
-    out.append(current)
-    return "\n".join(out)
+def _wrap_call(line: str) -> str:
+    """A long line broken after commas, continued with four spaces."""
+    return "\n".join(translate.wrap(line))
 
 
 # ---- Components and Examples --------------------------------------------------------------

@@ -194,7 +194,7 @@ def _locals(statements: list[str], extra: Sequence[int] = ()) -> list[str]:
                   | set(extra))
     if not used:
         return []
-    return ["protected", *_wrap("  Real " + ", ".join(_w(k) for k in used) + ";")]
+    return ["protected", *wrap("  Real " + ", ".join(_w(k) for k in used) + ";")]
 
 
 def _annotation(extra: str) -> str:
@@ -267,7 +267,7 @@ def functions(f: ca.Function, name: str, inputs: Sequence[Port], outputs: Sequen
     return "\n".join(text) + "\n", parts
 
 
-def _wrap(text: str, width: int = 100) -> list[str]:
+def wrap(text: str, width: int = 100) -> list[str]:
     """A long declaration broken after commas, continued with four spaces."""
     out, line = [], ""
     for piece in text.split(", "):
