@@ -893,6 +893,27 @@ def plastic_update(z, plastic, speed, P: _P, h):
     return ca.if_else(P["model.soil_memory"] == 1, relaxed, plastic)
 
 
+def _form_kernels(names: list[str], sym: list, z, z_rate, slip, angle, plastic, speed, P: _P,
+                  nodes: tuple[int, int], ripple: bool) -> tuple[ca.Function, tuple]:
+    """``(case, forms)`` over the symbols ``sym`` (named ``names``): the case the switch of
+    :func:`_forms` picks, and the contact of :func:`_contact` with each form's kernel in place
+    of the switch; with a ``plastic`` sinkage the outputs add MEMORY_OUTPUTS."""
+    case, switch = _forms(nodes, ripple)
+    theta_f = _entry_angle(_yield_sinkage(z, plastic, P) - rut_surface(P), P)
+    case_fn = ca.Function("contact_case", sym, [case(theta_f, slip, P.p)], names, ["case"],
+                          {"cse": True})
+    rows = CONTACT_OUTPUTS + (MEMORY_OUTPUTS if plastic is not None else ())
+    forms = []
+    for name in FORMS:
+        kernel = switch.find_function(name + ("" if ripple else "_static"))
+        out = _contact(z, z_rate, slip, angle, P, nodes, ripple, form=kernel, plastic=plastic)
+        if plastic is not None:
+            out["plastic_rate"] = plastic_rate(z, z_rate, plastic, speed, P)
+        forms.append(ca.Function(f"contact_{name}", sym, [ca.vertcat(*(out[k] for k in rows))],
+                                 names, ["out"], {"cse": True}))
+    return case_fn, tuple(forms)
+
+
 @lru_cache(maxsize=4)
 def lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> tuple[ca.Function, tuple]:
     """The contact (ripple on) as plain SX Functions of CONTACT_INPUTS, for code generators
@@ -901,19 +922,8 @@ def lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> tuple[ca.Function, t
     the contact with case c's kernel in place of the switch, so at every point where ``case``
     is c it is the same expression that ``build().contact`` evaluates."""
     sym = [ca.SX.sym(name) for name in CONTACT_INPUTS[:-1]] + [ca.SX.sym("p", len(NAMES))]
-    P = _P(sym[-1])
-    case, switch = _forms(nodes, True)
-    theta_f = _entry_angle(sym[0] - rut_surface(P), P)
-    case_fn = ca.Function("contact_case", sym, [case(theta_f, sym[2], P.p)],
-                          list(CONTACT_INPUTS), ["case"], {"cse": True})
-    forms = []
-    for name in FORMS:
-        kernel = switch.find_function(name)
-        out = _contact(*sym[:4], P, nodes, True, form=kernel)
-        forms.append(ca.Function(f"contact_{name}", sym, [ca.vertcat(
-            *(out[name_] for name_ in CONTACT_OUTPUTS))], list(CONTACT_INPUTS), ["out"],
-            {"cse": True}))
-    return case_fn, tuple(forms)
+    return _form_kernels(list(CONTACT_INPUTS), sym, *sym[:4], None, None, _P(sym[-1]), nodes,
+                         True)
 
 
 EXPORT_INPUTS = {
@@ -937,28 +947,12 @@ def export_kernels(memory: bool, nodes: tuple[int, int] = DEFAULT_NODES
     quasi-static contact of the steady state (ripple-free, no sinkage rate, no memory), inputs
     EXPORT_INPUTS[False], outputs CONTACT_OUTPUTS: its ``normal_force_static`` equal to the
     load is the steady state's equation for the sinkage."""
-    sym = [ca.SX.sym(name) for name in EXPORT_INPUTS[memory][:-1]]
-    sym.append(ca.SX.sym("p", len(NAMES)))
-    P = _P(sym[-1])
-    if memory:
-        z, z_rate, slip, angle, plastic, speed = sym[:6]
-    else:
-        (z, slip), z_rate, angle, plastic, speed = sym[:2], 0, 0, None, None
-    case, switch = _forms(nodes, memory)
-    theta_f = _entry_angle(_yield_sinkage(z, plastic, P) - rut_surface(P), P)
     names = list(EXPORT_INPUTS[memory])
-    case_fn = ca.Function("contact_case", sym, [case(theta_f, slip, P.p)], names, ["case"],
-                          {"cse": True})
-    rows = CONTACT_OUTPUTS + (MEMORY_OUTPUTS if memory else ())
-    forms = []
-    for name in FORMS:
-        kernel = switch.find_function(name + ("" if memory else "_static"))
-        out = _contact(z, z_rate, slip, angle, P, nodes, memory, form=kernel, plastic=plastic)
-        if memory:
-            out["plastic_rate"] = plastic_rate(z, z_rate, plastic, speed, P)
-        forms.append(ca.Function(f"contact_{name}", sym, [ca.vertcat(*(out[k] for k in rows))],
-                                 names, ["out"], {"cse": True}))
-    return case_fn, tuple(forms)
+    sym = [ca.SX.sym(name) for name in names[:-1]] + [ca.SX.sym("p", len(NAMES))]
+    if memory:
+        return _form_kernels(names, sym, *sym[:6], _P(sym[-1]), nodes, True)
+    z, slip = sym[:2]
+    return _form_kernels(names, sym, z, 0, slip, 0, None, None, _P(sym[-1]), nodes, False)
 
 
 @dataclass(frozen=True)
