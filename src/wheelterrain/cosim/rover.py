@@ -102,7 +102,7 @@ def _wheel_soils(xs: list, p: dict, pw: ca.MX, pg: ca.MX, met: ca.MX) -> ca.MX:
     for j, w in enumerate(rover.WHEELS):
         where = rover.wheel_position(p, xs[0], w)
         soil = dict(zip(ground.SOIL_NAMES, ground.soil_at(where, g), strict=True))
-        number = ground.cell_number(where + g["terrain.lookahead"], g)
+        number = ground.met_cell(where, g)
         first = met[j * (NEAR + 1)]
         rut = 0
         for k in range(NEAR):
@@ -117,7 +117,7 @@ def met_table(records: dict, positions: dict[str, float], g: Mapping[str, float]
     it meets at the block's start, then the record's ruts of NEAR cells from there."""
     out = []
     for w in rover.WHEELS:
-        first = ground.cell_number(positions[w] + g["terrain.lookahead"], g) - 1
+        first = ground.met_cell(positions[w], g) - 1
         out += [float(first), *(ground.recorded(records[rover.TRACK_OF[w]], first + k)
                                 for k in range(NEAR))]
     return out
@@ -335,7 +335,7 @@ def _remember(records: dict, rec: np.ndarray, met: list, p: Mapping[str, float],
     wheels, chassis = named_record(rec)
     positions = {w: rover.wheel_position(p, chassis["position"], w) for w in rover.WHEELS}
     for j, w in enumerate(rover.WHEELS):
-        numbers = ground.cell_number(positions[w] + g["terrain.lookahead"], g)
+        numbers = ground.met_cell(positions[w], g)
         first = met[j * (NEAR + 1)]
         if np.any(numbers < first) or np.any(numbers > first + NEAR - 1):
             raise WheelTerrainError(
@@ -626,11 +626,13 @@ def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
             return None if holds(terrain, p, slope, i) else "stability"
         return "stability" if growth_rate(terrain, p, slope, i)["rate"] > 0 else None
 
-    if verdict(0.0) is not None:
-        return {"slope": 0.0, "limit": verdict(0.0), "slip": None}
-    if verdict(top) is None:
+    level = verdict(0.0)  # each verdict once: on a soil with memory it runs the rover
+    if level is not None:
+        return {"slope": 0.0, "limit": level, "slip": None}
+    why = verdict(top)
+    if why is None:
         return {"slope": top, "limit": None, "slip": steady_slip(terrain, p, top)}
-    lo, hi, why = 0.0, top, verdict(top)
+    lo, hi = 0.0, top
     while abs(hi - lo) > tolerance:
         mid = (lo + hi) / 2
         v = verdict(mid)

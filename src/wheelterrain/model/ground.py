@@ -147,9 +147,15 @@ def record_one(x, position, left, p):
                       ca.if_else(hit, ca.repmat(cell, RUT_CELLS, 1), cells))
 
 
+def met_cell(position, p):
+    """The number of the cell whose rut a wheel at ``position`` [m] meets: terrain.lookahead
+    ahead of its axle, the front of its contact (a float, a numpy array, a CasADi symbol)."""
+    return cell_number(position + p["terrain.lookahead"], p)
+
+
 def met(x, position, p):
-    """The rut a wheel at ``position`` meets: the record's, terrain.lookahead ahead."""
-    return recorded(x, cell_number(position + p["terrain.lookahead"], p))
+    """The rut a wheel at ``position`` meets: the record's, in :func:`met_cell`."""
+    return recorded(x, met_cell(position, p))
 
 
 def outputs(x, u, p) -> tuple:
