@@ -274,14 +274,23 @@ def judge(form: Form, constants: dict[str, float], discrepancy: Discrepancy, hel
     return fold
 
 
+def held_out(form: Form, sets: Sequence[Dataset], held: Dataset, starts: int = 3,
+             intervals: bool = True) -> Fold:
+    """``held`` predicted by ``form`` with its constants (and, with ``intervals``, its
+    discrepancy) learned on the other data sets of ``sets`` only."""
+    train = [ds for ds in sets if ds.name != held.name]
+    constants = fit_constants(form, train, starts)
+    discrepancy = (Discrepancy.learn(form, constants, train) if intervals
+                   else Discrepancy(0.0, 0.0))
+    return judge(form, constants, discrepancy, held, intervals)
+
+
 def leave_one_dataset_out(form: Form, sets: Sequence[Dataset], starts: int = 3,
                           progress: Callable[[str], None] | None = None) -> list[Fold]:
     """One :class:`Fold` per data set: ``form``'s constants fitted on the others only."""
     folds = []
     for held in sets:
-        train = [ds for ds in sets if ds.name != held.name]
-        constants = fit_constants(form, train, starts)
-        folds.append(judge(form, constants, Discrepancy.learn(form, constants, train), held))
+        folds.append(held_out(form, sets, held, starts))
         if progress:
             progress(f"{form.name} without {held.name}")
     return folds
@@ -347,10 +356,8 @@ def _inner_score(form: Form, sets: Sequence[Dataset], starts: int) -> float:
     """``form``'s mean held-out pull MAE per load over ``sets``, each held out in turn."""
     scores = []
     for held in sets:
-        train = [ds for ds in sets if ds.name != held.name]
-        constants = fit_constants(form, train, starts)
-        share = judge(form, constants, Discrepancy(0.0, 0.0), held,
-                      intervals=False).mae_per_scale("drawbar_pull")
+        share = held_out(form, sets, held, starts, intervals=False).mae_per_scale(
+            "drawbar_pull")
         if share is None:
             return math.inf
         scores.append(share)
@@ -394,9 +401,7 @@ def nested_fold(sets: Sequence[Dataset], held_name: str, starts: int = 3,
     held = next(ds for ds in sets if ds.name == held_name)
     train = [ds for ds in sets if ds.name != held_name]
     chosen, scores = choose(train, starts, progress)
-    form = BY_CANDIDATE[chosen]
-    constants = fit_constants(form, train, starts)
-    row = judge(form, constants, Discrepancy.learn(form, constants, train), held).as_row()
+    row = held_out(BY_CANDIDATE[chosen], sets, held, starts).as_row()
     row.update(protocol=NESTED, trained_on=[ds.name for ds in train],
                selection={"rule": SELECTION, "scores": scores})
     return row

@@ -221,8 +221,9 @@ def tuned_on(name: str) -> list[str]:
 
 def step_count() -> int:
     """How many rows :func:`run` reports progress for: the line's three protocols, per
-    shipped preset three protocols and two transfer wheels, and per cross-wheel form and the
-    cross-wheel line one fold per shipped data set."""
+    shipped preset three protocols and two transfer wheels, per cross-wheel form and the
+    cross-wheel line one fold per shipped data set, and per shipped data set the nested
+    protocol's two rows (the line's and the rule's pick)."""
     sets = len(datasets.shipped())
     return (3 + 5 * len(presets.available())
             + (len(crosswheel.FORMS) + 1) * sets  # leave-one-dataset-out
