@@ -15,9 +15,7 @@
 
 from __future__ import annotations
 
-import csv
 import math
-import os
 import re
 from pathlib import Path
 
@@ -391,20 +389,12 @@ def _load_example(roots, name):
                          model="Run")
 
 
-def _reference(built, name) -> dict[str, np.ndarray]:
-    path = built / ROOT / "Resources" / "Reference" / f"{name}.csv"
-    with path.open() as handle:
-        rows = list(csv.reader(handle))
-    data = np.array(rows[1:], dtype=float)
-    return {column: data[:, k] for k, column in enumerate(rows[0])}
-
-
 def test_steady_c2_matches_the_steady_state(built):
     model = _load_example([built], "SteadyC2")
     assert model.structure().is_balanced
     result = model.simulate((0.0, 1.0), dt=0.5)
     expected = api.steady_state(presets.load(), 62.0, 0.25, slip_definition="paper")
-    ref = _reference(built, "SteadyC2")
+    ref = reference.read(built, "SteadyC2")
     for key in ("sinkage", "drawbar_pull"):
         assert ref[key][0] == expected[key]
         assert abs(result[key][-1] - expected[key]) <= 1e-8 * abs(expected[key]), key
@@ -413,7 +403,7 @@ def test_steady_c2_matches_the_steady_state(built):
 def test_a_slip_ramp_of_the_quasi_static_wheel_matches_the_steady_state(built):
     model = _load_example([built], "SlipRamp")
     result = model.simulate((0.0, 1.0), dt=0.05)
-    ref = _reference(built, "SlipRamp")
+    ref = reference.read(built, "SlipRamp")
     assert np.allclose(np.asarray(result.time), ref["time"], rtol=0, atol=1e-12)
     for key in ("sinkage", "drawbar_pull"):
         got = np.asarray(result[key])
@@ -431,7 +421,7 @@ def test_the_rover_of_four_wheels_follows_the_python_models_trajectory(built):
     assert model.structure().is_balanced
     result = model.simulate((0.0, 1.0), dt=reference.ROVER_INTERVAL, config=rumoca.SimConfig(
         solver="rk-like", rtol=1e-10, atol=1e-12))
-    ref = _reference(built, "Rover")
+    ref = reference.read(built, "Rover")
     n = len(result.time)
     assert n == 101
     checked = {"speed": "speed", "pitch": "pitch"}
@@ -447,17 +437,7 @@ def test_the_rover_of_four_wheels_follows_the_python_models_trajectory(built):
 
 # ---- with the Modelica Standard Library --------------------------------------------------------
 
-def _msl() -> Path | None:
-    """A folder on MODELICAPATH holding the Modelica Standard Library 4.x."""
-    for entry in os.environ.get("MODELICAPATH", "").split(os.pathsep):
-        package = Path(entry) / "Modelica" / "package.mo"
-        if package.is_file() and re.search(r'version\s*=\s*"4\.', package.read_text(
-                encoding="utf-8", errors="replace")[:4000]):
-            return Path(entry)
-    return None
-
-
-needs_msl = pytest.mark.skipif(_msl() is None, reason=(
+needs_msl = pytest.mark.skipif(reference.find_msl() is None, reason=(
     "needs the Modelica Standard Library 4.x on MODELICAPATH (a folder holding Modelica/, "
     "ModelicaServices/ and Complex.mo, e.g. modelica/ModelicaStandardLibrary at tag v4.1.0)"))
 
@@ -466,17 +446,13 @@ needs_msl = pytest.mark.skipif(_msl() is None, reason=(
 def msl_root(built, tmp_path_factory) -> Path:
     """One root holding MSL and the library side by side (rumoca 0.10 does not resolve a
     class of one root from a class of another)."""
-    root = tmp_path_factory.mktemp("modelicapath")
-    msl = _msl()
-    for name in ("Modelica", "ModelicaServices", "Complex.mo"):
-        (root / name).symlink_to(msl / name)
-    (root / ROOT).symlink_to(built / ROOT)
-    return root
+    return reference.one_root(reference.find_msl(), built,
+                              tmp_path_factory.mktemp("modelicapath"))
 
 
 @needs_msl
 def test_every_quantity_of_the_records_is_an_msl_si_type():
-    units = (_msl() / "Modelica" / "Units.mo").read_text(encoding="utf-8")
+    units = (reference.find_msl() / "Modelica" / "Units.mo").read_text(encoding="utf-8")
     si = set(re.findall(r"^\s*type (\w+)\s*=", units, re.M))
     from wheelterrain.parameters import TABLE
 
@@ -496,7 +472,7 @@ def test_the_rig_on_msl_components_follows_the_python_models_trajectory(built, m
     for case, slip_paper in reference.RIG_CASES.items():
         result = model.simulate((0.0, 1.0), dt=reference.RIG_INTERVAL,
                                 params={"slip_paper": slip_paper}, config=config)
-        ref = _reference(built, f"Rig{case}")
+        ref = reference.read(built, f"Rig{case}")
         n = len(result.time)
         assert n == 101
         for key, column in (("sinkage", "sinkage"), ("wheel.w", "wheel_speed"),

@@ -13,9 +13,7 @@ model) and plots both.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
-import os
 import sys
 import tempfile
 from pathlib import Path
@@ -24,20 +22,6 @@ import numpy as np
 
 from wheelterrain import plots
 from wheelterrain.modelica import library, reference
-
-
-def _reference(folder: Path, name: str) -> dict[str, np.ndarray]:
-    with (folder / "WheelTerrain" / "Resources" / "Reference" / f"{name}.csv").open() as f:
-        rows = list(csv.reader(f))
-    data = np.array(rows[1:], dtype=float)
-    return {c: data[:, k] for k, c in enumerate(rows[0])}
-
-
-def _msl() -> Path | None:
-    for entry in os.environ.get("MODELICAPATH", "").split(os.pathsep):
-        if entry and (Path(entry) / "Modelica" / "package.mo").is_file():
-            return Path(entry)
-    return None
 
 
 def _relative(got, want) -> float:
@@ -61,28 +45,24 @@ def main() -> int:
         model = session.loads("model Run\n  extends WheelTerrain.Examples.SlipRamp;\nend Run;\n",
                               model="Run")
         result = model.simulate((0.0, 1.0), dt=0.05)
-        ref = _reference(root / "lib", "SlipRamp")
+        ref = reference.read(root / "lib", "SlipRamp")
         ramp = {"name": f"rumoca {rumoca.version()}", "python": ref,
                 "tool": {k: np.asarray(result[k]) for k in ("sinkage", "drawbar_pull")}}
         figures = {"SlipRamp": {k: _relative(ramp["tool"][k], ref[k])
                                 for k in ("sinkage", "drawbar_pull")}}
         rig = None
-        msl = _msl()
+        msl = reference.find_msl()
         if msl is None:
             print("RigC2 not run: put the Modelica Standard Library 4.x on MODELICAPATH",
                   file=sys.stderr)
         else:
-            path = root / "path"
-            path.mkdir()
-            for name in ("Modelica", "ModelicaServices", "Complex.mo"):
-                (path / name).symlink_to(msl / name)
-            (path / "WheelTerrain").symlink_to(root / "lib" / "WheelTerrain")
+            path = reference.one_root(msl, root / "lib", root / "path")
             model = rumoca.Session(roots=[str(path)]).loads(
                 "model Run\n  extends WheelTerrain.Examples.RigC2;\nend Run;\n", model="Run")
             result = model.simulate((0.0, args.stop), dt=reference.RIG_INTERVAL,
                                     config=rumoca.SimConfig(solver="rk-like", rtol=1e-10,
                                                             atol=1e-12))
-            ref = _reference(root / "lib", "RigC2")
+            ref = reference.read(root / "lib", "RigC2")
             n = len(result.time)
             tool = {"time": np.asarray(result.time)}
             tool.update({k: np.asarray(result[k]) for k in ("sinkage", "drawbar_pull")})

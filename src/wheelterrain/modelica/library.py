@@ -555,9 +555,9 @@ def _rover_chassis() -> str:
         "protected",
         f"  Real u[{sizes['u']}];",
         "equation"]
-    lines += _wrap_lines(f"  u = {{{', '.join(u)}}};")
+    lines += translate.wrap(f"  u = {{{', '.join(u)}}};")
     lines.append(f"  der(x) = {LIBRARY}.Functions.roverRates(x, u, r);")
-    lines += _wrap_lines(f"  {{{', '.join(kinematics)}}} = "
+    lines += translate.wrap(f"  {{{', '.join(kinematics)}}} = "
                          f"{LIBRARY}.Functions.roverWheels(x, r);")
     speeds = ", ".join(_state(f"{w}.wheel_speed") for w in rover.WHEELS)
     lines += [f"  wheel_speed = {{{speeds}}};", f"  speed = {_state('speed')};",
@@ -593,10 +593,6 @@ def _rover_example() -> str:
               'exchange): the rear wheels do not meet the front wheels\' rut here.</p></html>"));',
               "end Rover;"]
     return "\n".join(lines) + "\n"
-
-
-def _wrap_lines(line: str) -> list[str]:
-    return _wrap_call(line).split("\n")
 
 
 def _examples(lib: Library) -> None:

@@ -13,7 +13,10 @@ from __future__ import annotations
 
 import csv
 import io
+import os
+import re
 from collections.abc import Sequence
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -72,15 +75,23 @@ def rig_trajectory(slip_paper: float, stop: float = RIG_STOP,
     forces = [out[k] for k in rig.FORCE_INPUTS]
     rates = rig.rates(x, [*forces, 0, 0], rp)
     state = ca.vertcat(x[:4], angle, plastic)
-    ode = {"x": state, "ode": ca.vertcat(*rates[:4], x[2], out["plastic_rate"])}
-    times = np.round(np.arange(0, stop + interval / 2, interval), 10)
-    integrator = ca.integrator("rig", "cvodes", ode, 0.0, times[1:].tolist(),
-                               {"abstol": 1e-14, "reltol": 1e-12, "max_num_steps": 10**7})
     start = [RIG_SINKAGE_START, 0.0, omega_ref, 0.0, 0.0, 0.0]
-    states = np.column_stack([start, np.array(integrator(x0=start)["xf"])]).T
-    outputs = ca.Function("outputs", [state], forces)
-    force_rows = np.array([[float(v) for v in outputs(s)] for s in states])
-    return np.column_stack([times, states, force_rows])
+    return _integrate(state, ca.vertcat(*rates[:4], x[2], out["plastic_rate"]), start,
+                      ca.vertcat(state, *forces), stop, interval)
+
+
+def _integrate(state: ca.SX, rate: ca.SX, start: Sequence[float], columns: ca.SX,
+               stop: float, interval: float) -> np.ndarray:
+    """d(state)/dt = rate from ``start``, integrated by CVODES at 1e-12 relative: one row per
+    output time (every ``interval`` s up to ``stop``), the time, then ``columns`` there."""
+    times = np.round(np.arange(0, stop + interval / 2, interval), 10)
+    integrator = ca.integrator("reference", "cvodes", {"x": state, "ode": rate}, 0.0,
+                               times[1:].tolist(),
+                               {"abstol": 1e-14, "reltol": 1e-12, "max_num_steps": 10**7})
+    states = np.column_stack([start, np.array(integrator(x0=list(start))["xf"])]).T
+    evaluate = ca.Function("columns", [state], [columns])
+    rows = np.array([np.array(evaluate(s), dtype=float).ravel() for s in states])
+    return np.column_stack([times, rows])
 
 
 ROVER_STOP, ROVER_INTERVAL = 10.0, 0.01
@@ -134,18 +145,11 @@ def rover_trajectory(stop: float = ROVER_STOP, interval: float = ROVER_INTERVAL)
     rates = rover.rates(xs, u, r)
     omegas = [xs[rover.STATES.index(f"{w}.wheel_speed")] for w in rover.WHEELS]
     state = ca.vertcat(x, angles, plastics)
-    ode = {"x": state, "ode": ca.vertcat(*rates, *omegas, *extra)}
-    times = np.round(np.arange(0, stop + interval / 2, interval), 10)
-    integrator = ca.integrator("rover", "cvodes", ode, 0.0, times[1:].tolist(),
-                               {"abstol": 1e-14, "reltol": 1e-12, "max_num_steps": 10**7})
     start = [*rover_start(), *[0.0] * (2 * len(rover.WHEELS))]
-    states = np.column_stack([start, np.array(integrator(x0=start)["xf"])]).T
     report.update(speed=speed, position=xs[rover.STATES.index("position")],
                   heave=xs[rover.STATES.index("heave")], pitch=xs[rover.STATES.index("pitch")])
-    columns = ca.Function("columns", [state], [ca.vertcat(*(report[c] for c in
-                                                           ROVER_COLUMNS[1:]))])
-    rows = np.array([np.array(columns(s), dtype=float).ravel() for s in states])
-    return np.column_stack([times, rows])
+    return _integrate(state, ca.vertcat(*rates, *omegas, *extra), start,
+                      ca.vertcat(*(report[c] for c in ROVER_COLUMNS[1:])), stop, interval)
 
 
 def _csv(columns: Sequence[str], rows) -> str:
@@ -155,6 +159,38 @@ def _csv(columns: Sequence[str], rows) -> str:
     for row in rows:
         writer.writerow([repr(float(v)) for v in row])
     return buffer.getvalue()
+
+
+def read(library_root: Path, name: str) -> dict[str, np.ndarray]:
+    """The reference result ``name`` (an example's) of the library written to
+    ``library_root`` (the folder holding WheelTerrain/): column -> values."""
+    path = Path(library_root) / "WheelTerrain" / "Resources" / "Reference" / f"{name}.csv"
+    with path.open(encoding="utf-8") as handle:
+        rows = list(csv.reader(handle))
+    data = np.array(rows[1:], dtype=float)
+    return {column: data[:, k] for k, column in enumerate(rows[0])}
+
+
+def find_msl() -> Path | None:
+    """A folder on MODELICAPATH holding the Modelica Standard Library 4.x (Modelica/,
+    ModelicaServices/, Complex.mo), or None."""
+    for entry in os.environ.get("MODELICAPATH", "").split(os.pathsep):
+        package = Path(entry) / "Modelica" / "package.mo" if entry else None
+        if package and package.is_file() and re.search(
+                r'version\s*=\s*"4\.', package.read_text(encoding="utf-8",
+                                                       errors="replace")[:4000]):
+            return Path(entry)
+    return None
+
+
+def one_root(msl: Path, library_root: Path, folder: Path) -> Path:
+    """``folder`` made one source root holding MSL and the library side by side (links):
+    rumoca 0.10 does not resolve a class of one root from a class of another."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for name in ("Modelica", "ModelicaServices", "Complex.mo"):
+        (folder / name).symlink_to(Path(msl) / name)
+    (folder / "WheelTerrain").symlink_to(Path(library_root) / "WheelTerrain")
+    return folder
 
 
 def files() -> dict[str, str]:
