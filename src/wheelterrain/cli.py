@@ -419,6 +419,8 @@ def build(out: str, flavor: str) -> None:
       records, components on MSL flanges, examples with reference results. Its
       examples SteadyC2 and SlipRamp need no Modelica Standard Library; the rest need
       MSL 4.x on the MODELICAPATH. Try it with rumoca (pip install rumoca).
+      Functions.External has the same functions as CasADi's C (Resources/C-Sources),
+      compiled for linux64 and, with MinGW-w64, win64 (cached after the first build).
     """
     from pathlib import Path
 
@@ -433,10 +435,14 @@ def build(out: str, flavor: str) -> None:
         if flavor in ("modelica", "all"):
             from wheelterrain.modelica import library
 
-            folder = library.write(Path(out))
+            notes: list[str] = []
+            folder = library.write(Path(out), notes=notes,
+                                   say=lambda message: click.echo(message, err=True))
             count = sum(1 for _ in folder.rglob("*.mo"))
             click.echo(f"wrote {folder} (Modelica library, {count} files; open "
                        f"{folder / 'package.mo'} in a Modelica tool)")
+            for note in notes:
+                click.echo(f"note: {note}", err=True)
         if flavor in ("pythonfmu", "all"):
             paths += build_pythonfmu(out)
         # --flavor all builds what this machine can; --flavor native without a compiler is

@@ -10,15 +10,17 @@ level), and where each part comes from:
   (CasADi's forward mode, ``annotation(derivative(zeroDerivative=p))``), a function choosing
   the form as the model's switch does, the two slips (:mod:`wheelterrain.fmu.functions`), and
   ``Index``: the position of each output in the functions' output vectors. No Modelica Standard
-  Library needed.
+  Library needed. ``Functions.External``: the same functions calling the C CasADi generates
+  from the same Functions (:mod:`.external`); ``Functions.Interfaces``: the signatures the
+  components' replaceable contact functions are constrained by.
 - ``Data``: every preset as a parameter vector in table order (no MSL needed).
 - ``Records``: the parameter table as records with ``Modelica.Units.SI`` types, ranges,
   descriptions and sources; every preset a record constant; ``parameterVector``.
 - ``Components``: ``QuasiStaticWheel`` (no MSL) and ``Contact`` on MSL flanges (Rotational
   hub, Translational axle and vertical), the soil's memory a state.
-- ``Examples``: ``SteadyC2``, ``SlipRamp`` (no MSL) and ``RigC1`` ... ``RigC4`` (the paper's
-  rig from MSL components), with ``experiment`` annotations; reference results in
-  ``Resources/Reference`` written by the Python model.
+- ``Examples``: ``SteadyC2``, ``SlipRamp``, ``Rover``, ``RoverSlope``, ``RoverDescent`` (no
+  MSL) and ``RigC1`` ... ``RigC4`` (the paper's rig from MSL components), with ``experiment``
+  annotations; reference results in ``Resources/Reference`` written by the Python model.
 - ``UsersGuide``: conventions, slips, citations, the name map, what was tested in which tool.
 
 The output is deterministic: the same bytes on every run.
@@ -40,7 +42,7 @@ import numpy as np
 
 from wheelterrain import __version__, presets
 from wheelterrain.model import contact, ground, rover, slip
-from wheelterrain.modelica import reference, translate
+from wheelterrain.modelica import external, reference, translate
 from wheelterrain.modelica.translate import Port
 from wheelterrain.parameters import NAMES, RIG_TABLE, TABLE, Parameter
 
@@ -209,7 +211,7 @@ def exported() -> tuple[Exported, ...]:
             out.append(Exported(
                 stem + FORM_NAMES[form], kernel, names,
                 (Port("y", len(rows), description="the outputs, Index order"),),
-                f"{what.capitalize()} in the {form.replace('_', ' ')} form",
+                f"{what[0].upper()}{what[1:]} in the {form.replace('_', ' ')} form",
                 _derivative(kernel, names)))
     wheel_speed, carriage_speed, p = ca.SX.sym("wheel_speed"), ca.SX.sym(
         "carriage_speed"), ca.SX.sym("p", len(NAMES))
@@ -266,39 +268,60 @@ def _rover_functions() -> list[Exported]:
     ]
 
 
-def _functions(lib: Library) -> None:
-    where = f"{LIBRARY}/Functions"
-    order: list[str] = []
-    internal: list[str] = []
+@dataclass(frozen=True)
+class Entry:
+    """One function of the Functions package as Modelica sees it: its name, the CasADi
+    Function it reproduces, its ports, its description and its derivative annotation ('' for
+    none). The generated functions and Functions.External both list these."""
+
+    name: str
+    function: ca.Function
+    inputs: tuple[Port, ...]
+    outputs: tuple[Port, ...]
+    description: str
+    annotation: str
+
+
+@lru_cache(maxsize=1)
+def entries() -> tuple[Entry, ...]:
+    """Every exported function and, after each, its derivative function."""
+    out = []
     for e in exported():
-        inputs = _ports(e.inputs)
+        inputs = tuple(_ports(e.inputs))
         annotation = ""
         if e.derivative is not None:
             zero = ", ".join(f"zeroDerivative={n}" for n in e.inputs if n in PARAMETER_INPUTS)
             annotation = f"derivative{f'({zero})' if zero else ''}={e.name}Der"
-        pieces = f"{LIBRARY}.Functions.Internal.{e.name[0].upper()}{e.name[1:]}"
-        text, parts = translate.functions(e.function, e.name, inputs, e.outputs,
-                                          e.description, annotation, pieces=pieces)
+        out.append(Entry(e.name, e.function, inputs, e.outputs, e.description, annotation))
+        if e.derivative is not None:
+            seeds = tuple(Port("der_" + p.name, p.size, description=f"d({p.name})/dt")
+                          for p in inputs if p.name not in PARAMETER_INPUTS)
+            outs = tuple(Port("der_" + p.name, p.size, description=f"d({p.name})/dt")
+                         for p in e.outputs)
+            out.append(Entry(f"{e.name}Der", e.derivative, inputs + seeds, outs,
+                             f"Derivative of {e.name} (CasADi's forward mode)", ""))
+    return tuple(out)
+
+
+def _functions(lib: Library) -> None:
+    where = f"{LIBRARY}/Functions"
+    order: list[str] = []
+    internal: list[str] = []
+    for e in entries():
+        stem = e.name.removesuffix("Der")
+        pieces = f"{LIBRARY}.Functions.Internal.{stem[0].upper()}{stem[1:]}"
+        pieces += "Der" if e.name != stem else ""
+        text, parts = translate.functions(e.function, e.name, e.inputs, e.outputs,
+                                          e.description, e.annotation, pieces=pieces)
         _class_file(lib, where, e.name, text)
         order.append(e.name)
         _internal(lib, internal, pieces, parts, e.name)
-        if e.derivative is not None:
-            seeds = [Port("der_" + p.name, p.size, description=f"d({p.name})/dt")
-                     for p in inputs if p.name not in PARAMETER_INPUTS]
-            outs = [Port("der_" + p.name, p.size, description=f"d({p.name})/dt")
-                    for p in e.outputs]
-            dname = f"{e.name}Der"
-            text, parts = translate.functions(
-                e.derivative, dname, [*inputs, *seeds], outs,
-                f"Derivative of {e.name} (CasADi's forward mode)", "",
-                pieces=pieces + "Der")
-            _class_file(lib, where, dname, text)
-            order.append(dname)
-            _internal(lib, internal, pieces + "Der", parts, dname)
     for stem, memory in (("contact", True), ("quasiStatic", False)):
         order += _dispatch(lib, where, stem, memory)
     _index(lib, where)
     order.append("Index")
+    order += _external(lib, where)
+    order += _interfaces(lib, where)
     lib.package(f"{LIBRARY}/Functions", "Internal", "Pieces of the long generated functions "
                 "(not to be called: each runs a stretch of its function's instructions)",
                 internal)
@@ -320,20 +343,65 @@ def _internal(lib: Library, internal: list[str], pieces: str, parts: list[str],
     internal.append(name)
 
 
+def _external(lib: Library, where: str) -> list[str]:
+    """Functions.External: every function of Functions with the same signature and derivative
+    annotation, calling the CasADi-generated C of the same Function (:mod:`.external`), and
+    the two dispatchers over them."""
+    folder = f"{where}/External"
+    order = []
+    for e in entries():
+        text = translate.external(e.name, e.inputs, e.outputs, e.description + " (C)",
+                                  external.call(e.name, e.inputs, e.outputs), e.annotation)
+        _class_file(lib, folder, e.name, text)
+        order.append(e.name)
+    for stem, memory in (("contact", True), ("quasiStatic", False)):
+        order += _dispatch(lib, folder, stem, memory)
+    lib.package(where, "External", "The same functions calling the C that CasADi generates "
+                "from the same Functions (Resources/C-Sources, Resources/Library): for tools "
+                "that compile long functions slowly", order)
+    return ["External"]
+
+
+def _dispatch_ports(memory: bool, der: bool) -> tuple[list[Port], Port]:
+    """The inputs and the output of ``contact`` (``memory``) or ``quasiStatic``, or of their
+    derivatives (``der``)."""
+    names = contact.EXPORT_INPUTS[memory]
+    rows = len(contact.CONTACT_OUTPUTS) + (len(contact.MEMORY_OUTPUTS) if memory else 0)
+    inputs = _ports(names)
+    if der:
+        inputs += [Port("der_" + n, description=f"d({n})/dt") for n in names if n != "p"]
+    return inputs, Port("der_y" if der else "y", rows, description="the outputs, Index order")
+
+
+def _interfaces(lib: Library, where: str) -> list[str]:
+    """Functions.Interfaces: the signatures of ``contact`` and ``quasiStatic``, which the
+    components' replaceable contact functions are constrained by (the generated functions or
+    Functions.External's)."""
+    order = []
+    for stem, memory in (("contact", True), ("quasiStatic", False)):
+        name = stem[0].upper() + stem[1:]
+        inputs, out = _dispatch_ports(memory, False)
+        lines = [f'partial function {name} "The signature of Functions.{stem} and '
+                 f'Functions.External.{stem}"']
+        lines += [p.declaration("input") for p in inputs]
+        lines += [out.declaration("output"), f"end {name};"]
+        _class_file(lib, f"{where}/Interfaces", name, "\n".join(lines) + "\n")
+        order.append(name)
+    lib.package(where, "Interfaces", "The signatures a component's contact function must have",
+                order)
+    return ["Interfaces"]
+
+
 def _dispatch(lib: Library, where: str, stem: str, memory: bool) -> list[str]:
     """``stem`` and ``stemDer``: the form ``stemCase`` picks, as the model's switch does (only
     that form is evaluated)."""
     names = contact.EXPORT_INPUTS[memory]
-    rows = len(contact.CONTACT_OUTPUTS) + (len(contact.MEMORY_OUTPUTS) if memory else 0)
     args = ", ".join(names)
     moving = [n for n in names if n != "p"]
     written = []
     for der in (False, True):
         name = stem + ("Der" if der else "")
-        inputs = _ports(names)
-        if der:
-            inputs += [Port("der_" + n, description=f"d({n})/dt") for n in moving]
-        out = Port("der_y" if der else "y", rows, description="the outputs, Index order")
+        inputs, out = _dispatch_ports(memory, der)
         call = args + (", " + ", ".join("der_" + n for n in moving) if der else "")
         suffix = "Der" if der else ""
         what = ("Derivative of " + stem) if der else (
@@ -573,7 +641,9 @@ def _rover_example() -> str:
         'RoverChassis, the default preset\'s soil (no Modelica Standard Library needed)"',
         f"  parameter Real p[{len(NAMES)}] = {LIBRARY}.Data.rashidPatch "
         '"every wheel\'s soil and model";',
-        f"  {LIBRARY}.Components.RoverChassis chassis(slope=0, towing_force=0,",
+        f"  parameter Real r[{_sizes()['r']}] = {LIBRARY}.Data.rover "
+        '"the rover\'s parameters (its input profile: the rover.ramp_time ... rows)";',
+        f"  {LIBRARY}.Components.RoverChassis chassis(r=r, slope=0, towing_force=0,",
         f"    wheel_speed_command=zeros({n}), motor_torque_command=zeros({n}));"]
     lines += [f"  {LIBRARY}.Components.Wheel {w}(p=p);" for w in rover.WHEELS]
     lines += ['  Real speed(unit="m/s") = chassis.speed;',
@@ -606,7 +676,29 @@ def _examples(lib: Library) -> None:
     _class_file(lib, where, "Rig", _template(
         "Rig", sinkage_start=translate.literal(reference.RIG_SINKAGE_START), **rig))
     _class_file(lib, where, "Rover", _rover_example())
-    order = ["SteadyC2", "SlipRamp", "Rover", "Rig"]
+    order = ["SteadyC2", "SlipRamp", "Rover"]
+    for example, profile in reference.ROVER_PROFILES.items():
+        if example == "Rover":
+            continue
+        r = reference.rover_parameters(example)
+        rate, bound = (math.degrees(r[k]) for k in ("rover.slope_rate_after",
+                                                      "rover.slope_bound"))
+        what = (f"after {r['rover.ramp_time']:g} s on level ground: the slope "
+                f"{'rises' if rate > 0 else 'falls'} at {abs(rate):g} deg/s to a {bound:g} deg "
+                f"{'climb' if rate > 0 else 'descent, the speed loops braking'}")
+        changed = ", ".join(sorted(profile))
+        text = (f'model {example} "The rover {what} (no Modelica Standard Library needed)"\n'
+                f"  extends Rover(r={_vector([r[n] for n in rover.ROVER_NAMES])});\n"
+                f"  annotation(experiment(StartTime=0, StopTime={reference.ROVER_STOP}, "
+                f"Interval={reference.ROVER_INTERVAL}, Tolerance=1e-8),\n"
+                f'    Documentation(info="<html><p>Data.rover with {changed} changed. '
+                f"Reference: Resources/Reference/{example}.csv (the Python model, as for "
+                "Rover). <code>wheelterrain rover --scenario slope|descent</code> ramps the "
+                'slope on until the rover stalls or slides.</p></html>"));\n'
+                f"end {example};\n")
+        _class_file(lib, where, example, text)
+        order.append(example)
+    order.append("Rig")
     for case, s in reference.RIG_CASES.items():
         text = (f'model Rig{case} "The rig at the paper\'s {case}: slip s = {s}"\n'
                 f"  extends Rig(slip_paper={translate.literal(s)});\n"
@@ -652,12 +744,17 @@ def build_library() -> Library:
     _examples(lib)
     for name, text in reference.files().items():
         lib.add(f"{LIBRARY}/Resources/Reference/{name}", text)
+    for name, text in external.sources(entries()).items():
+        lib.add(f"{LIBRARY}/Resources/C-Sources/{name}", text)
     return lib
 
 
-def write(out: Path) -> Path:
+def write(out: Path, binaries: bool = True, notes: list[str] | None = None,
+          say=lambda message: None) -> Path:
     """Write the library to ``out``/WheelTerrain (replacing what is there) and return that
-    folder."""
+    folder. ``binaries``: compile Functions.External's C into Resources/Library (what this
+    machine's compilers can build; ``notes`` gets a line per binary that could not be, ``say``
+    a line before each compile)."""
     import shutil
     import tempfile
 
@@ -667,6 +764,11 @@ def write(out: Path) -> Path:
     staging = Path(tempfile.mkdtemp(prefix=".WheelTerrain-", dir=out))
     try:
         lib.write(staging)
+        if binaries:
+            resources_ = staging / LIBRARY / "Resources"
+            missing = external.build(resources_ / "C-Sources", resources_ / "Library", say)
+            if notes is not None:
+                notes += missing
         target = out / LIBRARY
         if target.exists():
             shutil.rmtree(target)

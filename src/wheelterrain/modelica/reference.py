@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 import os
 import re
 from collections.abc import Sequence
@@ -111,13 +112,33 @@ def rover_start() -> list[float]:
     return state
 
 
-def rover_trajectory(stop: float = ROVER_STOP, interval: float = ROVER_INTERVAL) -> np.ndarray:
-    """The rover on level ground (Examples.Rover): the RoverChassis FMU's model-exchange rates
-    on four contacts with the soil's memory (each wheel's angle and plastic sinkage states), the
-    default preset's soil and the rover's defaults, integrated by CVODES at 1e-12: one row per
-    output time, ROVER_COLUMNS."""
+ROVER_PROFILES = {
+    "Rover": {},
+    "RoverSlope": {"rover.ramp_time": 3.0, "rover.slope_rate_after": math.radians(2.0),
+                   "rover.slope_bound": math.radians(10.0)},
+    "RoverDescent": {"rover.ramp_time": 3.0, "rover.slope_rate_after": math.radians(-2.0),
+                     "rover.slope_bound": math.radians(5.0)},
+}
+"""The rover examples and their input profiles (rover.* rows changed from the defaults): level
+ground; after 3 s on level ground, the slope rising at 2 deg/s to a 10 deg climb, or falling to
+a 5 deg descent the speed loops brake on (both inside the limits ``wheelterrain rover`` finds:
+a stall at 27 deg, a slide at 8.9 deg). Starting on the slope instead, the rover would slide
+while it sinks into the soil from its start."""
+
+
+def rover_parameters(example: str = "Rover") -> dict[str, float]:
+    """The rover's parameters of ``example`` (ROVER_PROFILES)."""
+    return {**rover.defaults(), **ROVER_PROFILES[example]}
+
+
+def rover_trajectory(stop: float = ROVER_STOP, interval: float = ROVER_INTERVAL,
+                     example: str = "Rover") -> np.ndarray:
+    """The rover of ``example`` (Examples.Rover, RoverSlope, RoverDescent): the RoverChassis
+    FMU's model-exchange rates on four contacts with the soil's memory (each wheel's angle and
+    plastic sinkage states), the default preset's soil and the example's rover parameters,
+    integrated by CVODES at 1e-12: one row per output time, ROVER_COLUMNS."""
     p = ca.DM(presets.load().vector())
-    r = rover.defaults()
+    r = rover_parameters(example)
     radius = fmu_functions.slip_radius(p)
     x = ca.SX.sym("x", len(rover.STATES))
     angles, plastics = ca.SX.sym("angle", len(rover.WHEELS)), ca.SX.sym(
@@ -205,5 +226,6 @@ def files() -> dict[str, str]:
     out["SlipRamp.csv"] = _csv(columns, [[r[k] for k in columns] for r in ramp])
     for case, s in RIG_CASES.items():
         out[f"Rig{case}.csv"] = _csv(RIG_COLUMNS, rig_trajectory(s))
-    out["Rover.csv"] = _csv(ROVER_COLUMNS, rover_trajectory())
+    for example in ROVER_PROFILES:
+        out[f"{example}.csv"] = _csv(ROVER_COLUMNS, rover_trajectory(example=example))
     return out

@@ -267,6 +267,16 @@ def functions(f: ca.Function, name: str, inputs: Sequence[Port], outputs: Sequen
     return "\n".join(text) + "\n", parts
 
 
+def external(name: str, inputs: Sequence[Port], outputs: Sequence[Port], description: str,
+             clause: str, annotation: str = "") -> str:
+    """The Modelica function ``name`` whose body is the external clause ``clause``, declared
+    ``pure`` (what an external function is by default; a tool that assumes otherwise, rumoca
+    0.10, then accepts its derivative annotation)."""
+    header = _header(name, description, inputs, outputs)
+    lines = ["pure " + header[0], *header[1:], clause, _annotation(annotation), f"end {name};"]
+    return "\n".join(lines) + "\n"
+
+
 def wrap(text: str, width: int = 100) -> list[str]:
     """A long declaration broken after commas, continued with four spaces."""
     out, line = [], ""

@@ -6,6 +6,9 @@ model Contact "The wheel-soil contact between a wheel's hub, its axle and the gr
   final parameter Real p[${N}] = WheelTerrain.Records.parameterVector(parameters)
     "the parameters in table order";
   parameter SI.Length plastic_sinkage_start = 0 "the soil's memory at the start";
+  replaceable function contactFunction = WheelTerrain.Functions.contact
+    constrainedby WheelTerrain.Functions.Interfaces.Contact
+    "the contact: Functions.contact (generated, the default) or Functions.External.contact (CasADi's C)";
   Modelica.Mechanics.Rotational.Interfaces.Flange_a hub "the wheel's hub: its angle turns the wheel forward";
   Modelica.Mechanics.Translational.Interfaces.Flange_a axle "the axle, horizontally: s forward";
   Modelica.Mechanics.Translational.Interfaces.Flange_a vertical "the axle, vertically: s up, s = -sinkage";
@@ -27,7 +30,7 @@ equation
   carriage_speed = der(axle.s);
   slip = WheelTerrain.Functions.tractionSlip(wheel_speed, carriage_speed, p);
   assert(slip >= -1 and slip <= 1, "Contact: the traction slip left the model's range [-1, 1]");
-  y = WheelTerrain.Functions.contact(sinkage, sinkage_rate, slip, hub.phi, plastic_sinkage, carriage_speed, p);
+  y = contactFunction(sinkage, sinkage_rate, slip, hub.phi, plastic_sinkage, carriage_speed, p);
   der(plastic_sinkage) = y[WheelTerrain.Functions.Index.plastic_rate];
   normal_force = y[WheelTerrain.Functions.Index.normal_force];
   drawbar_pull = y[WheelTerrain.Functions.Index.drawbar_pull];

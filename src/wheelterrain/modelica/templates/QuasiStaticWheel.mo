@@ -3,6 +3,9 @@ block QuasiStaticWheel "A wheel at steady state on the soil: the sinkage at whic
     "the parameters in table order (WheelTerrain.Data, Records.parameterVector)";
   parameter Real sinkage_start(unit="m") = 0.01
     "where the tool's solver starts looking for the sinkage";
+  replaceable function quasiStaticFunction = WheelTerrain.Functions.quasiStatic
+    constrainedby WheelTerrain.Functions.Interfaces.QuasiStatic
+    "the contact: Functions.quasiStatic (generated, the default) or Functions.External.quasiStatic (CasADi's C)";
   input Real load(unit="N") "the vertical load on the wheel";
   input Real slip(unit="1") "traction slip i";
   output Real sinkage(unit="m", start=sinkage_start, fixed=false)
@@ -13,7 +16,7 @@ block QuasiStaticWheel "A wheel at steady state on the soil: the sinkage at whic
   output Real exit_angle(unit="rad") "where it ends";
   output Real y[${QUASI_ROWS}] "every output of quasiStatic, Functions.Index order";
 equation
-  y = WheelTerrain.Functions.quasiStatic(sinkage, slip, p);
+  y = quasiStaticFunction(sinkage, slip, p);
   y[WheelTerrain.Functions.Index.normal_force_static] = load;
   drawbar_pull = y[WheelTerrain.Functions.Index.drawbar_pull];
   torque = y[WheelTerrain.Functions.Index.torque];

@@ -1,6 +1,9 @@
 block Wheel "The WheelTerrain FMU's contact as a block (its model exchange): the wheel's angle and the soil's memory its states (no Modelica Standard Library needed)"
   parameter Real p[${N}] = WheelTerrain.Data.rashidPatch
     "the parameters in table order (WheelTerrain.Data, Records.parameterVector)";
+  replaceable function contactFunction = WheelTerrain.Functions.contact
+    constrainedby WheelTerrain.Functions.Interfaces.Contact
+    "the contact: Functions.contact (generated, the default) or Functions.External.contact (CasADi's C)";
   input Real sinkage(unit="m") "of the contact circle below the undisturbed surface";
   input Real sinkage_rate(unit="m/s") "d(sinkage)/dt";
   input Real wheel_speed(unit="rad/s") "the wheel's angular velocity";
@@ -17,7 +20,7 @@ equation
   der(wheel_angle) = wheel_speed;
   slip = WheelTerrain.Functions.tractionSlip(wheel_speed, carriage_speed, p);
   assert(slip >= -1 and slip <= 1, "Wheel: the traction slip left the model's range [-1, 1]");
-  y = WheelTerrain.Functions.contact(sinkage, sinkage_rate, slip, wheel_angle, plastic_sinkage, carriage_speed, p);
+  y = contactFunction(sinkage, sinkage_rate, slip, wheel_angle, plastic_sinkage, carriage_speed, p);
   der(plastic_sinkage) = y[WheelTerrain.Functions.Index.plastic_rate];
   normal_force = y[WheelTerrain.Functions.Index.normal_force];
   drawbar_pull = y[WheelTerrain.Functions.Index.drawbar_pull];
