@@ -15,12 +15,15 @@ level), and where each part comes from:
   components' replaceable contact functions are constrained by.
 - ``Data``: every preset as a parameter vector in table order (no MSL needed).
 - ``Records``: the parameter table as records with ``Modelica.Units.SI`` types, ranges,
-  descriptions and sources; every preset a record constant; ``parameterVector``.
-- ``Components``: ``QuasiStaticWheel`` (no MSL) and ``Contact`` on MSL flanges (Rotational
-  hub, Translational axle and vertical), the soil's memory a state.
-- ``Examples``: ``SteadyC2``, ``SlipRamp``, ``Rover``, ``RoverSlope``, ``RoverDescent`` (no
-  MSL) and ``RigC1`` ... ``RigC4`` (the paper's rig from MSL components), with ``experiment``
-  annotations; reference results in ``Resources/Reference`` written by the Python model.
+  descriptions and sources; every preset a record (rumoca 0.10 cannot flatten a reference to
+  a record constant); ``parameterVector``.
+- ``Components``: ``QuasiStaticWheel``, ``Wheel`` and ``RoverChassis`` (no MSL) and
+  ``Contact`` on MSL flanges (Rotational hub, Translational axle and vertical), the soil's
+  memory a state, each contact function replaceable (generated or external).
+- ``Examples``: ``SteadyC2``, ``SlipRamp``, ``Rover``, ``RoverSlope``, ``RoverDescent``,
+  ``RoverPullTest`` (no MSL) and ``RigC1`` ... ``RigC4`` (the paper's rig from MSL
+  components), with ``experiment`` annotations; reference results in
+  ``Resources/Reference`` written by the Python model.
 - ``UsersGuide``: conventions, slips, citations, the name map, what was tested in which tool.
 
 The output is deterministic: the same bytes on every run.
@@ -681,20 +684,16 @@ def _examples(lib: Library) -> None:
         if example == "Rover":
             continue
         r = reference.rover_parameters(example)
-        rate, bound = (math.degrees(r[k]) for k in ("rover.slope_rate_after",
-                                                      "rover.slope_bound"))
-        what = (f"after {r['rover.ramp_time']:g} s on level ground: the slope "
-                f"{'rises' if rate > 0 else 'falls'} at {abs(rate):g} deg/s to a {bound:g} deg "
-                f"{'climb' if rate > 0 else 'descent, the speed loops braking'}")
+        what = reference.ROVER_DESCRIPTIONS[example]
         changed = ", ".join(sorted(profile))
-        text = (f'model {example} "The rover {what} (no Modelica Standard Library needed)"\n'
+        text = (f'model {example} "The rover: {what} (no Modelica Standard Library needed)"\n'
                 f"  extends Rover(r={_vector([r[n] for n in rover.ROVER_NAMES])});\n"
                 f"  annotation(experiment(StartTime=0, StopTime={reference.ROVER_STOP}, "
                 f"Interval={reference.ROVER_INTERVAL}, Tolerance=1e-8),\n"
                 f'    Documentation(info="<html><p>Data.rover with {changed} changed. '
                 f"Reference: Resources/Reference/{example}.csv (the Python model, as for "
-                "Rover). <code>wheelterrain rover --scenario slope|descent</code> ramps the "
-                'slope on until the rover stalls or slides.</p></html>"));\n'
+                "Rover). <code>wheelterrain rover --scenario slope|descent|pull-test</code> "
+                'goes on until the rover stalls or slides.</p></html>"));\n'
                 f"end {example};\n")
         _class_file(lib, where, example, text)
         order.append(example)

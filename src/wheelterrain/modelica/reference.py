@@ -118,12 +118,21 @@ ROVER_PROFILES = {
                    "rover.slope_bound": math.radians(10.0)},
     "RoverDescent": {"rover.ramp_time": 3.0, "rover.slope_rate_after": math.radians(-2.0),
                      "rover.slope_bound": math.radians(5.0)},
+    "RoverPullTest": {"rover.towing_rate": 1.0},
 }
 """The rover examples and their input profiles (rover.* rows changed from the defaults): level
 ground; after 3 s on level ground, the slope rising at 2 deg/s to a 10 deg climb, or falling to
 a 5 deg descent the speed loops brake on (both inside the limits ``wheelterrain rover`` finds:
-a stall at 27 deg, a slide at 8.9 deg). Starting on the slope instead, the rover would slide
-while it sinks into the soil from its start."""
+a stall at 27 deg, a slide at 8.9 deg); on level ground, a force holding the rover back rising
+at 1 N/s (the pull test's profile, faster: the CLI's rises at 0.05 % of the weight per second
+until the rover stalls, an hour). Starting on the slope instead, the rover would slide while
+it sinks into the soil from its start."""
+ROVER_DESCRIPTIONS = {
+    "RoverSlope": "after 3 s on level ground the slope rises at 2 deg/s to a 10 deg climb",
+    "RoverDescent": "after 3 s on level ground the slope falls at 2 deg/s to a 5 deg descent, "
+                    "the speed loops braking",
+    "RoverPullTest": "on level ground, a force holding it back rising at 1 N/s",
+}
 
 
 def rover_parameters(example: str = "Rover") -> dict[str, float]:
