@@ -229,6 +229,83 @@ RIG_MESSAGES = {
 }
 
 
+def _contact_with_damper(z, z_rate, traction, angle, plastic, speed, p) -> dict:
+    """``contact_memory``'s outputs by name, and ``damper_force``: the contact damper's share
+    of the normal force (the normal force less its value at zero sinkage rate)."""
+    fns = contact.build()
+    names = (*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS)
+    out = dict(zip(names, fns.contact_memory(z, z_rate, traction, angle, plastic, speed, p),
+                   strict=True))
+    still = fns.contact_memory(z, 0, traction, angle, plastic, speed, p)
+    out["damper_force"] = out["normal_force"] - still[names.index("normal_force")]
+    return out
+
+
+RIG_LOOP_STATES = (*rig.RIG_STATES[:4], "wheel_angle", "plastic_sinkage")
+"""The states of :func:`rig_on_contact`: the rig's (the carriage is kinematic), then
+WheelTerrain's."""
+
+
+def rig_on_contact(p, rig_values, sinkage_start: float) -> dict:
+    """The paper's rig in continuous time on the contact with the soil's memory: the
+    SingleWheelRig FMU's model-exchange rates (:func:`wheelterrain.model.rig.rates`) coupled to
+    WheelTerrain's (``contact_memory``, its wheel angle and plastic sinkage states), the
+    carriage kinematic. ``p``: the table's parameter vector; ``rig_values``: rig.* by name (its
+    slip radius is set to the contact's own). Returns ``state`` and ``rate`` (SX, RIG_LOOP_STATES
+    order), ``start`` (at rest in the soil at ``sinkage_start``, no memory yet, the wheel at its
+    reference speed) and ``values``: every contact output, ``damper_force`` (the contact
+    damper's share of the normal force), ``motor_torque`` and ``carriage_speed`` as SX of the
+    state."""
+    rp = {**rig_values, "rig.slip_radius": float(slip_radius(p))}
+    x = ca.SX.sym("x", len(rig.RIG_STATES))
+    angle, plastic = ca.SX.sym("wheel_angle"), ca.SX.sym("plastic_sinkage")
+    omega_ref, speed = rig.references(rp)
+    traction = slips(x[2], speed, rp["rig.slip_radius"])[0]
+    values = _contact_with_damper(x[0], x[1], traction, angle, plastic, speed, p)
+    u = [*(values[k] for k in rig.FORCE_INPUTS), 0, 0]
+    rates = rig.rates(x, u, rp)
+    values.update(motor_torque=rig.motor_torque(x, u, rp), carriage_speed=speed)
+    return {"state": ca.vertcat(x[:4], angle, plastic),
+            "rate": ca.vertcat(*rates[:4], x[2], values["plastic_rate"]),
+            "start": [sinkage_start, 0.0, omega_ref, 0.0, 0.0, 0.0], "values": values,
+            "rig": rp}
+
+
+def rover_on_contact(p, r) -> dict:
+    """The rover in continuous time on four contacts with the soil's memory: the RoverChassis
+    FMU's model-exchange rates (:func:`wheelterrain.model.rover.rates`) with each wheel's
+    WheelTerrain (``contact_memory``, its wheel angle and plastic sinkage states), no rut
+    record along the track (model exchange records none), every wheel on the soil of ``p``
+    (the table's parameter vector) and the rover's parameters ``r`` (by name). Returns
+    ``state`` and ``rate`` (SX: rover.STATES, the four wheel angles, the four plastic
+    sinkages), ``x`` (the chassis' states by name), ``u`` (the chassis' inputs by name: the
+    forces as SX of the state) and ``wheels`` (per wheel: every contact output,
+    ``damper_force``, ``sinkage``, ``sinkage_rate``, ``wheel_speed``)."""
+    radius = slip_radius(p)
+    x = ca.SX.sym("x", len(rover.STATES))
+    angles, plastics = ca.SX.sym("angle", len(rover.WHEELS)), ca.SX.sym(
+        "plastic", len(rover.WHEELS))
+    xs = tuple(x[k] for k in range(len(rover.STATES)))
+    speed = xs[rover.STATES.index("speed")]
+    u = {"slope": 0.0, "towing_force": 0.0}
+    extra, wheels = [], {}
+    for k, wheel in enumerate(rover.WHEELS):
+        z, z_rate = rover.wheel_kinematics(xs, r, wheel)
+        omega = xs[rover.STATES.index(f"{wheel}.wheel_speed")]
+        traction = slips(omega, speed, radius)[0]
+        out = _contact_with_damper(z, z_rate, traction, angles[k], plastics[k], speed, p)
+        for name in rover.WHEEL_FORCES:
+            u[f"{wheel}.{name}"] = out[name]
+        u[f"{wheel}.wheel_speed_command"] = 0.0
+        u[f"{wheel}.motor_torque_command"] = 0.0
+        extra.append(out["plastic_rate"])
+        wheels[wheel] = {**out, "sinkage": z, "sinkage_rate": z_rate, "wheel_speed": omega}
+    omegas = [wheels[w]["wheel_speed"] for w in rover.WHEELS]
+    return {"state": ca.vertcat(x, angles, plastics),
+            "rate": ca.vertcat(*rover.rates(xs, u, r), *omegas, *extra),
+            "x": dict(zip(rover.STATES, xs, strict=True)), "u": u, "wheels": wheels}
+
+
 def rig_state_problem(x) -> str | None:
     """Why the rig state ``x`` (rig.RIG_STATES, floats) is outside the rig's domain, or None.
     The native wrapper makes the same two checks with the same messages (state_hooks.c)."""

@@ -24,7 +24,7 @@ import numpy as np
 
 from wheelterrain import presets
 from wheelterrain.fmu import functions as fmu_functions
-from wheelterrain.model import api, contact, rig, rover
+from wheelterrain.model import api, rig, rover
 from wheelterrain.model.slip import traction_from_paper
 from wheelterrain.parameters import RIG_TABLE
 
@@ -62,23 +62,12 @@ def rig_trajectory(slip_paper: float, stop: float = RIG_STOP,
                    interval: float = RIG_INTERVAL) -> np.ndarray:
     """The rig at the paper's slip ``slip_paper`` from rest in the soil at RIG_SINKAGE_START
     (wheel at its reference speed, no memory yet): one row per output time, RIG_COLUMNS."""
-    p = ca.DM(presets.load().vector())
     rp = {row.name: row.default for row in RIG_TABLE}
     rp["rig.slip_paper"] = slip_paper
-    rp["rig.slip_radius"] = float(fmu_functions.slip_radius(p))  # the contact's own R_ref
-    x = ca.SX.sym("x", len(rig.RIG_STATES))
-    angle, plastic = ca.SX.sym("wheel_angle"), ca.SX.sym("plastic_sinkage")
-    omega_ref, speed = rig.references(rp)
-    slip = fmu_functions.slips(x[2], speed, rp["rig.slip_radius"])[0]
-    out = dict(zip((*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS),
-                   contact.build().contact_memory(x[0], x[1], slip, angle, plastic, speed, p),
-                   strict=True))
-    forces = [out[k] for k in rig.FORCE_INPUTS]
-    rates = rig.rates(x, [*forces, 0, 0], rp)
-    state = ca.vertcat(x[:4], angle, plastic)
-    start = [RIG_SINKAGE_START, 0.0, omega_ref, 0.0, 0.0, 0.0]
-    return _integrate(state, ca.vertcat(*rates[:4], x[2], out["plastic_rate"]), start,
-                      ca.vertcat(state, *forces), stop, interval)
+    loop = fmu_functions.rig_on_contact(ca.DM(presets.load().vector()), rp, RIG_SINKAGE_START)
+    forces = [loop["values"][k] for k in rig.FORCE_INPUTS]
+    return _integrate(loop["state"], loop["rate"], loop["start"],
+                      ca.vertcat(loop["state"], *forces), stop, interval)
 
 
 def _integrate(state: ca.SX, rate: ca.SX, start: Sequence[float], columns: ca.SX,
@@ -146,39 +135,13 @@ def rover_trajectory(stop: float = ROVER_STOP, interval: float = ROVER_INTERVAL,
     FMU's model-exchange rates on four contacts with the soil's memory (each wheel's angle and
     plastic sinkage states), the default preset's soil and the example's rover parameters,
     integrated by CVODES at 1e-12: one row per output time, ROVER_COLUMNS."""
-    p = ca.DM(presets.load().vector())
-    r = rover_parameters(example)
-    radius = fmu_functions.slip_radius(p)
-    x = ca.SX.sym("x", len(rover.STATES))
-    angles, plastics = ca.SX.sym("angle", len(rover.WHEELS)), ca.SX.sym(
-        "plastic", len(rover.WHEELS))
-    xs = tuple(x[k] for k in range(len(rover.STATES)))
-    speed = xs[rover.STATES.index("speed")]
-    u = {"slope": 0.0, "towing_force": 0.0}
-    extra, report = [], {}
-    fns = contact.build()
-    for k, wheel in enumerate(rover.WHEELS):
-        z, z_rate = rover.wheel_kinematics(xs, r, wheel)
-        omega = xs[rover.STATES.index(f"{wheel}.wheel_speed")]
-        slip = fmu_functions.slips(omega, speed, radius)[0]
-        out = dict(zip((*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS),
-                       fns.contact_memory(z, z_rate, slip, angles[k], plastics[k], speed, p),
-                       strict=True))
-        for name in rover.WHEEL_FORCES:
-            u[f"{wheel}.{name}"] = out[name]
-        u[f"{wheel}.wheel_speed_command"] = 0.0
-        u[f"{wheel}.motor_torque_command"] = 0.0
-        extra.append(out["plastic_rate"])
-        report.update({f"{wheel}.sinkage": z, f"{wheel}.drawbar_pull": out["drawbar_pull"],
-                       f"{wheel}.normal_force": out["normal_force"],
-                       f"{wheel}.wheel_speed": omega})
-    rates = rover.rates(xs, u, r)
-    omegas = [xs[rover.STATES.index(f"{w}.wheel_speed")] for w in rover.WHEELS]
-    state = ca.vertcat(x, angles, plastics)
+    loop = fmu_functions.rover_on_contact(ca.DM(presets.load().vector()),
+                                          rover_parameters(example))
+    report = {f"{w}.{q}": loop["wheels"][w][q] for w in rover.WHEELS
+              for q in ("sinkage", "drawbar_pull", "normal_force", "wheel_speed")}
+    report.update({k: loop["x"][k] for k in ("speed", "position", "heave", "pitch")})
     start = [*rover_start(), *[0.0] * (2 * len(rover.WHEELS))]
-    report.update(speed=speed, position=xs[rover.STATES.index("position")],
-                  heave=xs[rover.STATES.index("heave")], pitch=xs[rover.STATES.index("pitch")])
-    return _integrate(state, ca.vertcat(*rates, *omegas, *extra), start,
+    return _integrate(loop["state"], loop["rate"], start,
                       ca.vertcat(*(report[c] for c in ROVER_COLUMNS[1:])), stop, interval)
 
 
