@@ -384,6 +384,86 @@ def multipass(preset: str, assignments: tuple[str, ...], slip_text: str, slip_de
     click.echo(f"wrote {Path(out) / 'multipass.png'}")
 
 
+@main.command(epilog=EPILOG)
+@preset_option
+@set_option
+@click.option("--system", type=click.Choice(["rig", "rover"]), default="rig", show_default=True,
+              help="The paper's single-wheel rig (at --cases), or the rover on level ground.")
+@click.option("--cases", default="C1,C2,C3,C4", show_default=True, metavar="C1[,C2...]",
+              help="The rig's cases (the paper's Table III: its slip 0, 0.25, 0.5, 0.75).")
+@click.option("--gravity", type=click.Choice(["earth", "moon"]), default="earth",
+              show_default=True, help="The rover's gravity.")
+@click.option("--stop", default=None, type=click.FloatRange(0.5, 120.0),
+              help="Seconds of the run (default: 4 for the rig, from rest in the soil at "
+                   "10 mm; 10 for the rover, from 1 mm in the soil).")
+@json_option('One object {"system", "preset", "set", "stop", "runs": [{"case" (rig), "motor", '
+             '..., "residual", "relative_residual"}], "units"}')
+def energy(preset: str, assignments: tuple[str, ...], system: str, cases: str, gravity: str,
+           stop: float | None, json_target: str | None) -> None:
+    """Where the motor's energy goes: the work of every power term over a run, the system in
+    continuous time on the contact with the soil's memory (its FMUs' model exchange, CVODES).
+
+    \b
+    supplied: motor (the wheel motors' work); load (the rig's load as the wheel sinks) or
+              gravity (the rover's weight: its sinking, its climbing)
+    spent:    kinetic (spin, heave, pitch, travel gained); pull (the work the rig's wheel
+              does on the carriage) or towing (against the rover's holding force); slip (the
+              shear stresses' work against the slip); compaction and bulldozing (the
+              resistances times the travel); damping (the contact damper); pressing (the soil
+              pressed vertically); pitch (rover: the chassis model's neglect of the pitch
+              rate's share of the axle speeds, an error, not a loss)
+    The two sides agree to the integration's tolerance; `residual` says by how much.
+    """
+    from wheelterrain.cosim import energy as ledger
+    from wheelterrain.cosim import master
+    from wheelterrain.cosim.rover import GRAVITY
+
+    _check_file_target(json_target)
+    slips_of = {c["case"]: c["slip_paper"] for c in master.table3()["cases"]}
+    chosen = [c.strip().upper() for c in cases.split(",") if c.strip()]
+    unknown = [c for c in chosen if c not in slips_of]
+    if system == "rig" and (not chosen or unknown):
+        _usage_error(f"--cases {cases!r}: choose among {', '.join(slips_of)}")
+    ps = _load(preset, assignments)
+    rows = []
+    try:
+        if system == "rig":
+            stop = ledger.STOP if stop is None else stop
+            for case in chosen:
+                rows.append({"case": case, **ledger.rig_ledger(ps, slips_of[case], stop)})
+            terms = ledger.TERMS
+        else:
+            stop = 10.0 if stop is None else stop
+            rows.append({"case": f"level, {gravity}", **ledger.rover_ledger(
+                ps, {"rover.gravity": GRAVITY[gravity]}, stop)})
+            terms = ledger.ROVER_TERMS
+    except WheelTerrainError as err:
+        _fail(err)
+    except RuntimeError as err:  # CVODES gave up: the run left the model's domain
+        click.echo(f"error: the {system}'s run could not be integrated ({str(err)[-300:]})",
+                   err=True)
+        sys.exit(EXIT_NUMERICAL)
+    units = {k: "J" for k in terms} | {"residual": "J", "relative_residual": "1", "stop": "s",
+                                       "final_sinkage": "m", "mean_drawbar_pull": "N"}
+    document = {"system": system, "preset": preset, "set": list(assignments), "stop": stop,
+                "runs": rows, "units": units}
+    if _emit_json(json_target, document):
+        return
+    click.echo(f"energy over {stop:g} s, the {system}, preset {preset}"
+               + (f", {' '.join(assignments)}" if assignments else "") + " [J, % of supplied]")
+    click.echo(f"  {'term':11}" + "".join(f"{r['case']:>19}" for r in rows))
+    for term in terms:
+        cells = []
+        for r in rows:
+            supplied = sum(r[k] for k in terms if k in ledger.SUPPLIED)
+            cells.append(f"{r[term]:10.4g} {100 * r[term] / supplied:6.2f} %")
+        click.echo(f"  {term:11}" + "".join(f"{c:>19}" for c in cells))
+    click.echo(f"  {'residual':11}" + "".join(f"{r['residual']:19.1e}" for r in rows))
+    if system == "rig":
+        click.echo(f"  {'pull [N]':11}" + "".join(f"{r['mean_drawbar_pull']:19.3f}"
+                                                for r in rows) + "   (mean, last second)")
+
+
 def _platforms(fmu) -> str:
     """" (linux64, win64)": the platforms an FMU has binaries for."""
     import zipfile
