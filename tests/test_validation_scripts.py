@@ -105,8 +105,8 @@ def test_report_states_the_pull_floor_from_its_figures(monkeypatch, floor, sinka
 
 
 def test_modelica_examples_runs_the_slip_ramp_in_rumoca_and_draws_it(tmp_path):
-    """Without MSL the script runs SlipRamp alone, says why RigC2 was not run, and prints and
-    writes the measured difference from the Python model."""
+    """Without MSL the script runs SlipRamp and RoverSlope, says why RigC2 was not run, and
+    prints and writes the measured difference from the Python model."""
     pytest.importorskip("rumoca")
     out, figures = tmp_path / "examples.png", tmp_path / "figures.json"
     env = {k: v for k, v in os.environ.items() if k != "MODELICAPATH"}
@@ -115,8 +115,9 @@ def test_modelica_examples_runs_the_slip_ramp_in_rumoca_and_draws_it(tmp_path):
                          text=True, check=True, env=env, timeout=900)
     assert "put the Modelica Standard Library 4.x on MODELICAPATH" in run.stderr
     result = json.loads(figures.read_text())
-    assert set(result) == {"SlipRamp"}
-    assert 0 <= result["SlipRamp"]["sinkage"] < 1e-8
-    assert 0 <= result["SlipRamp"]["drawbar_pull"] < 1e-8
+    assert set(result) == {"SlipRamp", "RoverSlope"}
+    for example in result.values():
+        assert 0 <= example["sinkage"] < 1e-8
+        assert 0 <= example["drawbar_pull"] < 1e-8
     assert f"sinkage {result['SlipRamp']['sinkage']:.1e}" in run.stdout
     assert out.stat().st_size > 10_000

@@ -4,10 +4,10 @@
                                            [--stop 4] [--json FILE]
 
 Builds the library (as `wheelterrain build --flavor modelica`) into a temporary folder, runs
-Examples.SlipRamp (no Modelica Standard Library needed) and, where MSL 4.x is on MODELICAPATH,
-Examples.RigC2 (MSL flanges and blocks) with rumoca; prints the largest relative difference
-from the reference results the library ships (Resources/Reference, written by the Python
-model) and plots both.
+Examples.SlipRamp and Examples.RoverSlope (no Modelica Standard Library needed) and, where MSL
+4.x is on MODELICAPATH, Examples.RigC2 (MSL flanges and blocks) with rumoca; prints the largest
+relative difference from the reference results the library ships (Resources/Reference,
+written by the Python model) and plots them.
 """
 
 from __future__ import annotations
@@ -50,6 +50,19 @@ def main() -> int:
                 "tool": {k: np.asarray(result[k]) for k in ("sinkage", "drawbar_pull")}}
         figures = {"SlipRamp": {k: _relative(ramp["tool"][k], ref[k])
                                 for k in ("sinkage", "drawbar_pull")}}
+        model = session.loads("model Run\n  extends WheelTerrain.Examples.RoverSlope;\n"
+                              "end Run;\n", model="Run")
+        result = model.simulate((0.0, reference.ROVER_STOP), dt=reference.ROVER_INTERVAL,
+                                config=rumoca.SimConfig(solver="rk-like", rtol=1e-13,
+                                                        atol=1e-15))
+        ref = reference.read(root / "lib", "RoverSlope")
+        columns = {"drawbar_pull": ("rear_left.drawbar_pull", "rear_left.drawbar_pull"),
+                   "sinkage": ("chassis.sinkage[3]", "rear_left.sinkage")}
+        tool = {"time": np.asarray(result.time)}
+        tool.update({k: np.asarray(result[name]) for k, (name, _) in columns.items()})
+        python = {"time": ref["time"], **{k: ref[col] for k, (_, col) in columns.items()}}
+        climb = {"name": ramp["name"], "tool": tool, "python": python}
+        figures["RoverSlope"] = {k: _relative(tool[k], python[k]) for k in columns}
         rig = None
         msl = reference.find_msl()
         if msl is None:
@@ -73,7 +86,7 @@ def main() -> int:
     for name, errors in figures.items():
         print(f"{name}: largest difference from the Python model, relative to the largest "
               "value: " + ", ".join(f"{k} {v:.1e}" for k, v in errors.items()))
-    plots.modelica_examples(ramp, rig, args.out)
+    plots.modelica_examples(ramp, rig, args.out, rover=climb)
     print(f"wrote {args.out}")
     if args.json:
         args.json.write_text(json.dumps(figures, indent=2) + "\n")

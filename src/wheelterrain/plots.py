@@ -316,21 +316,28 @@ def _tool_against_python(ax, x: str, run: dict, marks: tuple[dict, dict], title:
     ax.legend(lines[0] + more[0], lines[1] + more[1], fontsize=8, loc="lower right")
 
 
-def modelica_examples(ramp: dict, rig: dict | None, path: Path) -> None:
+def modelica_examples(ramp: dict, rig: dict | None, path: Path, rover: dict | None = None
+                      ) -> None:
     """The Modelica library's examples run by a Modelica tool against the Python model: the
-    quasi-static wheel's slip ramp (left: drawbar pull and sinkage against slip) and, where
-    run, the rig at C2 on MSL components (right: drawbar pull and sinkage against time).
-    ``ramp``/``rig``: {"tool": {column: values}, "python": {column: values}, "name": str}."""
-    fig, axes = plt.subplots(1, 2 if rig else 1, figsize=(11 if rig else 6, 4.2),
-                             squeeze=False)
+    quasi-static wheel's slip ramp (drawbar pull and sinkage against slip), where given the
+    rover's climb (one wheel's drawbar pull and sinkage against time) and, where run, the rig
+    at C2 on MSL components (drawbar pull and sinkage against time).
+    ``ramp``/``rig``/``rover``: {"tool": {column: values}, "python": {column: values},
+    "name": str}."""
+    panels = 1 + (rover is not None) + (rig is not None)
+    fig, axes = plt.subplots(1, panels, figsize=(5.5 * panels, 4.2), squeeze=False)
     _tool_against_python(axes[0, 0], "slip", ramp, (
         {"marker": "o", "ls": "none", "color": "C0", "mfc": "none"},
         {"marker": "s", "ls": "none", "color": "C1", "mfc": "none"}),
         "Examples.SlipRamp (no MSL)")
-    if rig:
-        _tool_against_python(axes[0, 1], "time", rig, (
-            {"ls": ":", "color": "k", "lw": 1.2}, {"ls": ":", "color": "C3", "lw": 1.2}),
-            "Examples.RigC2 (MSL flanges and blocks)")
+    k = 1
+    for run, title in ((rover, "Examples.RoverSlope (no MSL): rear-left wheel"),
+                       (rig, "Examples.RigC2 (MSL flanges and blocks)")):
+        if run:
+            _tool_against_python(axes[0, k], "time", run, (
+                {"ls": ":", "color": "k", "lw": 1.2}, {"ls": ":", "color": "C3", "lw": 1.2}),
+                title)
+            k += 1
     fig.suptitle("The generated Modelica library, simulated by rumoca, against the Python model")
     fig.tight_layout()
     _save(fig, path)
