@@ -253,14 +253,8 @@ class Soil:
     def map_values(self) -> dict[str, float]:
         """Terrain.fmu's parameters (ground.NAMES) for this map (the rut record's
         terrain.cell and terrain.lookahead at their defaults)."""
-        out = {**ground.defaults(), **{name: self.base[name] for name in ground.SOIL_NAMES}}
-        out.update({patch: self.patched[soil]
-                    for soil, patch in zip(ground.SOIL_NAMES, ground.PATCH_NAMES, strict=True)})
-        if self.patch:
-            out.update({"patch.start": self.start, "patch.end": self.end})
-        else:
-            out.update({"patch.start": 0.0, "patch.end": 0.0})
-        return out
+        start, end = (self.start, self.end) if self.patch else (0.0, 0.0)
+        return ground.map_values(self.base, self.patched, start, end)
 
 
 @dataclass
@@ -650,9 +644,9 @@ STALL_SLIP = 0.95
 # --- scenarios ----------------------------------------------------------------------------------
 
 GRAVITY = {"earth": 9.81, "moon": 1.62}
-SOFT = {"soil.k_phi": 0.5, "soil.phi": 0.85}
+SOFT = ground.SOFT_PATCH
 """The soft patch: k_phi' and phi scaled by these factors (a looser soil)."""
-PATCH_START, PATCH_LENGTH = 0.50, 0.30  # m along the path (the front axle starts at 0.2 m)
+PATCH_START, PATCH_LENGTH = ground.SOFT_PATCH_START, ground.SOFT_PATCH_LENGTH
 
 
 @dataclass(frozen=True)
@@ -713,8 +707,7 @@ def scenario_soil(name: str, terrain: ParameterSet) -> Soil:
     soft patch of ``soft-patch`` (a terrain map: Terrain.fmu in the FMU engines)."""
     if name != "soft-patch":
         return Soil(terrain)
-    return Soil(terrain, {k: terrain[k] * f for k, f in SOFT.items()}, PATCH_START,
-                PATCH_START + PATCH_LENGTH)
+    return Soil(terrain, ground.soft_values(terrain), PATCH_START, PATCH_START + PATCH_LENGTH)
 
 
 def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",

@@ -271,12 +271,21 @@ def rig_on_contact(p, rig_values, sinkage_start: float) -> dict:
             "rig": rp}
 
 
-def rover_on_contact(p, r) -> dict:
+def _soil_from_map(p, position, g: dict):
+    """The parameter vector ``p`` with its soil rows the map ``g``'s (ground.NAMES by name) at
+    ``position`` (the rows are side by side in the table)."""
+    first, last = INDEX[ground.SOIL_NAMES[0]], INDEX[ground.SOIL_NAMES[-1]]
+    return ca.vertcat(p[:first], *ground.soil_at(position, g), p[last + 1:])
+
+
+def rover_on_contact(p, r, g: dict | None = None) -> dict:
     """The rover in continuous time on four contacts with the soil's memory: the RoverChassis
     FMU's model-exchange rates (:func:`wheelterrain.model.rover.rates`) with each wheel's
     WheelTerrain (``contact_memory``, its wheel angle and plastic sinkage states), no rut
     record along the track (model exchange records none), every wheel on the soil of ``p``
-    (the table's parameter vector) and the rover's parameters ``r`` (by name). Returns
+    (the table's parameter vector), or where a terrain map ``g`` (ground.NAMES by name) is
+    given on its soil at the wheel's position, and the rover's parameters ``r`` (by name).
+    Returns
     ``state`` and ``rate`` (SX: rover.STATES, the four wheel angles, the four plastic
     sinkages), ``x`` (the chassis' states by name), ``u`` (the chassis' inputs by name: the
     forces as SX of the state) and ``wheels`` (per wheel: every contact output,
@@ -293,7 +302,9 @@ def rover_on_contact(p, r) -> dict:
         z, z_rate = rover.wheel_kinematics(xs, r, wheel)
         omega = xs[rover.STATES.index(f"{wheel}.wheel_speed")]
         traction = slips(omega, speed, radius)[0]
-        out = _contact_with_damper(z, z_rate, traction, angles[k], plastics[k], speed, p)
+        pk = p if g is None else _soil_from_map(
+            p, rover.wheel_position(r, xs[rover.STATES.index("position")], wheel), g)
+        out = _contact_with_damper(z, z_rate, traction, angles[k], plastics[k], speed, pk)
         for name in rover.WHEEL_FORCES:
             u[f"{wheel}.{name}"] = out[name]
         u[f"{wheel}.wheel_speed_command"] = 0.0

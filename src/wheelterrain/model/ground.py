@@ -66,6 +66,34 @@ def soil_at(position, p) -> tuple:
                  for soil, patch in zip(SOIL_NAMES, PATCH_NAMES, strict=True))
 
 
+SOFT_PATCH = {"soil.k_phi": 0.5, "soil.phi": 0.85}
+"""The rover's soft patch: k_phi' and phi scaled by these factors (a looser soil)."""
+SOFT_PATCH_START, SOFT_PATCH_LENGTH = 0.50, 0.30
+"""m along the path: where the soft patch lies (the rover's front axle starts at 0.2 m)."""
+
+
+def map_values(base, patched, start: float, end: float) -> dict[str, float]:
+    """The map's parameters (NAMES) for a soil ``base`` with a patch of the soil ``patched``
+    on [start, end) m (both indexed by table name; start = end: no patch), the rut record's
+    rows at their defaults."""
+    out = {**defaults(), **{name: base[name] for name in SOIL_NAMES}}
+    out.update({patch: patched[soil] for soil, patch in zip(SOIL_NAMES, PATCH_NAMES,
+                                                             strict=True)})
+    out.update({"patch.start": start, "patch.end": end})
+    return out
+
+
+def soft_values(base) -> dict[str, float]:
+    """The soft patch's soil values that differ from the soil ``base`` (by table name)."""
+    return {k: base[k] * f for k, f in SOFT_PATCH.items()}
+
+
+def soft_patch(base) -> dict[str, float]:
+    """The map of the rover's soft-patch scenario over the soil ``base`` (by table name)."""
+    patched = {**{n: base[n] for n in SOIL_NAMES}, **soft_values(base)}
+    return map_values(base, patched, SOFT_PATCH_START, SOFT_PATCH_START + SOFT_PATCH_LENGTH)
+
+
 def defaults() -> dict[str, float]:
     """The map's parameters at their rows' defaults: one soil, no patch."""
     rows = {p.name: p for p in (*TABLE, *GROUND_TABLE)}
