@@ -227,7 +227,7 @@ def test_every_function_has_an_external_twin_with_its_signature_and_derivative(b
 
 
 def test_the_components_contact_function_is_replaceable_by_the_external_one(built):
-    for component, stem in (("Contact", "contact"), ("Wheel", "contact"),
+    for component, stem in (("Contact", "contact"), ("PartialWheel", "contact"),
                             ("QuasiStaticWheel", "quasiStatic")):
         text = (built / "Components" / f"{component}.mo").read_text()
         interface = f"{stem[0].upper()}{stem[1:]}"

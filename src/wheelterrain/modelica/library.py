@@ -17,12 +17,13 @@ level), and where each part comes from:
 - ``Records``: the parameter table as records with ``Modelica.Units.SI`` types, ranges,
   descriptions and sources; every preset a record (rumoca 0.10 cannot flatten a reference to
   a record constant); ``parameterVector``.
-- ``Components``: ``QuasiStaticWheel``, ``Wheel`` and ``RoverChassis`` (no MSL) and
+- ``Components``: ``QuasiStaticWheel``, ``Wheel``, ``MapWheel`` (on the terrain map) and
+  ``RoverChassis`` (no MSL) and
   ``Contact`` on MSL flanges (Rotational hub, Translational axle and vertical), the soil's
   memory a state, each contact function replaceable (generated or external).
 - ``Examples``: ``SteadyC2``, ``SlipRamp``, ``Rover``, ``RoverSlope``, ``RoverDescent``,
-  ``RoverPullTest`` (no MSL) and ``RigC1`` ... ``RigC4`` (the paper's rig from MSL
-  components), with ``experiment`` annotations; reference results in
+  ``RoverPullTest``, ``RoverSoftPatch`` (no MSL) and ``RigC1`` ... ``RigC4`` (the paper's
+  rig from MSL components), with ``experiment`` annotations; reference results in
   ``Resources/Reference`` written by the Python model.
 - ``UsersGuide``: conventions, slips, citations, the name map, what was tested in which tool.
 
@@ -578,11 +579,26 @@ def _components(lib: Library) -> None:
         "QuasiStaticWheel", N=len(NAMES), QUASI_ROWS=rows))
     _class_file(lib, where, "Contact", _template(
         "Contact", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS)))
-    _class_file(lib, where, "Wheel", _template(
-        "Wheel", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS)))
+    _class_file(lib, where, "PartialWheel", _template(
+        "PartialWheel", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS)))
+    _class_file(lib, where, "Wheel", _template("Wheel", N=len(NAMES)))
+    soil = [NAMES.index(n) for n in ground.SOIL_NAMES]
+    if soil != list(range(soil[0], soil[0] + len(soil))):
+        raise ValueError("MapWheel needs the soil.* rows side by side in the table")
+    in_map = [ground.NAMES.index(n) for n in ground.SOIL_NAMES]
+    patch = [ground.NAMES.index(n) for n in ground.PATCH_NAMES]
+    for rows in (in_map, patch):
+        if rows != list(range(rows[0], rows[0] + len(rows))):
+            raise ValueError("MapWheel needs the map's soil and patch rows side by side")
+    _class_file(lib, where, "MapWheel", _template(
+        "MapWheel", N=len(NAMES), G=len(ground.NAMES), SOIL_FIRST=soil[0],
+        SOIL_AFTER=soil[-1] + 2, START=ground.NAMES.index("patch.start") + 1,
+        END=ground.NAMES.index("patch.end") + 1, PATCH_FIRST=patch[0] + 1,
+        PATCH_LAST=patch[-1] + 1, MAP_SOIL_FIRST=in_map[0] + 1, MAP_SOIL_LAST=in_map[-1] + 1))
     _class_file(lib, where, "RoverChassis", _rover_chassis())
     lib.package(LIBRARY, "Components", "The wheel on the soil as components",
-                ["QuasiStaticWheel", "Contact", "Wheel", "RoverChassis"])
+                ["QuasiStaticWheel", "Contact", "PartialWheel", "Wheel", "MapWheel",
+                 "RoverChassis"])
 
 
 def _state(name: str) -> str:
@@ -637,34 +653,52 @@ def _rover_chassis() -> str:
     return "\n".join(lines) + "\n"
 
 
-def _rover_example() -> str:
+def _rover_example(name: str = "Rover") -> str:
+    """Examples.Rover (four Wheels on one soil) or, for an example with a terrain map
+    (reference.ROVER_MAPS), four MapWheels on the map at their axles' positions."""
     n = len(rover.WHEELS)
+    stop, interval = reference.rover_run(name)
+    mapped = name in reference.ROVER_MAPS
+    what = ("on level ground with a patch of looser soil (k_phi' and phi scaled down) on "
+            f"[{ground.SOFT_PATCH_START:g}, {ground.SOFT_PATCH_START + ground.SOFT_PATCH_LENGTH:g})"
+            " m, under the front axle, then the rear: four MapWheels" if mapped else
+            "on level ground at the commanded rim speed: four Wheels")
     lines = [
-        'model Rover "The rover on level ground at the commanded rim speed: four Wheels on a '
-        'RoverChassis, the default preset\'s soil (no Modelica Standard Library needed)"',
+        f'model {name} "The rover {what} on a RoverChassis, the default preset\'s soil (no '
+        'Modelica Standard Library needed)"',
         f"  parameter Real p[{len(NAMES)}] = {LIBRARY}.Data.rashidPatch "
         '"every wheel\'s soil and model";',
         f"  parameter Real r[{_sizes()['r']}] = {LIBRARY}.Data.rover "
-        '"the rover\'s parameters (its input profile: the rover.ramp_time ... rows)";',
-        f"  {LIBRARY}.Components.RoverChassis chassis(r=r, slope=0, towing_force=0,",
-        f"    wheel_speed_command=zeros({n}), motor_torque_command=zeros({n}));"]
-    lines += [f"  {LIBRARY}.Components.Wheel {w}(p=p);" for w in rover.WHEELS]
+        '"the rover\'s parameters (its input profile: the rover.ramp_time ... rows)";']
+    if mapped:
+        g = reference.ROVER_MAPS[name]
+        lines.append(f"  parameter Real g[{len(ground.NAMES)}] = "
+                     f"{_vector([g[k] for k in ground.NAMES])} "
+                     '"the terrain map (Data.terrain with the soft patch)";')
+    lines += [f"  {LIBRARY}.Components.RoverChassis chassis(r=r, slope=0, towing_force=0,",
+              f"    wheel_speed_command=zeros({n}), motor_torque_command=zeros({n}));"]
+    lines += [f"  {LIBRARY}.Components.MapWheel {w}(p=p, g=g);" if mapped else
+              f"  {LIBRARY}.Components.Wheel {w}(p=p);" for w in rover.WHEELS]
     lines += ['  Real speed(unit="m/s") = chassis.speed;',
               '  Real pitch(unit="rad") = chassis.pitch;', "equation"]
+    half = f"r[{rover.ROVER_NAMES.index('rover.wheelbase') + 1}]/2"
     for k, w in enumerate(rover.WHEELS, start=1):
         lines += [f"  {w}.sinkage = chassis.sinkage[{k}];",
                   f"  {w}.sinkage_rate = chassis.sinkage_rate[{k}];",
                   f"  {w}.wheel_speed = chassis.wheel_speed[{k}];",
                   f"  {w}.carriage_speed = chassis.speed;"]
+        if mapped:  # rover.wheel_position: the axle ahead of or behind the reference point
+            lines.append(f"  {w}.position = chassis.position "
+                         f"{'+' if w in rover.FRONT else '-'} {half};")
         lines += [f"  chassis.{q}[{k}] = {w}.{q};"
                   for q in ("normal_force", "drawbar_pull", "torque")]
-    lines += [f"  annotation(experiment(StartTime=0, StopTime={reference.ROVER_STOP}, "
-              f"Interval={reference.ROVER_INTERVAL}, Tolerance=1e-8),",
-              '    Documentation(info="<html><p>Reference: Resources/Reference/Rover.csv (the '
+    lines += [f"  annotation(experiment(StartTime=0, StopTime={stop}, "
+              f"Interval={interval}, Tolerance=1e-8),",
+              f'    Documentation(info="<html><p>Reference: Resources/Reference/{name}.csv (the '
               "Python model: the RoverChassis FMU's model-exchange rates on four contacts with "
               'memory). Model exchange records no rut along the track (as the FMUs\' model '
               'exchange): the rear wheels do not meet the front wheels\' rut here.</p></html>"));',
-              "end Rover;"]
+              f"end {name};"]
     return "\n".join(lines) + "\n"
 
 
@@ -680,6 +714,9 @@ def _examples(lib: Library) -> None:
         "Rig", sinkage_start=translate.literal(reference.RIG_SINKAGE_START), **rig))
     _class_file(lib, where, "Rover", _rover_example())
     order = ["SteadyC2", "SlipRamp", "Rover"]
+    for example in reference.ROVER_MAPS:
+        _class_file(lib, where, example, _rover_example(example))
+        order.append(example)
     for example, profile in reference.ROVER_PROFILES.items():
         if example == "Rover":
             continue

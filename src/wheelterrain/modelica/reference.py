@@ -24,7 +24,7 @@ import numpy as np
 
 from wheelterrain import presets
 from wheelterrain.fmu import functions as fmu_functions
-from wheelterrain.model import api, rig, rover
+from wheelterrain.model import api, ground, rig, rover
 from wheelterrain.model.slip import traction_from_paper
 from wheelterrain.parameters import RIG_TABLE
 
@@ -116,6 +116,13 @@ a stall at 27 deg, a slide at 8.9 deg); on level ground, a force holding the rov
 at 1 N/s (the pull test's profile, faster: the CLI's rises at 0.05 % of the weight per second
 until the rover stalls, an hour). Starting on the slope instead, the rover would slide while
 it sinks into the soil from its start."""
+ROVER_MAPS = {"RoverSoftPatch": ground.soft_patch(presets.load())}
+"""The rover examples on a terrain map (MapWheels): the soft-patch scenario's map over the
+default preset's soil."""
+ROVER_RUNS = {"RoverSoftPatch": (40.0, 0.05)}
+"""(stop, interval) [s] of the rover examples that differ from ROVER_STOP, ROVER_INTERVAL: the
+soft patch lies under the front axle from 9.4 s to 19.0 s, under the rear from 22.1 s to
+31.7 s."""
 ROVER_DESCRIPTIONS = {
     "RoverSlope": "after 3 s on level ground the slope rises at 2 deg/s to a 10 deg climb",
     "RoverDescent": "after 3 s on level ground the slope falls at 2 deg/s to a 5 deg descent, "
@@ -125,8 +132,13 @@ ROVER_DESCRIPTIONS = {
 
 
 def rover_parameters(example: str = "Rover") -> dict[str, float]:
-    """The rover's parameters of ``example`` (ROVER_PROFILES)."""
-    return {**rover.defaults(), **ROVER_PROFILES[example]}
+    """The rover's parameters of ``example`` (ROVER_PROFILES; the map examples: defaults)."""
+    return {**rover.defaults(), **ROVER_PROFILES.get(example, {})}
+
+
+def rover_run(example: str) -> tuple[float, float]:
+    """(stop, interval) [s] of the rover example ``example``."""
+    return ROVER_RUNS.get(example, (ROVER_STOP, ROVER_INTERVAL))
 
 
 def rover_trajectory(stop: float = ROVER_STOP, interval: float = ROVER_INTERVAL,
@@ -136,7 +148,7 @@ def rover_trajectory(stop: float = ROVER_STOP, interval: float = ROVER_INTERVAL,
     plastic sinkage states), the default preset's soil and the example's rover parameters,
     integrated by CVODES at 1e-12: one row per output time, ROVER_COLUMNS."""
     loop = fmu_functions.rover_on_contact(ca.DM(presets.load().vector()),
-                                          rover_parameters(example))
+                                          rover_parameters(example), ROVER_MAPS.get(example))
     report = {f"{w}.{q}": loop["wheels"][w][q] for w in rover.WHEELS
               for q in ("sinkage", "drawbar_pull", "normal_force", "wheel_speed")}
     report.update({k: loop["x"][k] for k in ("speed", "position", "heave", "pitch")})
@@ -198,6 +210,7 @@ def files() -> dict[str, str]:
     out["SlipRamp.csv"] = _csv(columns, [[r[k] for k in columns] for r in ramp])
     for case, s in RIG_CASES.items():
         out[f"Rig{case}.csv"] = _csv(RIG_COLUMNS, rig_trajectory(s))
-    for example in ROVER_PROFILES:
-        out[f"{example}.csv"] = _csv(ROVER_COLUMNS, rover_trajectory(example=example))
+    for example in (*ROVER_PROFILES, *ROVER_MAPS):
+        stop, interval = rover_run(example)
+        out[f"{example}.csv"] = _csv(ROVER_COLUMNS, rover_trajectory(stop, interval, example))
     return out

@@ -1,6 +1,5 @@
-block Wheel "The WheelTerrain FMU's contact as a block (its model exchange): the wheel's angle and the soil's memory its states (no Modelica Standard Library needed)"
-  parameter Real p[${N}] = WheelTerrain.Data.rashidPatch
-    "the parameters in table order (WheelTerrain.Data, Records.parameterVector)";
+partial block PartialWheel "The WheelTerrain FMU's contact as a block (its model exchange), its parameter vector pk given by the block that extends it"
+  Real pk[${N}] "the parameters the contact takes, in table order";
   replaceable function contactFunction = WheelTerrain.Functions.contact
     constrainedby WheelTerrain.Functions.Interfaces.Contact
     "the contact: Functions.contact (generated, the default) or Functions.External.contact (CasADi's C)";
@@ -18,13 +17,13 @@ block Wheel "The WheelTerrain FMU's contact as a block (its model exchange): the
   output Real y[${CONTACT_ROWS}] "every output of Functions.contact, Functions.Index order";
 equation
   der(wheel_angle) = wheel_speed;
-  slip = WheelTerrain.Functions.tractionSlip(wheel_speed, carriage_speed, p);
+  slip = WheelTerrain.Functions.tractionSlip(wheel_speed, carriage_speed, pk);
   assert(slip >= -1 and slip <= 1, "Wheel: the traction slip left the model's range [-1, 1]");
-  y = contactFunction(sinkage, sinkage_rate, slip, wheel_angle, plastic_sinkage, carriage_speed, p);
+  y = contactFunction(sinkage, sinkage_rate, slip, wheel_angle, plastic_sinkage, carriage_speed, pk);
   der(plastic_sinkage) = y[WheelTerrain.Functions.Index.plastic_rate];
   normal_force = y[WheelTerrain.Functions.Index.normal_force];
   drawbar_pull = y[WheelTerrain.Functions.Index.drawbar_pull];
   torque = y[WheelTerrain.Functions.Index.torque];
   rut_left = y[WheelTerrain.Functions.Index.rut_left];
-  annotation(Documentation(info="<html><p>The WheelTerrain FMU's model exchange as a block: the same inputs, the same contact, its states wheel_angle and plastic_sinkage.</p></html>"));
-end Wheel;
+  annotation(Documentation(info="<html><p>The WheelTerrain FMU's model exchange as a block: the same inputs, the same contact, its states wheel_angle and plastic_sinkage. Wheel gives it one parameter vector, MapWheel the soil of a terrain map at the wheel's position.</p></html>"));
+end PartialWheel;

@@ -1,0 +1,7 @@
+block Wheel "The WheelTerrain FMU's contact as a block (its model exchange): the wheel's angle and the soil's memory its states (no Modelica Standard Library needed)"
+  extends WheelTerrain.Components.PartialWheel;
+  parameter Real p[${N}] = WheelTerrain.Data.rashidPatch
+    "the parameters in table order (WheelTerrain.Data, Records.parameterVector)";
+equation
+  pk = p;
+end Wheel;
