@@ -38,6 +38,24 @@ def native_dir(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
+def modelica_root(tmp_path_factory):
+    """The Modelica library as `wheelterrain build --flavor modelica` writes it, once per run:
+    the folder holding WheelTerrain/ (tests read it, never write into it)."""
+    from wheelterrain.modelica import library
+
+    out = tmp_path_factory.mktemp("modelica")
+    library.write(out)
+    return out
+
+
+@pytest.fixture(scope="session")
+def wine_prefix(tmp_path_factory):
+    """One Wine prefix for every test that runs a win64 binary under Wine (a new prefix takes
+    ~20 s to set up)."""
+    return tmp_path_factory.mktemp("wine") / "prefix"
+
+
+@pytest.fixture(scope="session")
 def built_root(tmp_path_factory, fmu_dir, native_dir):
     """A folder with both flavours as pythonfmu/ and native/ (native/fmi3/ inside), built once
     per test run (links to :func:`fmu_dir` and :func:`native_dir`): tests only read it."""

@@ -40,9 +40,9 @@ pytestmark = pytest.mark.skipif(compiled.compiler() is None,
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory) -> Path:
+def built(modelica_root) -> Path:
     """The library's folder WheelTerrain/, as `wheelterrain build --flavor modelica` writes it."""
-    return library.write(tmp_path_factory.mktemp("external"))
+    return modelica_root / library.LIBRARY
 
 
 def _cases() -> list[tuple]:
@@ -171,7 +171,7 @@ def test_a_host_linked_against_the_static_archive_gives_the_shared_librarys_numb
 @pytest.mark.slow
 @pytest.mark.skipif(build_native.cross_compiler() is None or WINE is None,
                     reason="needs gcc-mingw-w64-x86-64 and wine (.ci/run installs them)")
-def test_under_wine_the_win64_dll_gives_the_linux64_numbers(built, host):
+def test_under_wine_the_win64_dll_gives_the_linux64_numbers(built, host, wine_prefix):
     folder, cases = host
     dll = built / "Resources/Library/win64" / external.BINARIES["win64"][0]
     shutil.copyfile(dll, folder / dll.name)  # found beside the executable
@@ -179,7 +179,7 @@ def test_under_wine_the_win64_dll_gives_the_linux64_numbers(built, host):
     subprocess.run([build_native.cross_compiler(), "-O1", "-Wall", "-Werror", "-I",
                     str(built / "Resources/C-Sources"), str(folder / "host.c"),
                     str(folder / dll.name), "-o", str(exe)], check=True, capture_output=True)
-    env = {**os.environ, "WINEPREFIX": str(folder / "wineprefix"), "WINEDEBUG": "-all"}
+    env = {**os.environ, "WINEPREFIX": str(wine_prefix), "WINEDEBUG": "-all"}
     run = subprocess.run([WINE, str(exe), str(folder / "inputs.txt")], capture_output=True,
                          text=True, check=False, env=env, cwd=folder)
     assert run.returncode == 0, run.stderr[-2000:]

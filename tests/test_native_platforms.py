@@ -31,7 +31,7 @@ pytestmark = [
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory, native_dir):
+def built(tmp_path_factory, native_dir, wine_prefix):
     root = tmp_path_factory.mktemp("platforms")
     built = [*native_dir.glob("*.fmu"), *(native_dir / "fmi3").glob("*.fmu")]
     fmus = {("3" if f.parent.name == "fmi3" else "2", f.stem): f for f in built}
@@ -42,7 +42,7 @@ def built(tmp_path_factory, native_dir):
     subprocess.run([nativebuild.cross_compiler(), "-O1", "-Wall", "-Werror", "-I", headers,
                     str(HERE / "fmi_host.c"), "-o", str(hosts["win64"])], check=True)
     unzip = {key: extract(str(fmu)) for key, fmu in fmus.items()}
-    yield {"fmus": fmus, "unzip": unzip, "hosts": hosts, "prefix": root / "wineprefix"}
+    yield {"fmus": fmus, "unzip": unzip, "hosts": hosts, "prefix": wine_prefix}
     for d in unzip.values():
         shutil.rmtree(d, ignore_errors=True)
 
