@@ -28,7 +28,6 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
-import subprocess
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
@@ -135,9 +134,9 @@ def sources(entries: Sequence) -> dict[str, str]:
 
 def _run(command: list[str], what: str) -> None:
     try:
-        run = subprocess.run(command, capture_output=True, text=True, check=False)
-    except OSError as err:
-        raise ExternalBuildError(f"cannot run {command[0]!r} for {what}: {err}") from err
+        run = compiled.run_compiler(command)
+    except compiled.CompileError as err:
+        raise ExternalBuildError(f"{what}: {err}") from err
     if run.returncode != 0:
         raise ExternalBuildError(f"{what}: {command[0]} failed:\n{run.stderr[:4000]}")
 
@@ -192,15 +191,14 @@ def build(c_sources: Path, library: Path, say=lambda message: None) -> list[str]
         _run([win, *WIN64_FLAGS, "-I", str(c_sources), str(source), "-o",
               str(folder / BINARIES["win64"][0])], "Functions.External (win64)")
 
-    for platform, compiler, make, missing in (
-            ("linux64", cc, linux64, "no C compiler (cc/gcc, or $CC)"),
-            ("win64", win, win64, "no x86_64-w64-mingw32-gcc (Debian/Ubuntu: apt-get install "
-             "gcc-mingw-w64-x86-64)")):
+    for platform, compiler, flags, make, missing in (
+            ("linux64", cc, CFLAGS, linux64, "no C compiler (cc/gcc, or $CC)"),
+            ("win64", win, WIN64_FLAGS, win64, "no x86_64-w64-mingw32-gcc (Debian/Ubuntu: "
+             "apt-get install gcc-mingw-w64-x86-64)")):
         if compiler is None:
             notes.append(f"{missing}: Functions.External has no {platform} binary (C-Sources "
                          "still ship)")
             continue
-        flags = CFLAGS if platform == "linux64" else WIN64_FLAGS
         place = _cached(platform, _fingerprint(c_sources, [compiler], flags), c_sources, make,
                         say)
         folder = library / platform
