@@ -583,13 +583,12 @@ def _components(lib: Library) -> None:
         "PartialWheel", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS)))
     _class_file(lib, where, "Wheel", _template("Wheel", N=len(NAMES)))
     soil = [NAMES.index(n) for n in ground.SOIL_NAMES]
-    if soil != list(range(soil[0], soil[0] + len(soil))):
-        raise ValueError("MapWheel needs the soil.* rows side by side in the table")
     in_map = [ground.NAMES.index(n) for n in ground.SOIL_NAMES]
     patch = [ground.NAMES.index(n) for n in ground.PATCH_NAMES]
-    for rows in (in_map, patch):
+    for rows in (soil, in_map, patch):
         if rows != list(range(rows[0], rows[0] + len(rows))):
-            raise ValueError("MapWheel needs the map's soil and patch rows side by side")
+            raise ValueError("MapWheel needs the soil rows side by side in the table and the "
+                             "map's soil and patch rows side by side in the map's")
     _class_file(lib, where, "MapWheel", _template(
         "MapWheel", N=len(NAMES), G=len(ground.NAMES), SOIL_FIRST=soil[0],
         SOIL_AFTER=soil[-1] + 2, START=ground.NAMES.index("patch.start") + 1,
@@ -653,6 +652,11 @@ def _rover_chassis() -> str:
     return "\n".join(lines) + "\n"
 
 
+def _experiment(stop: float, interval: float) -> str:
+    """An example's experiment annotation (its reference result is at these output times)."""
+    return f"experiment(StartTime=0, StopTime={stop}, Interval={interval}, Tolerance=1e-8)"
+
+
 def _rover_example(name: str = "Rover") -> str:
     """Examples.Rover (four Wheels on one soil) or, for an example with a terrain map
     (reference.ROVER_MAPS), four MapWheels on the map at their axles' positions."""
@@ -692,8 +696,7 @@ def _rover_example(name: str = "Rover") -> str:
                          f"{'+' if w in rover.FRONT else '-'} {half};")
         lines += [f"  chassis.{q}[{k}] = {w}.{q};"
                   for q in ("normal_force", "drawbar_pull", "torque")]
-    lines += [f"  annotation(experiment(StartTime=0, StopTime={stop}, "
-              f"Interval={interval}, Tolerance=1e-8),",
+    lines += [f"  annotation({_experiment(stop, interval)},",
               f'    Documentation(info="<html><p>Reference: Resources/Reference/{name}.csv (the '
               "Python model: the RoverChassis FMU's model-exchange rates on four contacts with "
               'memory). Model exchange records no rut along the track (as the FMUs\' model '
@@ -725,8 +728,7 @@ def _examples(lib: Library) -> None:
         changed = ", ".join(sorted(profile))
         text = (f'model {example} "The rover: {what} (no Modelica Standard Library needed)"\n'
                 f"  extends Rover(r={_vector([r[n] for n in rover.ROVER_NAMES])});\n"
-                f"  annotation(experiment(StartTime=0, StopTime={reference.ROVER_STOP}, "
-                f"Interval={reference.ROVER_INTERVAL}, Tolerance=1e-8),\n"
+                f"  annotation({_experiment(*reference.rover_run(example))},\n"
                 f'    Documentation(info="<html><p>Data.rover with {changed} changed. '
                 f"Reference: Resources/Reference/{example}.csv (the Python model, as for "
                 "Rover). <code>wheelterrain rover --scenario slope|descent|pull-test</code> "
@@ -738,8 +740,7 @@ def _examples(lib: Library) -> None:
     for case, s in reference.RIG_CASES.items():
         text = (f'model Rig{case} "The rig at the paper\'s {case}: slip s = {s}"\n'
                 f"  extends Rig(slip_paper={translate.literal(s)});\n"
-                f"  annotation(experiment(StartTime=0, StopTime={reference.RIG_STOP}, "
-                f"Interval={reference.RIG_INTERVAL}, Tolerance=1e-8),\n"
+                f"  annotation({_experiment(reference.RIG_STOP, reference.RIG_INTERVAL)},\n"
                 f'    Documentation(info="<html><p>Reference: Resources/Reference/Rig{case}.csv '
                 f'(the Python model\'s rig in continuous time).</p></html>"));\n'
                 f"end Rig{case};\n")
@@ -785,12 +786,11 @@ def build_library() -> Library:
     return lib
 
 
-def write(out: Path, binaries: bool = True, notes: list[str] | None = None,
-          say=lambda message: None) -> Path:
+def write(out: Path, notes: list[str] | None = None, say=lambda message: None) -> Path:
     """Write the library to ``out``/WheelTerrain (replacing what is there) and return that
-    folder. ``binaries``: compile Functions.External's C into Resources/Library (what this
-    machine's compilers can build; ``notes`` gets a line per binary that could not be, ``say``
-    a line before each compile)."""
+    folder, Functions.External's C compiled into Resources/Library as far as this machine's
+    compilers can (``notes`` gets a line per binary that could not be built, ``say`` a line
+    before each compile)."""
     import shutil
     import tempfile
 
@@ -800,11 +800,10 @@ def write(out: Path, binaries: bool = True, notes: list[str] | None = None,
     staging = Path(tempfile.mkdtemp(prefix=".WheelTerrain-", dir=out))
     try:
         lib.write(staging)
-        if binaries:
-            resources_ = staging / LIBRARY / "Resources"
-            missing = external.build(resources_ / "C-Sources", resources_ / "Library", say)
-            if notes is not None:
-                notes += missing
+        resources_ = staging / LIBRARY / "Resources"
+        missing = external.build(resources_ / "C-Sources", resources_ / "Library", say)
+        if notes is not None:
+            notes += missing
         target = out / LIBRARY
         if target.exists():
             shutil.rmtree(target)
