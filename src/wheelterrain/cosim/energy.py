@@ -45,8 +45,8 @@ import casadi as ca
 import numpy as np
 
 from wheelterrain.fmu.functions import rig_on_contact, rover_on_contact
-from wheelterrain.model import rover
-from wheelterrain.parameters import RIG_TABLE, ParameterSet
+from wheelterrain.model import rig, rover
+from wheelterrain.parameters import ParameterSet
 
 SOIL_TERMS = ("slip", "compaction", "bulldozing", "damping", "pressing")
 """Where a wheel's contact takes the energy, per wheel [J]."""
@@ -101,9 +101,7 @@ def rig_ledger(params: ParameterSet, slip_paper: float, stop: float = STOP,
     in the soil at SINKAGE_START: each of TERMS [J], ``residual`` (supplied less the rest) and
     ``relative_residual`` (over the motor's work), ``final_sinkage`` [m] and
     ``mean_drawbar_pull`` [N] over the last second."""
-    rp = {row.name: row.default for row in RIG_TABLE}
-    rp.update(rig_values or {})
-    rp["rig.slip_paper"] = float(slip_paper)
+    rp = {**rig.defaults(), **(rig_values or {}), "rig.slip_paper": float(slip_paper)}
     loop = rig_on_contact(ca.DM(params.vector()), rp, SINKAGE_START)
     v, state = loop["values"], loop["state"]
     z_rate, omega, speed = state[1], state[2], v["carriage_speed"]
@@ -132,13 +130,14 @@ def rover_ledger(params: ParameterSet, rover_values: Mapping[str, float] | None 
     no rut record: model exchange): each of ROVER_TERMS [J], ``wheels`` (per wheel its
     SOIL_TERMS), ``residual`` and ``relative_residual``."""
     r = {**rover.defaults(), **(rover_values or {})}
-    loop = rover_on_contact(ca.DM(params.vector()), r)
+    loop = rover_on_contact(ca.DM(params.vector()), r, heave_start=heave_start)
     x, u = loop["x"], loop["u"]
-    slope, towing = rover.effective_inputs(tuple(x.values()), u, r)
+    xs = tuple(x.values())
+    slope, towing = rover.effective_inputs(xs, u, r)
     m, g, d = r["rover.mass"], r["rover.gravity"], r["rover.cg_height"]
     sin_t, cos_t = ca.sin(x["pitch"]), ca.cos(x["pitch"])
     q = x["pitch_rate"]
-    powers = {"motor": sum(rover.motor_torque(tuple(x.values()), u, r, w)
+    powers = {"motor": sum(rover.motor_torque(xs, u, r, w)
                            * (x[f"{w}.wheel_speed"] - q) for w in rover.WHEELS),
               "gravity": m * g * (x["heave_rate"] * ca.cos(slope)
                                   - x["speed"] * ca.sin(slope)),
@@ -151,11 +150,8 @@ def rover_ledger(params: ParameterSet, rover_values: Mapping[str, float] | None 
         for term, power in soil_powers(wheel, x["speed"], wheel["wheel_speed"],
                                        wheel["sinkage_rate"]).items():
             powers[f"{w}.{term}"] = power
-    state = rover.initial_state(r)
-    start = [*state, *([0.0] * (2 * len(rover.WHEELS)))]
-    start[rover.STATES.index("heave")] = heave_start
-    _, path = _integrate(loop["state"], loop["rate"], powers, start, stop)
-    n = len(start)
+    _, path = _integrate(loop["state"], loop["rate"], powers, loop["start"], stop)
+    n = len(loop["start"])
     first, end = path[:, 0], path[:, -1]
     out = dict(zip(powers, (float(w) for w in end[n:]), strict=True))
 

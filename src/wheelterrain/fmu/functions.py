@@ -278,16 +278,16 @@ def _soil_from_map(p, position, g: dict):
     return ca.vertcat(p[:first], *ground.soil_at(position, g), p[last + 1:])
 
 
-def rover_on_contact(p, r, g: dict | None = None) -> dict:
+def rover_on_contact(p, r, g: dict | None = None, heave_start: float = 0.0) -> dict:
     """The rover in continuous time on four contacts with the soil's memory: the RoverChassis
     FMU's model-exchange rates (:func:`wheelterrain.model.rover.rates`) with each wheel's
     WheelTerrain (``contact_memory``, its wheel angle and plastic sinkage states), no rut
     record along the track (model exchange records none), every wheel on the soil of ``p``
     (the table's parameter vector), or where a terrain map ``g`` (ground.NAMES by name) is
     given on its soil at the wheel's position, and the rover's parameters ``r`` (by name).
-    Returns
-    ``state`` and ``rate`` (SX: rover.STATES, the four wheel angles, the four plastic
-    sinkages), ``x`` (the chassis' states by name), ``u`` (the chassis' inputs by name: the
+    Returns ``state`` and ``rate`` (SX: rover.STATES, the four wheel angles, the four plastic
+    sinkages), ``start`` (rover.initial_state ``heave_start`` m in the soil, no memory yet),
+    ``x`` (the chassis' states by name), ``u`` (the chassis' inputs by name: the
     forces as SX of the state) and ``wheels`` (per wheel: every contact output,
     ``damper_force``, ``sinkage``, ``sinkage_rate``, ``wheel_speed``)."""
     radius = slip_radius(p)
@@ -314,6 +314,8 @@ def rover_on_contact(p, r, g: dict | None = None) -> dict:
     omegas = [wheels[w]["wheel_speed"] for w in rover.WHEELS]
     return {"state": ca.vertcat(x, angles, plastics),
             "rate": ca.vertcat(*rover.rates(xs, u, r), *omegas, *extra),
+            "start": [*rover.initial_state(r, heave=heave_start),
+                      *([0.0] * (2 * len(rover.WHEELS)))],
             "x": dict(zip(rover.STATES, xs, strict=True)), "u": u, "wheels": wheels}
 
 

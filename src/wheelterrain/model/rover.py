@@ -239,13 +239,14 @@ def step(x, u, p, h) -> tuple:
     return tuple(nxt[k] for k in STATES), tuple(motor_next[w] for w in WHEELS)
 
 
-def initial_state(p, speed: float | None = None) -> tuple:
-    """At rest on the surface (no sinkage, level), wheels turning at the common reference and
-    the chassis moving at ``speed`` (default: the rim speed, no slip)."""
+def initial_state(p, speed: float | None = None, heave: float = 0.0) -> tuple:
+    """Level, ``heave`` m in the soil (default: on the surface), wheels turning at the common
+    reference and the chassis moving at ``speed`` (default: the rim speed, no slip)."""
     omega = p["rover.rim_speed"] / p["rover.slip_radius"]
     v = p["rover.rim_speed"] if speed is None else speed
     s = dict.fromkeys(STATES, 0.0)
     s["speed"] = v
+    s["heave"] = heave
     for w in WHEELS:
         s[f"{w}.wheel_speed"] = omega
     return tuple(s[k] for k in STATES)

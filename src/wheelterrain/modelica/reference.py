@@ -26,7 +26,6 @@ from wheelterrain import presets
 from wheelterrain.fmu import functions as fmu_functions
 from wheelterrain.model import api, ground, rig, rover
 from wheelterrain.model.slip import traction_from_paper
-from wheelterrain.parameters import RIG_TABLE
 
 STEADY_LOAD = 62.0
 """N: the rig's load in the paper's C1-C4 (Table III), the steady examples' load."""
@@ -37,8 +36,7 @@ RIG_CASES = {"C1": 0.0, "C2": 0.25, "C3": 0.5, "C4": 0.75}
 """The paper's rig cases and their slips s (Abubakar et al., Table III)."""
 RIG_STOP, RIG_INTERVAL = 4.0, 0.01
 RIG_SINKAGE_START = 0.01
-RIG_COLUMNS = ("time", "sinkage", "sinkage_rate", "wheel_speed", "speed_error_integral",
-               "wheel_angle", "plastic_sinkage", "normal_force", "drawbar_pull", "torque")
+RIG_COLUMNS = ("time", *fmu_functions.RIG_LOOP_STATES, *rig.FORCE_INPUTS)
 
 
 def steady_rows(slips: Sequence[float], times: Sequence[float] | None = None) -> list[dict]:
@@ -62,8 +60,7 @@ def rig_trajectory(slip_paper: float, stop: float = RIG_STOP,
                    interval: float = RIG_INTERVAL) -> np.ndarray:
     """The rig at the paper's slip ``slip_paper`` from rest in the soil at RIG_SINKAGE_START
     (wheel at its reference speed, no memory yet): one row per output time, RIG_COLUMNS."""
-    rp = {row.name: row.default for row in RIG_TABLE}
-    rp["rig.slip_paper"] = slip_paper
+    rp = {**rig.defaults(), "rig.slip_paper": slip_paper}
     loop = fmu_functions.rig_on_contact(ca.DM(presets.load().vector()), rp, RIG_SINKAGE_START)
     forces = [loop["values"][k] for k in rig.FORCE_INPUTS]
     return _integrate(loop["state"], loop["rate"], loop["start"],
@@ -96,9 +93,7 @@ ROVER_COLUMNS = ("time", "speed", "position", "heave", "pitch",
 def rover_start() -> list[float]:
     """Examples.Rover's start (rover.STATES order): rover.initial_state at the table's
     defaults, the chassis ROVER_HEAVE_START in the soil."""
-    state = list(rover.initial_state(rover.defaults()))
-    state[rover.STATES.index("heave")] = ROVER_HEAVE_START
-    return state
+    return list(rover.initial_state(rover.defaults(), heave=ROVER_HEAVE_START))
 
 
 ROVER_PROFILES = {
@@ -148,12 +143,12 @@ def rover_trajectory(stop: float = ROVER_STOP, interval: float = ROVER_INTERVAL,
     plastic sinkage states), the default preset's soil and the example's rover parameters,
     integrated by CVODES at 1e-12: one row per output time, ROVER_COLUMNS."""
     loop = fmu_functions.rover_on_contact(ca.DM(presets.load().vector()),
-                                          rover_parameters(example), ROVER_MAPS.get(example))
+                                          rover_parameters(example), ROVER_MAPS.get(example),
+                                          ROVER_HEAVE_START)
     report = {f"{w}.{q}": loop["wheels"][w][q] for w in rover.WHEELS
               for q in ("sinkage", "drawbar_pull", "normal_force", "wheel_speed")}
     report.update({k: loop["x"][k] for k in ("speed", "position", "heave", "pitch")})
-    start = [*rover_start(), *[0.0] * (2 * len(rover.WHEELS))]
-    return _integrate(loop["state"], loop["rate"], start,
+    return _integrate(loop["state"], loop["rate"], loop["start"],
                       ca.vertcat(*(report[c] for c in ROVER_COLUMNS[1:])), stop, interval)
 
 
