@@ -129,6 +129,32 @@ def test_the_rear_wheels_run_in_the_front_wheels_ruts(level, quiet):
     assert b["wheels"]["rear_left"]["sinkage"] > b["wheels"]["front_left"]["rut_left"]
 
 
+def _pull_per_load(run, wheel, since):
+    keep = run.time >= since
+    w = run.wheels[wheel]
+    return w["drawbar_pull"][keep].mean() / w["normal_force"][keep].mean()
+
+
+def test_rear_wheels_pull_more_per_newton_with_the_shear_the_rut_remembers(level, quiet):
+    """The multi-pass effect on a level traverse. With model.rut_shear = 1 the rear wheels, in
+    the front wheels' ruts, count their shear displacement on from the front wheels' and pull
+    more per newton of load than the front wheels, in the run (settled from ~25 s) and in the
+    steady balance at its slip. With the default, 0, they pull less: the contact from the rut's
+    surface is short and mobilises less shear (docs/rover.md)."""
+    assert quiet["model.rut_shear"] == 0
+    for front, rear in rover.TRACKS.values():
+        assert _pull_per_load(level, rear, 15.0) < _pull_per_load(level, front, 15.0)
+    on = quiet.with_values({"model.rut_shear": 1})
+    run = rover_system.simulate(rover_system.Soil(on), {}, stop=40.0)
+    slip = run.wheels["front_left"]["slip"][-1]
+    b = rover.steady_balance({w: on for w in rover.WHEELS}, rover.defaults(), 0.0, slip)
+    for front, rear in rover.TRACKS.values():
+        assert _pull_per_load(run, rear, 25.0) > _pull_per_load(run, front, 25.0)
+        steady = {w: b["wheels"][w]["drawbar_pull"] / b["loads"][w] for w in (front, rear)}
+        assert steady[rear] > steady[front]
+        assert run.wheels[rear]["normal_force"][-1] == pytest.approx(b["loads"][rear], rel=1e-3)
+
+
 def test_pull_test_curve_is_four_single_wheel_curves(quiet):
     r = rover_system.run_scenario("pull-test", quiet, "earth")["figures"]
     assert len(r["pull_curve"]) >= 8

@@ -7,6 +7,7 @@ import itertools
 import json
 import math
 
+import casadi as ca
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -180,6 +181,56 @@ def test_multipass_sinks_less_each_pass_and_leaves_a_rut_near_its_sinkage(form):
     assert off[0] == {**off[1], "pass": 1, "sinkage_increment": off[0]["sinkage"]}
 
 
+@pytest.mark.parametrize("hump", [0, 1])
+def test_the_patch_mean_after_a_sheared_rut_is_the_mean_of_the_shear_law(hump):
+    """patch_shear_mean_after(a0, a) is the mean of g over [a0, a0 + a] (Gauss-Legendre, 200
+    nodes), odd in (a0, a) together, and at a0 = 0 the patch mean of virgin soil."""
+    P = contact._P(ca.DM(_vector("rashid-patch", model__shear_model=hump)))
+    K = float(P["soil.shear_modulus"])
+    x, w = np.polynomial.legendre.leggauss(200)
+    for a0, a in ((0.3, 0.7), (2.0, 0.05), (1e-4, 3.0), (0.8, 1e-5), (0.0, 0.4)):
+        u = a0 + a * (x + 1) / 2
+        g = np.array([float(contact.shear_function(ca.DM(v * K), P)) for v in u])
+        mean = float(np.dot(w, g) / 2)
+        got = float(contact.patch_shear_mean_after(ca.DM(a0), ca.DM(a), P))
+        assert got == pytest.approx(mean, rel=1e-9, abs=1e-12)
+        assert float(contact.patch_shear_mean_after(ca.DM(-a0), ca.DM(-a), P)) == -got
+    assert float(contact.patch_shear_mean_after(ca.DM(0.0), ca.DM(0.4), P)) == pytest.approx(
+        float(contact.patch_shear_mean(ca.DM(0.4), P)), rel=1e-14)
+
+
+@pytest.mark.parametrize("form", FORMS)
+def test_the_shear_a_rut_remembers_raises_the_thrust_in_a_rut_only(form):
+    """model.rut_shear (default 0): on virgin soil it changes nothing, bit for bit; in a rut,
+    a wheel that counts its shear on from the rut maker's has more gross thrust at the same
+    sinkage and slip, and (patch form, where the shear adds nothing to them) the same normal
+    force and compaction resistance."""
+    fns = contact.build()
+    for z, rate, slip in ((0.004, 0.0, 0.2), (0.02, 0.01, 0.6)):
+        on, off = _vector(FORMS[form], model__rut_shear=1), _vector(FORMS[form])
+        assert _memory(fns, z, rate, slip, z, on) == _memory(fns, z, rate, slip, z, off)
+        on, off = (_vector(FORMS[form], soil__rut_depth=0.008, model__rut_shear=1),
+                   _vector(FORMS[form], soil__rut_depth=0.008))
+        a = _contact(fns, 0.008 + z, rate, slip, on)
+        b = _contact(fns, 0.008 + z, rate, slip, off)
+        assert a["gross_thrust"] > b["gross_thrust"] > 0
+        if form == "patch":  # the arc's shear adds to its normal force and ripple
+            assert a["normal_force"] == b["normal_force"]
+            assert a["compaction_resistance"] == b["compaction_resistance"]
+
+
+def test_multipass_traction_rises_with_the_shear_the_rut_remembers():
+    """Rig, 62 N, slip 0.3: with the rut's shear remembered every later pass pulls more per
+    newton than the first (the multi-pass effect Holm 1969 reports); without it, less."""
+    off = multipass.run(presets.load("rashid-patch"), 62.0, 0.3, passes=3)
+    on = multipass.run(presets.load("rashid-patch").with_values({"model.rut_shear": 1}),
+                       62.0, 0.3, passes=3)
+    assert on[0] == off[0]  # the first pass meets virgin soil
+    assert all(r["traction_coefficient"] > on[0]["traction_coefficient"] for r in on[1:])
+    assert all(r["traction_coefficient"] < off[0]["traction_coefficient"] for r in off[1:])
+    assert [r["sinkage"] for r in on] == [r["sinkage"] for r in off]  # patch: shear-free Fz
+
+
 def test_multipass_cli_json_and_mistakes(tmp_path):
     runner = CliRunner()
     result = runner.invoke(main, ["multipass", "--slip", "0.2,0.4", "--passes", "3", "--out",
@@ -198,6 +249,24 @@ def test_multipass_cli_json_and_mistakes(tmp_path):
                                  str(tmp_path)])
     assert heavy.exit_code == 3
     assert "Traceback" not in heavy.output
+    both = runner.invoke(main, ["multipass", "--slip", "0.3", "--passes", "2", "--compare",
+                                "model.rut_shear=1", "--out", str(tmp_path), "--json"])
+    assert both.exit_code == 0, both.output
+    doc = json.loads(both.output)
+    assert (doc["rut_shear"], doc["compare"]["rut_shear"]) == (0, 1)
+    assert doc["compare"]["set"] == ["model.rut_shear=1"]
+    first, other = doc["runs"][0]["passes"], doc["compare"]["runs"][0]["passes"]
+    assert other[0] == first[0]  # the first pass meets virgin soil
+    assert other[1]["traction_coefficient"] > first[1]["traction_coefficient"]
+    text = runner.invoke(main, ["multipass", "--slip", "0.3", "--passes", "2", "--compare",
+                                "model.rut_shear=1", "--out", str(tmp_path)])
+    assert "compared: model.rut_shear=1" in text.output
+    assert "rut shear cumulative" in text.output
+    wrong = runner.invoke(main, ["multipass", "--slip", "0.3", "--compare", "model.rut_shear=7",
+                                 "--out", str(tmp_path)])
+    assert wrong.exit_code == 2
+    assert "model.rut_shear" in wrong.output
+    assert "Traceback" not in wrong.output
 
 
 # --- WheelTerrain.fmu carries the plastic sinkage as its state (both flavours) --------------

@@ -326,12 +326,18 @@ def _slip_list(text: str) -> list[float]:
               help="Vertical load on the wheel [N] (the rig's 62 N by default).")
 @click.option("--passes", default=5, show_default=True, type=click.IntRange(1, 100),
               help="Passes over the same strip (Tanaka et al. ran five with the Rashid wheel).")
+@click.option("--compare", "compare", multiple=True, metavar="NAME=VALUE",
+              help="Run the passes again with this assignment added (repeatable), printed "
+                   "after the first and drawn dashed: e.g. --compare model.rut_shear=1 shows "
+                   "what the shear a rut remembers changes.")
 @click.option("--out", default="validation/output", show_default=True,
               type=click.Path(file_okay=False), help="Folder for multipass.png.")
-@json_option('One object {"preset", "load", "runs": [{"slip", "slip_paper", "passes": '
-             '[{"pass", "traction_coefficient", "sinkage", "rut_left", ...}]}], "units"}')
+@json_option('One object {"preset", "load", "soil_memory", "rut_shear", "runs": [{"slip", '
+             '"slip_paper", "passes": [{"pass", "traction_coefficient", "sinkage", "rut_left", '
+             '...}]}], "units"}; with --compare also "compare": {"set", "rut_shear", "runs"}')
 def multipass(preset: str, assignments: tuple[str, ...], slip_text: str, slip_definition: str,
-              load: float, passes: int, out: str, json_target: str | None) -> None:
+              load: float, passes: int, compare: tuple[str, ...], out: str,
+              json_target: str | None) -> None:
     """The single-wheel rig run PASSES times over the same strip: per pass, the traction
     coefficient (drawbar pull / load), the sinkage from the original surface and the rut left.
 
@@ -339,9 +345,12 @@ def multipass(preset: str, assignments: tuple[str, ...], slip_text: str, slip_de
     rut the pass before left (soil.rut_depth): with model.soil_memory = 1 (the default) the
     soil is elastic-plastic, it answers elastically up to the pressure it has carried and
     along the pressure-sinkage law beyond, and the wheel's contact begins at the rut's
-    surface; with 0 every pass meets virgin soil. The soil's constants are the virgin soil's
-    in every pass: no cited rule for how a pass compacts a soil (density, modulus, strength)
-    is applied. Writes OUT/multipass.png.
+    surface; with 0 every pass meets virgin soil. With model.rut_shear = 1 (default 0) a
+    pass counts its shear displacement on from the displacement the pass before left
+    (cumulative shear: every later pass pulls more per newton); with 0 each pass starts its
+    shear afresh and later passes pull less (their contact from the rut's surface is short).
+    The soil's constants are the virgin soil's in every pass: no cited rule for how a pass
+    compacts a soil (density, modulus, strength) is applied. Writes OUT/multipass.png.
     """
     from pathlib import Path
 
@@ -353,25 +362,47 @@ def multipass(preset: str, assignments: tuple[str, ...], slip_text: str, slip_de
     _check_out_dir(out)
     slips_given = _slip_list(slip_text)
     ps = _load(preset, assignments)
-    runs = []
-    try:
+    other = _load(preset, assignments + compare) if compare else None
+
+    def passes_at_each_slip(params) -> list[dict]:
+        runs = []
         for s in slips_given:
-            rows = mp.run(ps, load, s, passes, slip_definition)
+            rows = mp.run(params, load, s, passes, slip_definition)
             traction = slips.to_traction(s, slip_definition)
             runs.append({"slip": traction, "slip_paper": slips.paper_from_traction(traction),
                          "passes": rows})
+        return runs
+
+    try:
+        runs = passes_at_each_slip(ps)
+        compared = passes_at_each_slip(other) if compare else None
     except WheelTerrainError as err:
         _fail(err)
     document = {"preset": preset, "set": list(assignments), "load": load,
-                "soil_memory": int(ps["model.soil_memory"]), "runs": runs, "units": mp.UNITS}
+                "soil_memory": int(ps["model.soil_memory"]),
+                "rut_shear": int(ps["model.rut_shear"]), "runs": runs, "units": mp.UNITS}
+    if compare:
+        document["compare"] = {"set": list(compare), "rut_shear": int(other["model.rut_shear"]),
+                               "runs": compared}
     with master.one_set(Path(out)) as staging:
         plots.multipass(runs, staging / "multipass.png",
                         f"{preset}, {load:g} N" + (f", {' '.join(assignments)}"
-                                                    if assignments else ""))
+                                                    if assignments else ""),
+                        (" ".join(compare), compared) if compare else None)
     if _emit_json(json_target, document):
         return
-    click.echo(f"multi-pass, preset {preset}, load {load:g} N, soil memory "
-               f"{'on' if ps['model.soil_memory'] == 1 else 'off'}")
+    for label, params, of in (("", ps, runs), (" ".join(compare), other, compared)):
+        if of is None:
+            continue
+        click.echo(f"multi-pass, preset {preset}, load {load:g} N"
+                   + (f", compared: {label}" if label else "") + ", soil memory "
+                   f"{'on' if params['model.soil_memory'] == 1 else 'off'}, rut shear "
+                   f"{'cumulative' if params['model.rut_shear'] == 1 else 'off'}")
+        _multipass_table(of)
+    click.echo(f"wrote {Path(out) / 'multipass.png'}")
+
+
+def _multipass_table(runs: list[dict]) -> None:
     for run in runs:
         click.echo(f"slip {run['slip']:g} (traction; paper {run['slip_paper']:.4g})")
         click.echo(f"  {'pass':>4}  {'pull/load':>9}  {'pull [N]':>8}  {'sinkage [mm]':>12}  "
@@ -381,7 +412,6 @@ def multipass(preset: str, assignments: tuple[str, ...], slip_text: str, slip_de
                        f"{r['drawbar_pull']:8.3f}  {r['sinkage'] * 1e3:12.3f}  "
                        f"{r['sinkage_increment'] * 1e3:14.3f}  {r['rut_left'] * 1e3:13.3f}  "
                        f"{r['torque']:12.4f}")
-    click.echo(f"wrote {Path(out) / 'multipass.png'}")
 
 
 @main.command(epilog=EPILOG)

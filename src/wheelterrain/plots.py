@@ -269,10 +269,17 @@ def rover(result, figures: dict, path: Path) -> None:
     _save(fig, path)
 
 
-def multipass(runs: list[dict], path: Path, title: str) -> None:
+def multipass(runs: list[dict], path: Path, title: str,
+              compare: tuple[str, list[dict]] | None = None) -> None:
     """Multi-pass on the rig: the traction coefficient per pass (left) and the sinkage from
-    the original surface with the rut each pass leaves (right), one line per slip."""
+    the original surface with the rut each pass leaves (right), one line per slip.
+    ``compare``: (label, runs) of the same slips with other settings, their traction drawn
+    dashed on the left."""
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
+    for k, run in enumerate(compare[1] if compare else []):
+        rows = run["passes"]
+        left.plot([r["pass"] for r in rows], [r["traction_coefficient"] for r in rows], "^--",
+                  color=f"C{k}", alpha=0.7, label=f"slip {run['slip']:.3g}, {compare[0]}")
     for k, run in enumerate(runs):
         rows = run["passes"]
         n = [r["pass"] for r in rows]

@@ -500,8 +500,12 @@ def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tup
 
     contact_length = Rc * (ca.sin(theta_f) - ca.sin(theta_r))
     K = effective_shear_modulus(contact_length, P)
-    g_front = shear_function(displacement.at(front), P, K)
-    g_rear = shear_function(displacement.at(rear), P, K)
+    # model.rut_shear: the displacement the rut's maker, at this slip, left at its exit
+    maker = _maker_angle(ground, P)
+    made = _Displacement(maker, slip, P, Rc, Rs, Rref).along(maker - exit_angle(maker, P))
+    made = ca.if_else(_cumulative(P), made, 0)
+    g_front = shear_function(made + displacement.at(front), P, K)
+    g_rear = shear_function(made + displacement.at(rear), P, K)
 
     def integrals(sigma: ca.SX) -> dict:
         tau_f, tau_r = (c + sigma * tan_phi) * g_front, (c + sigma * tan_phi) * g_rear
@@ -621,6 +625,44 @@ def patch_shear_mean(a: ca.SX, P: _P) -> ca.SX:
     return ca.sign(a) * ((1 - hump) * janosi + hump * wong)
 
 
+def _mean_decay(m: ca.SX) -> ca.SX:
+    """(1 - exp(-m))/m for m >= 0, the mean of exp(-u) over [0, m]; its Taylor series below
+    SMALL_MOBILISATION (error ~m**4)."""
+    small = m < SMALL_MOBILISATION
+    safe = ca.if_else(small, 1, m)
+    return ca.if_else(small, 1 - m / 2 + m**2 / 6 - m**3 / 24, -ca.expm1(-safe) / safe)
+
+
+def patch_shear_mean_after(a0: ca.SX, a: ca.SX, P: _P) -> ca.SX:
+    """:func:`patch_shear_mean` for soil that arrives already sheared by ``a0`` = j0/K (the
+    displacement a wheel before this one left, same sign as ``a``): the mean of g(u*K) over
+    u in [a0, a0 + a], (G(a0 + a) - G(a0))/a with G the integral of g. With E the mean of
+    exp(-u) over the patch, exp(-a0)*(1 - exp(-a))/a, and E2 that of exp(-2u)::
+
+        Janosi: 1 - E          hump: K_r*[(1 - E) + C*e*(E - E2)]
+
+    a0 = 0 gives :func:`patch_shear_mean`'s value (to rounding; that function is used there)."""
+    Kr, hump = P["soil.residual_ratio"], P["model.shear_model"]
+    m, m0 = ca.fabs(a), ca.fabs(a0)
+    E = ca.exp(-m0) * _mean_decay(m)
+    E2 = ca.exp(-2 * m0) * _mean_decay(2 * m)
+    C = 1 / (Kr * (1 - math.exp(-1))) - 1
+    janosi = 1 - E
+    wong = Kr * (janosi + C * math.e * (E - E2))
+    return ca.sign(a) * ((1 - hump) * janosi + hump * wong)
+
+
+def _cumulative(P: _P) -> ca.SX:
+    """1 where a wheel's shear counts on from the rut's (``model.rut_shear`` = 1 in a rut)."""
+    return ca.logic_and(_in_rut(P), P["model.rut_shear"] == 1)
+
+
+def _maker_angle(ground: Rut, P: _P) -> ca.SX:
+    """Entry angle of the wheel that made ``ground``'s rut, read as a wheel of this radius that
+    pressed virgin soil to the rut's yield depth; 0 where the shear is not cumulative."""
+    return _entry_angle(ca.if_else(_cumulative(P), ground.yield_depth, 0), P)
+
+
 def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: bool) -> dict:
     """The patch form (``model.contact_form`` = 1): all contact quantities for a given entry
     angle (no damping), the keys of :func:`_arc_form`.
@@ -675,7 +717,13 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
     v, soil_ratio = _speed_ratios(slip, Rs, Rref)
     kinematics = P["model.shear_kinematics"]
     x = (1 - kinematics) * (1 - v / Rs) + kinematics * (soil_ratio - 1)
-    mobilised = patch_shear_mean(x * length / effective_shear_modulus(length, P), P)
+    K = effective_shear_modulus(length, P)
+    mobilised = patch_shear_mean(x * length / K, P)
+    # model.rut_shear: the rut's maker, at this slip, left j0 = x*(its contact length)
+    maker = _maker_angle(ground, P)
+    made = x * Rc * (ca.sin(maker) - ca.sin(exit_angle(maker, P)))
+    mobilised = ca.if_else(_cumulative(P), patch_shear_mean_after(made / K, x * length / K, P),
+                           mobilised)
     thrust = (c * b * length + normal * tan_phi) * mobilised
     dozing = bulldozing(z, P)
     return {

@@ -11,8 +11,9 @@ pass meets virgin soil and the passes are identical.
 The soil's strength and pressure-sinkage constants are those of the virgin soil in every pass:
 the literature found here gives no rule for how one pass changes them (density, modulus,
 shear strength per pass) that the model could take with a source, so the multi-pass effect
-here is the rut's geometry and its stress history only (the README's multi-pass section says
-what this reproduces and what not).
+here is the rut's geometry and its stress history only: the pressure it carried and, with
+``model.rut_shear`` = 1, the shear displacement the pass before left, which a later pass
+counts on from (the README's multi-pass section says what this reproduces and what not).
 
 Tanaka, Takehana, Hurrell, Uno & Yoshida (ISTVS 2024) ran five passes of the Rashid rover's
 wheel on FJS-1 and Toyoura sand; ``passes`` defaults to their five.
