@@ -155,6 +155,16 @@ def test_rear_wheels_pull_more_per_newton_with_the_shear_the_rut_remembers(level
         assert run.wheels[rear]["normal_force"][-1] == pytest.approx(b["loads"][rear], rel=1e-3)
 
 
+def test_a_stall_inside_a_block_of_steps_ends_the_run(quiet):
+    """With the rut's shear remembered the rover stalls on the slope by sliding back within a
+    block of the in-process run's steps, further than the rut record's two cells: the run ends
+    at the stall with its cause, it does not fail on the record."""
+    run = rover_system.run_scenario("slope", quiet.with_values({"model.rut_shear": 1}), "earth")
+    r = run["figures"]
+    assert r["stall_slope_deg"] is not None
+    assert r["stall_cause"] in rover_system.STALL_CAUSES
+
+
 def test_pull_test_curve_is_four_single_wheel_curves(quiet):
     r = rover_system.run_scenario("pull-test", quiet, "earth")["figures"]
     assert len(r["pull_curve"]) >= 8

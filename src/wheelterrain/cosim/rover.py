@@ -307,7 +307,6 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
         met = met_table(memory, at, g)
         x, rec = evaluate(x, pw, pg, pr, slope, towing, cmd, step, met)
         rec = np.asarray(rec, dtype=float).reshape(N_REC, block, order="F")
-        _remember(memory, rec, met, p, g)
         problem = _outside(rec)
         if problem is not None:
             k, why = problem
@@ -316,7 +315,8 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
             break
         records.append(rec)
         if stop_when is not None and stop_when(last_values(rec[:, -1])):
-            break
+            break  # the run ends here: no later step meets the ruts of this block
+        _remember(memory, rec, met, p, g)
     wall = time.perf_counter() - t0
     return from_records(np.concatenate(records, axis=1), step, wall, f"in-process ({engine})",
                         left)
