@@ -219,6 +219,19 @@ def test_the_shear_a_rut_remembers_raises_the_thrust_in_a_rut_only(form):
             assert a["compaction_resistance"] == b["compaction_resistance"]
 
 
+@pytest.mark.parametrize("form", FORMS)
+def test_a_rut_deeper_than_the_wheel_keeps_the_remembered_shear_finite(form):
+    """A rut deeper than the contact radius (soil.rut_depth up to 0.5 m, a 1 cm wheel): its
+    maker is taken buried to the axle, so the shear it left, and every output, stays finite
+    (the property tests found NaN here before the maker's depth was capped)."""
+    fns = contact.build()
+    p = _vector(FORMS[form], wheel__radius=0.01, wheel__width=0.005, grouser__height=0.0,
+                grouser__count=0.0, soil__rut_depth=0.5, model__rut_shear=1)
+    for z, slip in ((0.5 + 1e-6, -0.9), (0.505, 0.3), (1e-6, 0.5)):
+        out = _contact(fns, z, 0.0, slip, p)
+        assert all(math.isfinite(v) for v in out.values()), out
+
+
 def test_multipass_traction_rises_with_the_shear_the_rut_remembers():
     """Rig, 62 N, slip 0.3: with the rut's shear remembered every later pass pulls more per
     newton than the first (the multi-pass effect Holm 1969 reports); without it, less."""

@@ -278,7 +278,8 @@ TABLE: tuple[Parameter, ...] = (
        "Shear a rut remembers: 1 = cumulative: a wheel in a rut (model.soil_memory = 1, "
        "soil.rut_depth > 0) counts its Janosi shear displacement on from the displacement the "
        "wheel that made the rut left there, taking that wheel to have run at this one's slip "
-       "with this one's radius and soil (its exit displacement at the rut's yield depth); "
+       "with this one's radius and soil (its exit displacement at the rut's yield depth, "
+       "buried to the axle at most); "
        "0 = every wheel's displacement starts at 0 at its entry, as on virgin soil. Unused "
        "where the wheel meets virgin soil.",
        "Wong, Theory of Ground Vehicles, ch. 2 (repetitive shear loading: reloaded soil takes "

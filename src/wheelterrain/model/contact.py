@@ -659,8 +659,12 @@ def _cumulative(P: _P) -> ca.SX:
 
 def _maker_angle(ground: Rut, P: _P) -> ca.SX:
     """Entry angle of the wheel that made ``ground``'s rut, read as a wheel of this radius that
-    pressed virgin soil to the rut's yield depth; 0 where the shear is not cumulative."""
-    return _entry_angle(ca.if_else(_cumulative(P), ground.yield_depth, 0), P)
+    pressed virgin soil to the rut's yield depth; at most FULL_BURIAL (a rut deeper than the
+    contact radius R_c: its maker is taken buried to the axle); 0 where the shear is not
+    cumulative."""
+    Rc, _, _ = _radii(P)
+    depth = ca.if_else(_cumulative(P), ca.fmin(ground.yield_depth, Rc), 0)
+    return _entry_angle(depth, P)
 
 
 def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: bool) -> dict:
