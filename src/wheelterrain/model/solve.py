@@ -33,7 +33,8 @@ from wheelterrain.model.contact import (
 )
 from wheelterrain.parameters import NAMES
 
-NEWTON_ITERATIONS = 16  # at most; ~4 when driving (then it stops), degenerate corners up to 16
+NEWTON_ITERATIONS = 24  # at most; ~4 when driving (then it stops); a braking corner where
+# Fz_static crosses 0 just below a tiny load (0.1 N against ~500 N/rad) needs 19
 SCAN_POINTS = 12  # bracketing scan of the sinkage solve, log-spaced in the entry angle
 SCAN_MIN = 1e-4  # rad: smallest scanned entry angle (below it the power-law regime holds)
 THETA_MIN = 1e-12  # rad: lower end of the sinkage-solve bracket (z ~ 1e-26 m)
