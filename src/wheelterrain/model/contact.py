@@ -657,6 +657,13 @@ def _cumulative(P: _P) -> ca.SX:
     return ca.logic_and(_in_rut(P), P["model.rut_shear"] == 1)
 
 
+def _contact_length(theta_f: ca.SX, P: _P) -> ca.SX:
+    """R_c*(sin(theta_f) - sin(theta_r)): the contact length of both forms at entry angle
+    ``theta_f`` (theta_r = :func:`exit_angle`)."""
+    Rc, _, _ = _radii(P)
+    return Rc * (ca.sin(theta_f) - ca.sin(exit_angle(theta_f, P)))
+
+
 def _maker_angle(ground: Rut, P: _P) -> ca.SX:
     """Entry angle of the wheel that made ``ground``'s rut, read as a wheel of this radius that
     pressed virgin soil to the rut's yield depth; at most FULL_BURIAL (a rut deeper than the
@@ -724,8 +731,7 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
     K = effective_shear_modulus(length, P)
     mobilised = patch_shear_mean(x * length / K, P)
     # model.rut_shear: the rut's maker, at this slip, left j0 = x*(its contact length)
-    maker = _maker_angle(ground, P)
-    made = x * Rc * (ca.sin(maker) - ca.sin(exit_angle(maker, P)))
+    made = x * _contact_length(_maker_angle(ground, P), P)
     mobilised = ca.if_else(_cumulative(P), patch_shear_mean_after(made / K, x * length / K, P),
                            mobilised)
     thrust = (c * b * length + normal * tan_phi) * mobilised
@@ -913,9 +919,7 @@ def _imprint_decay(yielded, speed, P: _P):
     """|V|/l: the rate at which a wheel rolling at ``speed`` replaces the soil under it, l the
     contact length at the yield sinkage (R_c*(sin(theta_f) - sin(theta_r)), the contact
     forms' own)."""
-    Rc, _, _ = _radii(P)
-    theta_f = _entry_angle(yielded - rut_surface(P), P)
-    length = Rc * (ca.sin(theta_f) - ca.sin(exit_angle(theta_f, P)))
+    length = _contact_length(_entry_angle(yielded - rut_surface(P), P), P)
     return ca.fabs(speed) / ca.fmax(length, 1e-300)
 
 
