@@ -1215,9 +1215,10 @@ def validate(json_target: str | None, starts: int, data_file: str | None) -> Non
                         judged on the one left out: forms compared with every set in view
                         (picking the best of these rows is not a held-out figure)
     Every cross-wheel row gives pull/W and z/R beside N and mm, and the share of its points
-    inside their 90 % interval. Folds start from the preset as it was before its own fit, so
-    no held-out case reaches a fit. Takes about 3 minutes on a 2-core machine (the nested
-    rule fits 6 candidates in 5 inner folds of each of 7 outer ones).
+    inside their 90 % interval (the soil values' spread, and the form's errors on data sets
+    it was not fitted to, learned inside the fold). Folds start from the preset as it was
+    before its own fit, so no held-out case reaches a fit. Takes about 3 minutes on a 2-core
+    machine (the nested rule fits 6 candidates in 5 inner folds of each of 7 outer ones).
 
     \b
     --data FILE.csv: '#' comment lines, a header, one row per test point. Columns (SI; a
