@@ -660,14 +660,34 @@ class Scenario:
 
 
 SLOW_RAMP = 0.002  # deg/s: the slope's rate near the predicted limit
-FAST_RAMP = 0.1  # deg/s: up to 1 deg below it
+FAST_RAMP = 0.1  # deg/s: up to KNEE_MARGIN before it
+KNEE_MARGIN = 2.0
+"""deg: how far before the predicted limit the slope's ramp slows down. With 1 deg the Moon's
+runs stalled (climb, 23.99 deg) or slid (descent approached this way, 6.72 deg) during the
+fast ramp, before its knee (24.22, 6.82 deg): 0.1 deg/s is not quasi-static there. With 2
+deg both end in the slow ramp."""
+
+
+def approach(knee_deg: float, direction: int = 1) -> dict:
+    """The input profile that tilts the ground at FAST_RAMP to ``knee_deg`` (uphill for
+    ``direction`` 1, downhill for -1), then at SLOW_RAMP: a limit approached quasi-statically
+    (the slope scenario; tests/test_rover.py approaches the descent's limit so)."""
+    deg = math.pi / 180
+    return {"rover.slope_rate": direction * FAST_RAMP * deg,
+            "rover.ramp_time": knee_deg / FAST_RAMP,
+            "rover.slope_rate_after": direction * SLOW_RAMP * deg}
+
+
+def approach_stop(knee_deg: float, beyond_deg: float = 6.0) -> float:
+    """The time [s] at which :func:`approach` has gone ``beyond_deg`` past its knee."""
+    return knee_deg / FAST_RAMP + beyond_deg / SLOW_RAMP
 
 
 def scenarios(gravity: str = "earth", knee_deg: float = 15.0,
               weight: float = 10.0 * GRAVITY["earth"]) -> dict[str, Scenario]:
     """The scenarios; ``knee_deg``: where the slope scenario's ramp slows down (run_scenario
-    puts it 1 deg below the predicted stall slope, so that an instability's growth does not
-    lag the slope). Each scenario's inputs are the chassis' input profile, so its Rover.ssp
+    puts it KNEE_MARGIN below the predicted stall slope, so that an instability's growth does
+    not lag the slope). Each scenario's inputs are the chassis' input profile, so its Rover.ssp
     carries it whole."""
     deg = math.pi / 180
     stall_step = FINE_STEP if gravity == "moon" else STEP
@@ -676,10 +696,7 @@ def scenarios(gravity: str = "earth", knee_deg: float = 15.0,
                           40.0, {}, 20.0),
         "slope": Scenario("slope", f"the slope rises ({FAST_RAMP} deg/s to {knee_deg:.1f} deg, "
                           f"then {SLOW_RAMP} deg/s) until the rover stalls (slip {STALL_SLIP})",
-                          knee_deg / FAST_RAMP + 6.0 / SLOW_RAMP,
-                          {"rover.slope_rate": FAST_RAMP * deg,
-                           "rover.ramp_time": knee_deg / FAST_RAMP,
-                           "rover.slope_rate_after": SLOW_RAMP * deg}, 0.0, stall_step),
+                          approach_stop(knee_deg), approach(knee_deg), 0.0, stall_step),
         "soft-patch": Scenario("soft-patch", f"level; a looser soil (k_phi' x{SOFT['soil.k_phi']}, "
                                f"phi x{SOFT['soil.phi']}) from {PATCH_START} m to "
                                f"{PATCH_START + PATCH_LENGTH} m under the front, then the rear "
@@ -731,7 +748,7 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
     pred = None
     if name in ("slope", "descent"):
         pred = limit_slope(quiet, p, 1 if name == "slope" else -1)
-    knee = max(math.degrees(pred["slope"]) - 1.0, 0.0) if name == "slope" else 15.0
+    knee = max(math.degrees(pred["slope"]) - KNEE_MARGIN, 0.0) if name == "slope" else 15.0
     sc = scenarios(gravity, knee, p["rover.mass"] * p["rover.gravity"])[name]
     step = sc.step if step is None else step
     stalled = (lambda last: last["front_left.slip"] >= STALL_SLIP) \
