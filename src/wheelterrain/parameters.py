@@ -318,7 +318,10 @@ TABLE: tuple[Parameter, ...] = (
        "sinkage, so with slip where the sinkage does. 0 = off (the classical model).",
        "Bekker 1956/1960 (bulldozing resistance of the soil wedge ahead of a sinking wheel); "
        "Wong, Theory of Ground Vehicles, ch. 4 (its passive-pressure form); the share is this "
-       "project's", plausible=(0.0, 1.0, "0 (no wedge) to the full passive force")),
+       "project's", plausible=(0.0, 1.0, "0 (no wedge) to the full Rankine passive force. "
+                                  "Bekker's bulldozing coefficients give 12-31 times more at "
+                                  "phi 25-40 deg; so bounded, the cross-wheel fits reach "
+                                  "1.1-2.5 and the held-out pull worsens (7.09 -> 8.55 N)")),
     _P("model.diameter_exponent", "1", 0.0, -1.0, 1.0,
        "Diameter dependence of the pressure-sinkage modulus: multiplied by "
        "(2R/0.5 m)**exponent. 0 = the flat-plate (Bekker/Reece) law.",
