@@ -79,10 +79,9 @@ def test_motor_power_is_traction_power_plus_losses(level_elastic):
 def test_simulated_stall_slope_is_the_predicted_one(quiet, gravity, memory):
     """The slope rises until the rover stalls; the steady-state prediction (traction limit,
     the force balance's slope, and the stability of the steady motion) is within 0.5 deg.
-    On the soil with memory the steady motion's stability depends on the disturbance's size
-    (stiff when a wheel lifts, soft when it presses): the prediction's small one gives an
-    upper bound the run does not pass, met within 0.5 deg on Earth (26.88 against 27.01 deg)
-    and 0.9 deg below it on the Moon (24.35 against 25.22 deg; docs/rover.md)."""
+    On the soil with memory: 26.96 against 27.01 deg on Earth, 25.09 against 25.22 deg on
+    the Moon (with the rut met as a staircase of cells the Moon's run stalled at 24.35 deg:
+    tests/test_ground.py)."""
     run = rover_system.run_scenario("slope", quiet.with_values({"model.soil_memory": memory}),
                                     gravity)
     r = run["figures"]
@@ -92,10 +91,7 @@ def test_simulated_stall_slope_is_the_predicted_one(quiet, gravity, memory):
     assert np.diff(run["result"].time[:3]) == pytest.approx([step, step])
     assert r["stall_slope_deg"] is not None
     assert r["stall_cause"] in rover_system.STALL_CAUSES
-    if memory and gravity == "moon":
-        assert r["stall_slope_deg"] < r["predicted_stall_slope_deg"] + 0.5
-    else:
-        assert abs(r["stall_slope_deg"] - r["predicted_stall_slope_deg"]) < 0.5
+    assert abs(r["stall_slope_deg"] - r["predicted_stall_slope_deg"]) < 0.5
     assert r["stall_slope_deg"] > 1.0
     rows = r["slip_vs_slope"]  # one row per whole degree reached, the slip rising with it
     assert [row["slope_deg"] for row in rows] == list(range(len(rows)))
@@ -109,7 +105,7 @@ def test_the_descent_approached_slowly_slides_at_the_predicted_limit(quiet, grav
     for: not quasi-static, so not a measure of the steady limit. Approached as the climb is
     (:func:`rover_system.approach`: 0.1 deg/s to KNEE_MARGIN before the prediction, then 0.002
     deg/s), ripple-free on the soil with memory, the rover slides within 0.5 deg of the
-    steady prediction, in the slow ramp (measured: Earth 10.67 against 10.96 deg, Moon 7.69
+    steady prediction, in the slow ramp (measured: Earth 10.68 against 10.96 deg, Moon 7.79
     against 7.82 deg)."""
     p = {**rover.defaults(), "rover.gravity": rover_system.GRAVITY[gravity]}
     pred = math.degrees(rover_system.limit_slope(rover_system.terrain_of(quiet), p, -1)["slope"])

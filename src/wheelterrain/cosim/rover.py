@@ -83,11 +83,11 @@ def _coupled_forces(xs: list, p: dict, pt: ca.MX, angles, plastics=None) -> tupl
     return u, wheels
 
 
-NEAR = 4
+NEAR = 5
 """Cells of the rut record a wheel may meet within one block of steps, from the one before the
-cell it meets at the block's start (:func:`met_table`): the record is replayed between
-blocks (:func:`replay`), exactly as Terrain.fmu keeps it step by step, where a wheel moves
-less than two cells a block."""
+first of the two it meets between at the block's start (:func:`met_table`): the record is
+replayed between blocks (:func:`replay`), exactly as Terrain.fmu keeps it step by step,
+where a wheel moves less than two cells a block."""
 N_MET = len(rover.WHEELS) * (NEAR + 1)
 
 
@@ -102,22 +102,25 @@ def _wheel_soils(xs: list, p: dict, pw: ca.MX, pg: ca.MX, met: ca.MX) -> ca.MX:
     for j, w in enumerate(rover.WHEELS):
         where = rover.wheel_position(p, xs[0], w)
         soil = dict(zip(ground.SOIL_NAMES, ground.soil_at(where, g), strict=True))
-        number = ground.met_cell(where, g)
+        number, share = ground.met_cells(where, g)
         first = met[j * (NEAR + 1)]
-        rut = 0
+        near = far = 0
         for k in range(NEAR):
-            rut = rut + ca.if_else(number == first + k, met[j * (NEAR + 1) + 1 + k], 0)
+            near = near + ca.if_else(number == first + k, met[j * (NEAR + 1) + 1 + k], 0)
+            far = far + ca.if_else(number + 1 == first + k, met[j * (NEAR + 1) + 1 + k], 0)
+        rut = ground.between(near, far, share)
         column = ca.vertcat(*(soil.get(name, pw[k]) for k, name in enumerate(NAMES)))
         columns.append(functions.with_rut_met(column, rut))
     return ca.horzcat(*columns)
 
 
 def met_table(records: dict, positions: dict[str, float], g: Mapping[str, float]) -> list:
-    """The ``met`` input of a block (N_MET): per wheel, the number of the cell before the one
-    it meets at the block's start, then the record's ruts of NEAR cells from there."""
+    """The ``met`` input of a block (N_MET): per wheel, the number of the cell before the
+    first of the two it meets between at the block's start (ground.met_cells), then the
+    record's ruts of NEAR cells from there."""
     out = []
     for w in rover.WHEELS:
-        first = ground.met_cell(positions[w], g) - 1
+        first = ground.met_cells(positions[w], g)[0] - 1
         out += [float(first), *(ground.recorded(records[rover.TRACK_OF[w]], first + k)
                                 for k in range(NEAR))]
     return out
@@ -329,9 +332,9 @@ def _remember(records: dict, rec: np.ndarray, met: list, p: Mapping[str, float],
     wheels, chassis = named_record(rec)
     positions = {w: rover.wheel_position(p, chassis["position"], w) for w in rover.WHEELS}
     for j, w in enumerate(rover.WHEELS):
-        numbers = ground.met_cell(positions[w], g)
+        numbers = ground.met_cells(positions[w], g)[0]  # and the cell after each
         first = met[j * (NEAR + 1)]
-        if np.any(numbers < first) or np.any(numbers > first + NEAR - 1):
+        if np.any(numbers < first) or np.any(numbers + 1 > first + NEAR - 1):
             raise WheelTerrainError(
                 f"{w} moved more than two cells of the rut record (terrain.cell = "
                 f"{g['terrain.cell']:g} m) in one block of {rec.shape[1]} steps: make "

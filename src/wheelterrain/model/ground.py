@@ -11,7 +11,8 @@ The rut record (the soil's memory along a track): a Terrain answers the query po
 track, QUERY (the leading wheel, then the one behind it). Each step it records, at each query
 point's position, the rut that wheel leaves (WheelTerrain's ``rut_left``): the track is cut into
 cells of ``terrain.cell``, each keeping the deepest rut left in it. A wheel meets the rut
-``terrain.lookahead`` ahead of its axle (the front of its contact), WheelTerrain's input
+``terrain.lookahead`` ahead of its axle (the front of its contact; linear between the middles
+of the two cells around that point, :func:`met`), WheelTerrain's input
 ``rut_met`` (its contact takes the deeper of it and its soil's ``soil.rut_depth``), so the
 wheel behind runs in the rut of the wheel ahead, the query-point pattern of vehicle-terrain
 co-simulation. The record is a ring of RUT_CELLS cells (the track's last RUT_CELLS * cell
@@ -176,14 +177,34 @@ def record_one(x, position, left, p):
 
 
 def met_cell(position, p):
-    """The number of the cell whose rut a wheel at ``position`` [m] meets: terrain.lookahead
-    ahead of its axle, the front of its contact (a float, a numpy array, a CasADi symbol)."""
+    """The number of the cell that holds the point whose rut a wheel at ``position`` [m]
+    meets: terrain.lookahead ahead of its axle, the front of its contact (a float, a numpy
+    array, a CasADi symbol)."""
     return cell_number(position + p["terrain.lookahead"], p)
 
 
+def met_cells(position, p):
+    """``(first, share)``: the point a wheel at ``position`` meets (:func:`met_cell`) lies
+    between the middles of the cells ``first`` and ``first + 1``, ``share`` (0..1) of the way
+    from the one to the other."""
+    u = (position + p["terrain.lookahead"]) / p["terrain.cell"] - 0.5
+    first = _floor(u)
+    return first, u - first
+
+
+def between(near, far, share):
+    """The rut ``share`` of the way from ``near`` (a cell's middle) to ``far`` (the next's)."""
+    return near + share * (far - near)
+
+
 def met(x, position, p):
-    """The rut a wheel at ``position`` meets: the record's, in :func:`met_cell`."""
-    return recorded(x, met_cell(position, p))
+    """The rut a wheel at ``position`` meets: the record's, linear between the middles of the
+    two cells around the point it meets (:func:`met_cells`). Piecewise linear along the track,
+    not a staircase: a staircase steps the rut under a wheel at every cell's edge, and those
+    steps were a disturbance of the rover's steady motion that depended on the cell's length
+    (the Moon's climb stalled 23.3-25.4 deg for cells of 10-2 mm)."""
+    first, share = met_cells(position, p)
+    return between(recorded(x, first), recorded(x, first + 1), share)
 
 
 def outputs(x, u, p) -> tuple:
