@@ -311,6 +311,39 @@ def test_a_constant_at_an_end_of_its_plausible_range_is_reported():
     assert fold.as_row()["at_bound"] == ["model.interface_ratio", "soil.n1"]
 
 
+def _fold(name, shares, interval=None, measured=10.0):
+    """A fold of one point per share (load 100 N: pull error = share * 100 N)."""
+    fold = cw.Fold(name, "x", {}, cw.Discrepancy(0.0, 0.0))
+    for share in shares:
+        entry = {"case": "c", "drawbar_pull": measured + 100 * share, "sinkage": 0.01,
+                 "measured": {"drawbar_pull": measured, "sinkage": 0.01},
+                 "scale": {"drawbar_pull": 100.0, "sinkage": 0.1}}
+        if interval is not None:
+            entry["interval"] = {"drawbar_pull": list(interval), "sinkage": [0.009, 0.011]}
+            entry["inside"] = {"drawbar_pull": interval[0] <= measured <= interval[1],
+                               "sinkage": True}
+        fold.points.append(entry)
+    return fold
+
+
+def test_the_form_choice_widens_the_interval_to_every_form_within_reach():
+    """The one-standard-error rule: a candidate whose inner score is within one standard
+    error of the choice's is within reach (the choice first); the nested interval is the
+    union of theirs, so a measurement only another form's interval holds is inside."""
+    folds = {"a": [_fold("a", [s]) for s in (0.10, 0.14, 0.12, 0.16)],  # mean 0.13, se 0.013
+             "b": [_fold("b", [0.14])], "c": [_fold("c", [0.15])]}
+    scores = {"a": 0.13, "b": 0.14, "c": 0.15}
+    assert cw.within_reach(scores, folds, "a") == ["a", "b"]
+    chosen = _fold("a", [0.0], interval=(12.0, 14.0))  # measured 10: outside
+    assert chosen.coverage() == 0.5
+    other = _fold("b", [0.0], interval=(9.0, 13.0))
+    out = cw.widened(chosen, [other])
+    assert out.points[0]["interval"]["drawbar_pull"] == [9.0, 14.0]
+    assert out.points[0]["drawbar_pull"] == 10.0  # the choice's prediction stays
+    assert out.coverage() == 1.0
+    assert cw.widened(_fold("a", [0.0], interval=(12.0, 14.0)), []).coverage() == 0.5
+
+
 @pytest.mark.slow
 def test_the_rule_on_every_shipped_data_set_picks_the_default_form(shipped):
     chosen, scores = cw.choose(shipped)

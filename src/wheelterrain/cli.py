@@ -1216,7 +1216,8 @@ def validate(json_target: str | None, starts: int, data_file: str | None) -> Non
                         (picking the best of these rows is not a held-out figure)
     Every cross-wheel row gives pull/W and z/R beside N and mm, and the share of its points
     inside their 90 % interval (the soil values' spread, and the form's errors on data sets
-    it was not fitted to, learned inside the fold). Folds start from the preset as it was
+    it was not fitted to, learned inside the fold; nested, widened to every form the rule
+    cannot tell from its choice). Folds start from the preset as it was
     before its own fit, so no held-out case reaches a fit. Takes about 3 minutes on a 2-core
     machine (the nested rule fits 6 candidates in 5 inner folds of each of 7 outer ones).
 
