@@ -667,8 +667,8 @@ FAST_RAMP = 0.1  # deg/s: up to KNEE_MARGIN before it
 KNEE_MARGIN = 2.0
 """deg: how far before the predicted limit the slope's ramp slows down. With 1 deg the Moon's
 runs stalled (climb, 23.99 deg) or slid (descent approached this way, 6.72 deg) during the
-fast ramp, before its knee (24.22, 6.82 deg): 0.1 deg/s is not quasi-static there. With 2
-deg both end in the slow ramp."""
+fast ramp, before its knee (24.22, 6.82 deg; measured with the rut met as a staircase of
+cells): 0.1 deg/s is not quasi-static there. With 2 deg both end in the slow ramp."""
 
 
 def approach(knee_deg: float, direction: int = 1) -> dict:
