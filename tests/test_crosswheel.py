@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from wheelterrain import model
-from wheelterrain.errors import DataError
+from wheelterrain.errors import DataError, WheelTerrainError
 from wheelterrain.fit import crosswheel as cw
 from wheelterrain.fit import datasets
 from wheelterrain.parameters import BY_NAME, ParameterSet
@@ -123,6 +123,24 @@ def test_the_discrepancy_quantile_weighs_each_data_set_the_same():
     # falls inside the first data set; weighted by data set, on the second's point
     assert cw._quantile([1, 2, 3, 4, 5, 10], [1.0] * 6, 0.6) == 4
     assert cw._quantile([1, 2, 3, 4, 5, 10], [0.2] * 5 + [1.0], 0.6) == 10
+
+
+def test_a_data_set_the_form_cannot_predict_adds_nothing_to_the_discrepancy(shipped,
+                                                                            monkeypatch):
+    """A training set none of whose points the form can predict is left out of the
+    discrepancy's quantile (it crashed on its zero weight); the others still teach it."""
+    form = cw.BY_FORM["classical"]
+    sets = shipped[1:3]
+    real = cw.steady
+
+    def refusing(f, pt, constants=None):
+        if pt in sets[0].points:
+            raise WheelTerrainError("not carried")
+        return real(f, pt, constants)
+
+    alone = cw.Discrepancy.learn(form, [({}, sets[1])])
+    monkeypatch.setattr(cw, "steady", refusing)
+    assert cw.Discrepancy.learn(form, [({}, ds) for ds in sets]) == alone
 
 
 def test_leave_one_dataset_out_rows_are_whole(shipped):

@@ -186,7 +186,7 @@ class Discrepancy:
         number of points."""
         pull, sink, weight = [], [], []
         for constants, ds in judged:
-            kept = []
+            kept = 0  # the points of ds the form predicts
             for pt in ds.points:
                 try:
                     out = steady(form, pt, constants)
@@ -197,8 +197,8 @@ class Discrepancy:
                                            ("sinkage", 1.0, sink)):
                     excess = (out[key] - getattr(pt, key)) ** 2 - (Z90 * sigma[key]) ** 2
                     needed.append(math.sqrt(max(excess, 0.0)) / scale)
-                kept.append(pt)
-            weight += [1 / len(kept)] * len(kept)
+                kept += 1
+            weight += [1 / kept] * kept if kept else []
         if not pull:
             return cls(math.inf, math.inf)
         return cls(_quantile(pull, weight, COVERAGE), _quantile(sink, weight, COVERAGE))
