@@ -95,6 +95,20 @@ def _synthetic(shipped, phi_sd, stated, seed=7, n=40):
     return sets
 
 
+def test_a_remembered_fit_is_the_fit_and_follows_the_data_not_the_name(shipped):
+    """fit_constants remembers fits by content: asked again, it gives what a fresh fit gives
+    (a copy the caller may change); a training set changed under its own name is fitted anew."""
+    form = cw.BY_FORM["arc-cross"]
+    train = shipped[:3]
+    cw.clear_fits()
+    first = cw.fit_constants(form, train, starts=1)
+    first["soil.n1"] = -99.0  # the caller's copy: the remembered fit must not see it
+    again = cw.fit_constants(form, train, starts=1)
+    assert again == cw._fit(form, train, 1, 0)
+    dirty = [_corrupted(train[0]), *train[1:]]
+    assert cw.fit_constants(form, dirty, starts=1) == cw._fit(form, dirty, 1, 0) != again
+
+
 def test_intervals_have_their_nominal_coverage_on_synthetic_data(shipped):
     """Data drawn from the model with known soil spreads and known measurement noise:
     held-out 90 % intervals cover close to 90 % of the points."""

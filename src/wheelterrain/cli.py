@@ -1218,8 +1218,9 @@ def validate(json_target: str | None, starts: int, data_file: str | None) -> Non
     inside their 90 % interval (the soil values' spread, and the form's errors on data sets
     it was not fitted to, learned inside the fold; nested, widened to every form the rule
     cannot tell from its choice). Folds start from the preset as it was
-    before its own fit, so no held-out case reaches a fit. Takes about 3 minutes on a 2-core
-    machine (the nested rule fits 6 candidates in 5 inner folds of each of 7 outer ones).
+    before its own fit, so no held-out case reaches a fit. Takes about a minute on a 2-core
+    machine (the nested rule fits 6 candidates in 5 inner folds of each of 7 outer ones; a fit
+    asked for again is remembered, not redone).
 
     \b
     --data FILE.csv: '#' comment lines, a header, one row per test point. Columns (SI; a

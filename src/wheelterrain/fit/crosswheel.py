@@ -34,7 +34,10 @@ Coverage is the share of held-out points inside their interval; its nominal valu
 
 from __future__ import annotations
 
+import hashlib
 import math
+import threading
+from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -121,13 +124,55 @@ def _residuals(form: Form, names: Sequence[str], x, sets: Sequence[Dataset]) -> 
     return np.array(r)
 
 
+_FITS: OrderedDict[str, dict[str, float]] = OrderedDict()
+_FITS_LOCK = threading.Lock()
+FITS_KEPT = 512
+"""How many fits :func:`fit_constants` remembers (least recently used dropped first)."""
+
+
+def _fit_key(form: Form, sets: Sequence[Dataset], starts: int, seed: int) -> str:
+    """What a fit depends on, by content: the form, its constants' ranges, the training sets'
+    every point (not only their names: the tests corrupt a data set under its own name), the
+    starts and the seed (a digest of their exact repr: floats print round-trip)."""
+    content = repr((form.name, sorted(form.values.items()), form.free,
+                    [BY_NAME[n].plausible for n in form.free], starts, seed,
+                    [(ds.name, ds.points) for ds in sets]))
+    return hashlib.sha256(content.encode()).hexdigest()
+
+
+def clear_fits() -> None:
+    """Forget every remembered fit (:func:`fit_constants`)."""
+    with _FITS_LOCK:
+        _FITS.clear()
+
+
 def fit_constants(form: Form, sets: Sequence[Dataset], starts: int = 3, seed: int = 0
                   ) -> dict[str, float]:
     """``form``'s free constants fitted on ``sets`` (least squares, several starts inside the
-    plausible ranges); {} for a form with nothing free."""
+    plausible ranges); {} for a form with nothing free.
+
+    A fit is remembered by its content (:func:`_fit_key`): the nested protocol asks for the
+    same fit several times (the fit on "all but A and B" is an inner fold of the held-out
+    discrepancy in outer folds A and B, and of the rule in both), and `wheelterrain validate`
+    spent 61 % of its fitting time on repeats before (benchmarks/crosswheel.py)."""
     names = form.free
     if not names:
         return {}
+    key = _fit_key(form, sets, starts, seed)
+    with _FITS_LOCK:
+        if key in _FITS:
+            _FITS.move_to_end(key)
+            return dict(_FITS[key])
+    fitted = _fit(form, sets, starts, seed)
+    with _FITS_LOCK:
+        _FITS[key] = dict(fitted)
+        while len(_FITS) > FITS_KEPT:
+            _FITS.popitem(last=False)
+    return fitted
+
+
+def _fit(form: Form, sets: Sequence[Dataset], starts: int, seed: int) -> dict[str, float]:
+    names = form.free
     lo = np.array([BY_NAME[n].plausible[0] for n in names])
     hi = np.array([BY_NAME[n].plausible[1] for n in names])
     rng = np.random.default_rng(seed)
