@@ -90,7 +90,8 @@ def _synthetic(shipped, phi_sd, stated, seed=7, n=40):
             out = model.steady_state(ParameterSet({**cw.NO_RIPPLE, **truth}), base.load, slip)
             points.append(replace(base, case=f"{ds.name}-{j}", slip=slip, spread=spread,
                                   drawbar_pull=out["drawbar_pull"] + rng.normal(0, 1.0),
-                                  sinkage=out["sinkage"] + rng.normal(0, 5e-4)))
+                                  sinkage=out["sinkage"] + rng.normal(0, 5e-4),
+                                  sinkage_from="surface"))  # the model's: the total sinkage
         sets.append(datasets.Dataset(ds.name, points))
     return sets
 
@@ -205,6 +206,63 @@ def test_a_bad_cell_names_its_line():
     lines[header + 2] = ",".join(cells)
     with pytest.raises(DataError, match=f"line {header + 3}: slip = 'ten' is not a number"):
         datasets.parse("\n".join(lines))
+
+
+def test_sinkage_from_is_read_and_a_wrong_word_names_its_line():
+    lines = _shipped_text().splitlines()
+    header = next(k for k, line in enumerate(lines) if not line.startswith("#"))
+    assert lines[header].split(",")[-1] == "sinkage_from"
+    sets = {ds.name: ds for ds in datasets.parse("\n".join(lines))}
+    assert {p.sinkage_from for p in sets["kls1-smooth"].points} == {"rest"}
+    assert {p.sinkage_from for p in sets["rashid-rig"].points} == {"surface"}  # empty cell
+    lines[header + 1] = lines[header + 1].rsplit(",", 1)[0] + ",grousers"
+    with pytest.raises(DataError, match=f"line {header + 2}: sinkage_from = 'grousers'"):
+        datasets.parse("\n".join(lines))
+
+
+def _rest_datum(ds, form, constants):
+    """``ds`` remeasured by ``form`` itself: its own pull, its sinkage from the wheel at rest."""
+    points = []
+    for p in ds.points:
+        out = cw.predict(form, p, constants)
+        static = cw.predict(form, replace(p, slip=0.0), constants)["sinkage"]
+        points.append(replace(p, drawbar_pull=out["drawbar_pull"],
+                              sinkage=out["sinkage"] - static, sinkage_from="rest"))
+    return replace(ds, points=points)
+
+
+def test_a_sinkage_from_the_wheel_at_rest_is_compared_as_measured(shipped):
+    """A data set whose sinkage is measured from the wheel at rest is met by the form that made
+    it (errors ~0); read as from the surface, it misses by the static sinkage; the soil's
+    spread of a sinkage from rest vanishes at zero slip (the datum moves with the soil)."""
+    form, constants = cw.BY_FORM["patch"], {}
+    ds = _rest_datum(shipped[0], form, constants)
+    fold = cw.judge(form, constants, cw.Discrepancy(0.0, 0.0), ds)
+    assert fold.mae("sinkage") < 1e-9
+    assert fold.mae("drawbar_pull") < 1e-9
+    surface = replace(ds, points=[replace(p, sinkage_from="surface") for p in ds.points])
+    static = cw.predict(form, replace(surface.points[0], slip=0.0), constants)["sinkage"]
+    assert cw.judge(form, constants, cw.Discrepancy(0.0, 0.0), surface).mae("sinkage") == \
+        pytest.approx(static, rel=1e-9)
+    at_zero = replace(ds.points[0], slip=0.0)
+    assert cw.soil_sigma(form, at_zero, constants)["sinkage"] < 1e-12
+    assert cw.soil_sigma(form, replace(at_zero, sinkage_from="surface"),
+                         constants)["sinkage"] > 1e-4
+
+
+def test_the_line_takes_its_intercept_off_a_sinkage_from_the_wheel_at_rest(shipped):
+    """The baseline's sinkage from rest is b*i*R: its datum takes the intercept a off, as the
+    forms' takes their sinkage at zero slip off."""
+    held = shipped[3]
+    rest = replace(held, points=[replace(p, sinkage_from="rest") for p in held.points])
+    surface = replace(held, points=[replace(p, sinkage_from="surface") for p in held.points])
+    (row_rest,) = cw.line_rows(shipped, [rest])
+    (row_surface,) = cw.line_rows(shipped, [surface])
+    _, a = row_rest["fitted"]["sinkage"]
+    for p in held.points:
+        r = p.values["wheel.radius"]
+        assert row_surface["errors"][p.case]["sinkage"] - row_rest["errors"][p.case]["sinkage"] \
+            == pytest.approx(a * r, abs=1e-12)
 
 
 def test_cli_validate_data_malformed_file_exits_2_with_one_line(tmp_path):

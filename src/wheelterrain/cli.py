@@ -1226,7 +1226,11 @@ def validate(json_target: str | None, starts: int, data_file: str | None) -> Non
     --data FILE.csv: '#' comment lines, a header, one row per test point. Columns (SI; a
     header may carry its unit in brackets, e.g. 'load [N]'):
       wheel.radius, wheel.width, grouser.height, grouser.count, load, slip (traction),
-      drawbar_pull, sinkage, optional torque, optional dataset (groups rows), optional case;
+      drawbar_pull, sinkage, optional torque, optional dataset (groups rows), optional case,
+      optional sinkage_from: surface (the default: from the undisturbed soil) or rest (from
+      the wheel resting under its load: the static sinkage zeroed, as a rig reports it that
+      zeroes its sensor after placing the wheel; compared as the prediction less its sinkage
+      at zero slip);
       soil.n0, soil.cohesion, soil.phi [rad], soil.gamma, soil.shear_modulus, and
       soil.k_c + soil.k_phi (Reece) or bekker.k_c [N/m^(n+1)] + bekker.k_phi [N/m^(n+2)];
       optional sd.<soil column>: its standard deviation.

@@ -321,7 +321,7 @@ TABLE: tuple[Parameter, ...] = (
        "project's", plausible=(0.0, 1.0, "0 (no wedge) to the full Rankine passive force. "
                                   "Bekker's bulldozing coefficients give 12-31 times more at "
                                   "phi 25-40 deg; so bounded, the cross-wheel fits reach "
-                                  "1.1-2.5 and the held-out pull worsens (7.09 -> 8.55 N)")),
+                                  "1.2-2.1 and the held-out pull worsens (6.78 -> 8.56 N)")),
     _P("model.diameter_exponent", "1", 0.0, -1.0, 1.0,
        "Diameter dependence of the pressure-sinkage modulus: multiplied by "
        "(2R/0.5 m)**exponent. 0 = the flat-plate (Bekker/Reece) law.",

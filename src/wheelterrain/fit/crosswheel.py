@@ -40,6 +40,7 @@ import threading
 from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -105,9 +106,38 @@ def steady(form: Form, point: Point, constants: dict[str, float] | None = None) 
 
 
 def predict(form: Form, point: Point, constants: dict[str, float] | None = None) -> dict:
-    """Steady-state drawbar pull, sinkage and torque of ``point`` in ``form``."""
-    out = steady(form, point, constants)
-    return {k: out[k] for k in PREDICTED}
+    """Steady-state drawbar pull, sinkage and torque of ``point`` in ``form``, as ``point``'s
+    measurements report them (:func:`as_measured`)."""
+    return as_measured(form, point, constants, steady(form, point, constants))
+
+
+def as_measured(form: Form, point: Point, constants: dict[str, float] | None,
+                state: dict) -> dict[str, float]:
+    """The pull, sinkage and torque of the steady ``state`` of ``point`` in the terms its
+    measurements are in: a sinkage measured from the wheel at rest (``sinkage_from`` ``rest``,
+    :data:`wheelterrain.fit.datasets.SINKAGE_FROM`) is the predicted sinkage less the
+    sinkage at zero slip under the same load, :func:`rest_sinkage`."""
+    out = {k: state[k] for k in PREDICTED}
+    if point.sinkage_from == "rest":
+        out["sinkage"] -= rest_sinkage(form, point, constants)
+    return out
+
+
+def rest_sinkage(form: Form, point: Point, constants: dict[str, float] | None = None) -> float:
+    """Where a sinkage measured from the wheel at rest starts: the sinkage of ``point``'s wheel
+    under its load at zero slip. That is the rolling wheel's; a wheel standing still has a
+    symmetric contact and sinks somewhat less, which no form here models, so the conversion
+    may take off a little too much. The points of a data set share it (one solve)."""
+    return _rest_sinkage(form.name, tuple(sorted(form.values.items())),
+                         tuple(sorted((constants or {}).items())),
+                         tuple(sorted(point.values.items())), point.load)
+
+
+@lru_cache(maxsize=4096)
+def _rest_sinkage(name: str, values: tuple, constants: tuple, point: tuple, load: float
+                  ) -> float:
+    ps = ParameterSet({**dict(values), **NO_RIPPLE, **dict(constants), **dict(point)})
+    return float(model.steady_state(ps, load, 0.0)["sinkage"])
 
 
 def _residuals(form: Form, names: Sequence[str], x, sets: Sequence[Dataset]) -> np.ndarray:
@@ -195,6 +225,9 @@ def soil_sigma(form: Form, point: Point, constants: dict[str, float],
     state, :func:`steady`, if the caller has it; else it is solved here)."""
     ps = parameters(form, point, constants)
     jac = model.steady_jacobian(ps, point.load, point.slip, state=state)["d_params"]
+    if point.sinkage_from == "rest":  # the sinkage as measured: less the sinkage at rest
+        jac = jac.copy()
+        jac[0] -= model.steady_jacobian(ps, point.load, 0.0)["d_params"][0]
     rows = {"sinkage": 0, "drawbar_pull": 2}  # steady_jacobian rows: sinkage, Fz, DP, T
     var = dict.fromkeys(rows, 0.0)
     for name, (rel, absolute) in DEFAULT_SPREAD.items():
@@ -234,8 +267,9 @@ class Discrepancy:
             kept = 0  # the points of ds the form predicts
             for pt in ds.points:
                 try:
-                    out = steady(form, pt, constants)
-                    sigma = soil_sigma(form, pt, constants, out)
+                    state = steady(form, pt, constants)
+                    sigma = soil_sigma(form, pt, constants, state)
+                    out = as_measured(form, pt, constants, state)
                 except WheelTerrainError:
                     continue
                 for key, scale, needed in (("drawbar_pull", pt.load, pull),
@@ -323,15 +357,15 @@ def judge(form: Form, constants: dict[str, float], discrepancy: Discrepancy, hel
     for pt in held.points:
         entry = {"case": pt.case, "load": pt.load, "slip": pt.slip,
                  "measured": {"drawbar_pull": pt.drawbar_pull, "sinkage": pt.sinkage},
-                 "scale": _scale(pt)}
+                 "sinkage_from": pt.sinkage_from, "scale": _scale(pt)}
         try:
             state = steady(form, pt, constants)
+            out = as_measured(form, pt, constants, state)
         except WheelTerrainError as err:
             fold.error = f"{pt.case}: {err}"
             entry.update(drawbar_pull=None, sinkage=None)
             fold.points.append(entry)
             continue
-        out = {k: state[k] for k in PREDICTED}
         entry.update(out)
         if intervals:
             half = discrepancy.half_widths(soil_sigma(form, pt, constants, state), pt.load)
@@ -392,19 +426,22 @@ data sets (tests/test_crosswheel.py reruns it); judged by the nested protocol's 
 def line_rows(sets: Sequence[Dataset], judged: Sequence[Dataset] | None = None) -> list[dict]:
     """The simple baseline held out data set by data set: pull/load = a + b*i and
     sinkage/R = a + b*i (dimensionless, so that one line spans wheels and loads), least squares
-    on the other data sets' points; no physics, no soil values, no interval. ``judged``: the
-    data sets to predict (a user's), each from ``sets`` less any of its name; default
-    ``sets`` themselves."""
+    on the other data sets' points; no physics, no soil values, no interval. A sinkage
+    measured from the wheel at rest is b*i (its datum takes a off, as :func:`as_measured`
+    takes the sinkage at zero slip off a form's). ``judged``: the data sets to predict (a
+    user's), each from ``sets`` less any of its name; default ``sets`` themselves."""
     rows = []
     for held in (sets if judged is None else judged):
         train = [p for ds in sets if ds.name != held.name for p in ds.points]
         slips = np.array([p.slip for p in train])
+        from_surface = np.array([p.sinkage_from == "surface" for p in train], dtype=float)
         fits = {"drawbar_pull": np.polyfit(slips, [p.drawbar_pull / p.load for p in train], 1),
-                "sinkage": np.polyfit(slips, [p.sinkage / p.values["wheel.radius"]
-                                              for p in train], 1)}
-        scale = {"drawbar_pull": lambda p: p.load, "sinkage": lambda p: p.values["wheel.radius"]}
-        errors = {p.case: {k: float(np.polyval(c, p.slip) * scale[k](p) - getattr(p, k))
-                           for k, c in fits.items()} for p in held.points}
+                "sinkage": np.linalg.lstsq(
+                    np.column_stack([slips, from_surface]),
+                    [p.sinkage / p.values["wheel.radius"] for p in train], rcond=None)[0]}
+
+        errors = {p.case: {k: float(_on_line(fits[k], k, p) - getattr(p, k)) for k in fits}
+                  for p in held.points}
         mae = {k: float(np.mean([abs(e[k]) for e in errors.values()])) for k in fits}
         share = {k: float(np.mean([abs(errors[p.case][k]) / _scale(p)[k] for p in held.points]))
                  for k in fits}
@@ -418,6 +455,14 @@ def line_rows(sets: Sequence[Dataset], judged: Sequence[Dataset] | None = None) 
                      "judged_on": [p.case for p in held.points], "data": held.name,
                      "errors": errors})
     return rows
+
+
+def _on_line(fit, key: str, p: Point) -> float:
+    """The line ``fit`` = (b, a) at ``p``, in ``key``'s unit: (a + b*i) times the load or the
+    radius; a sinkage from the wheel at rest without the intercept."""
+    b, a = fit
+    at_rest = key == "sinkage" and p.sinkage_from == "rest"
+    return (b * p.slip + (0.0 if at_rest else a)) * _scale(p)[key]
 
 
 CANDIDATES: tuple[Form, ...] = (

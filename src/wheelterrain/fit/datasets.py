@@ -8,7 +8,10 @@ carry its unit in brackets (``load [N]``), which must then be the unit below:
 - the wheel: ``wheel.radius`` [m], ``wheel.width`` [m], ``grouser.height`` [m], ``grouser.count``;
 - the test: ``load`` [N], ``slip`` (traction slip i = (omega*R - V)/(omega*R)),
   ``drawbar_pull`` [N], ``sinkage`` [m], optional ``torque`` [N.m], optional ``dataset`` (groups
-  rows; default ``user``) and ``case`` (a label);
+  rows; default ``user``) and ``case`` (a label), optional ``sinkage_from``: where the sinkage
+  is measured from, ``surface`` (the undisturbed soil surface: the total sinkage; the default)
+  or ``rest`` (the wheel resting on the soil under its load before it drives: the static
+  sinkage zeroed, as a rig that zeroes its sinkage sensor after placing the wheel reports it);
 - the soil, in the parameter table's names (``soil.n0``, ``soil.k_c``, ``soil.k_phi``,
   ``soil.cohesion`` [Pa], ``soil.phi`` [rad], ``soil.gamma`` [N/m3], ``soil.shear_modulus``
   [m]) or with the pressure-sinkage moduli in Bekker's form (``bekker.k_c`` [N/m^(n+1)],
@@ -39,7 +42,11 @@ SOIL_COMMON = ("soil.n0", "soil.cohesion", "soil.phi", "soil.gamma", "soil.shear
 REECE = ("soil.k_c", "soil.k_phi")
 BEKKER = ("bekker.k_c", "bekker.k_phi")
 UNITS = {"load": "N", "slip": "1", "drawbar_pull": "N", "sinkage": "m", "torque": "N.m",
-         "bekker.k_c": "N/m^(n+1)", "bekker.k_phi": "N/m^(n+2)", "dataset": "", "case": ""}
+         "bekker.k_c": "N/m^(n+1)", "bekker.k_phi": "N/m^(n+2)", "dataset": "", "case": "",
+         "sinkage_from": ""}
+SINKAGE_FROM = ("surface", "rest")
+"""Where a measured sinkage is measured from: the undisturbed surface (total sinkage) or the
+wheel at rest under its load (the static sinkage zeroed); see the module doc."""
 DEFAULT_SPREAD = {
     "soil.phi": (0.0, 2.0 * math.pi / 180),
     "soil.cohesion": (0.3, 100.0),
@@ -69,6 +76,7 @@ class Point:
     drawbar_pull: float
     sinkage: float
     torque: float = math.nan
+    sinkage_from: str = "surface"  # one of SINKAGE_FROM
 
 
 @dataclass
@@ -197,10 +205,14 @@ def _point(cells: dict[str, str], line: int) -> Point:
     slip = get("slip")
     if not -1 < slip < 1:
         raise DataError(f"line {line}: slip = {slip:g} must be a traction slip in (-1, 1)")
+    datum = cells.get("sinkage_from") or "surface"
+    if datum not in SINKAGE_FROM:
+        raise DataError(f"line {line}: sinkage_from = {datum!r}: one of "
+                        f"{', '.join(SINKAGE_FROM)} (or empty: surface)")
     return Point(dataset=cells.get("dataset") or "user", case=cells.get("case") or f"line {line}",
                  values=values, spread=spread, load=load, slip=slip,
                  drawbar_pull=get("drawbar_pull"), sinkage=get("sinkage"),
-                 torque=get("torque", False))
+                 torque=get("torque", False), sinkage_from=datum)
 
 
 def read(path: str | Path) -> list[Dataset]:
