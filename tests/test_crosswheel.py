@@ -308,6 +308,42 @@ def test_cli_validate_data_json_rows(tmp_path):
     assert "my-wheel: " in text.stdout
     assert "line " in text.stdout
     assert "pull/W" in text.stdout
+    assert "sinkage datum check" in text.stdout
+    assert "far below" not in text.stdout  # Ding's sinkage starts near its static one
+    (check,) = result["sinkage_datum"]
+    assert check["dataset"] == "my-wheel"
+    assert check["suspect"] is False
+
+
+def test_the_datum_check_flags_kls1_read_from_the_surface_and_nothing_else(shipped):
+    """The check that uses no fitted constant: read from the surface, both KLS-1 sets start far
+    below the static sinkage of their own soil values, the other four near it; marked as
+    measured from the wheel at rest (as shipped), nothing is flagged."""
+    surface = [replace(ds, points=[replace(p, sinkage_from="surface") for p in ds.points])
+               for ds in shipped]
+    rows = cw.datum_check(surface)
+    assert [r["dataset"] for r in rows if r["suspect"]] == ["kls1-smooth", "kls1-lugged"]
+    for r in rows:
+        assert r["ratio"] == pytest.approx(r["sinkage"] / r["static_patch"])
+        assert (r["ratio"] < 0.25) == r["dataset"].startswith("kls1")
+        assert r["static_classical"] > r["static_patch"] > 0
+    assert not any(r["suspect"] for r in cw.datum_check(shipped))
+
+
+def test_cli_validate_data_flags_a_sinkage_that_looks_measured_from_rest(tmp_path):
+    """A user's file of KLS-1's rows with the sinkage_from column left empty (read from the
+    surface): validate --data says what to check, in the text and in the JSON."""
+    lines = [line for line in _shipped_text().splitlines() if not line.startswith("#")]
+    mine = [lines[0]] + [line.replace("kls1-smooth", "my-wheel").rsplit(",", 1)[0] + ","
+                         for line in lines if line.startswith("kls1-smooth")]
+    path = tmp_path / "mine.csv"
+    path.write_text("\n".join(mine) + "\n", encoding="utf-8")
+    run = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "validate", "--data",
+                          str(path)], capture_output=True, text=True, timeout=600, check=True)
+    flagged = [line for line in run.stdout.splitlines() if "far below" in line]
+    assert len(flagged) == 1
+    assert flagged[0].strip().startswith("my-wheel: sinkage 1.0 mm")
+    assert "sinkage_from = rest" in flagged[0]
 
 
 def test_mechanisms_act_as_documented(shipped):

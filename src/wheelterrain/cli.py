@@ -1267,6 +1267,7 @@ def _validate_user_data(data_file: str, json_target: str | None, starts: int) ->
               "units": {"drawbar_pull_mae": "N", "sinkage_mae": "m",
                         "drawbar_pull_mae_per_load": "1", "sinkage_mae_per_radius": "1"}}
     result["beats_the_line"] = crosswheel.verdicts(rows)
+    result["sinkage_datum"] = crosswheel.datum_check(user)
     forms = [r for r in rows if r["model"] != "line"]
     failed = [r for r in forms if r.get("error")]
     if not _emit_json(json_target, result):

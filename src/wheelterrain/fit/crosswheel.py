@@ -613,6 +613,56 @@ def user_rows(user: Sequence[Dataset], shipped: Sequence[Dataset], starts: int =
     return rows
 
 
+DATUM_WORDS = {"surface": "the surface", "rest": "the wheel at rest"}
+DATUM_SUSPECT = 1 / 3
+"""A sinkage from the surface below this share of the static sinkage its own soil values give
+(:func:`datum_check`) is flagged: on the shipped data sets the four read from the surface
+start at 0.85-1.12 of it, KLS-1 at 0.09 and 0.21 (validation/DATA.md, "Sinkage datum")."""
+
+
+def datum_check(sets: Sequence[Dataset]) -> list[dict]:
+    """Per data set, a check of its sinkage datum that uses no fitted constant: its sinkage at
+    its lowest slip beside the static sinkage (zero slip, :func:`rest_sinkage`) that its own
+    wheel and soil values give in the ``patch`` form (and in the classical arc, for
+    comparison). A sinkage read from the surface far below it (``ratio`` <
+    :data:`DATUM_SUSPECT`) suggests a rig that zeroes its sensor once the wheel rests on the
+    soil (``sinkage_from`` = ``rest``), or soil values much stiffer than the test's soil."""
+    rows = []
+    for ds in sets:
+        first = min(ds.points, key=lambda p: p.slip)
+        static = {}
+        for name in ("patch", "classical"):
+            try:
+                static[name] = rest_sinkage(BY_FORM[name], first)
+            except WheelTerrainError:
+                static[name] = None
+        ratio = (first.sinkage / static["patch"] if static["patch"] and
+                 math.isfinite(first.sinkage) else None)
+        rows.append({"dataset": ds.name, "slip": first.slip, "sinkage": first.sinkage,
+                     "sinkage_from": first.sinkage_from, "static_patch": static["patch"],
+                     "static_classical": static["classical"], "ratio": ratio,
+                     "suspect": bool(first.sinkage_from == "surface" and ratio is not None
+                                     and ratio < DATUM_SUSPECT)})
+    return rows
+
+
+def format_datum_check(rows: Sequence[dict]) -> list[str]:
+    """:func:`datum_check`'s rows as text lines, a flagged data set saying what to check."""
+    lines = []
+    for r in rows:
+        static = ("-" if r["static_patch"] is None else f"{1e3 * r['static_patch']:.1f} mm")
+        ratio = "-" if r["ratio"] is None else f"{r['ratio']:.2f}"
+        line = (f"{r['dataset']}: sinkage {1e3 * r['sinkage']:.1f} mm at slip {r['slip']:g} "
+                f"(from {DATUM_WORDS[r['sinkage_from']]}), the patch form's static sinkage "
+                f"with its "
+                f"own soil values {static} (ratio {ratio})")
+        if r["suspect"]:
+            line += ("; far below it: if the rig zeroed its sinkage once the wheel rested on "
+                     "the soil, mark the rows sinkage_from = rest")
+        lines.append(line)
+    return lines
+
+
 def verdicts(rows: Sequence[dict]) -> dict[str, list[str]]:
     """Per data set, the forms whose pull MAE is below the line's there (rows of one protocol:
     user data or nested)."""

@@ -280,6 +280,7 @@ def run(progress: Callable[[str], None] | None = None, starts: int = 4) -> dict:
     default, scores = crosswheel.choose(shipped, starts=min(starts, 3))
     rows[:0] = nested
     return {"rows": rows, "load": LOAD, "transfer_load": DING_LOAD,
+            "sinkage_datum": crosswheel.datum_check(shipped),
             "default_form": default,
             "default_form_rule": {"rule": crosswheel.SELECTION, "scores": scores,
                                   "judged_by": nested_summary(nested)},
@@ -355,4 +356,8 @@ def format_table(result: dict) -> str:
             f"On all data sets the rule picks {result['default_form']}. Constants at a bound of "
             f"their plausible range in most folds: "
             f"{', '.join(rule['at_bound_in_most_folds']) or 'none'}.")
+    if result.get("sinkage_datum"):
+        lines += ["", "sinkage datum check (lowest slip against the static sinkage, nothing "
+                  "fitted):"]
+        lines += ["  " + line for line in crosswheel.format_datum_check(result["sinkage_datum"])]
     return "\n".join(lines)
