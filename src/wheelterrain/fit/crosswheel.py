@@ -30,6 +30,11 @@ widened to the union of the intervals of every candidate the rule cannot tell fr
 choice (:func:`within_reach`: a score within one standard error of the chosen one's).
 
 Coverage is the share of held-out points inside their interval; its nominal value is 90 %.
+
+Every comparison is made in the terms each point was measured in (:func:`as_measured`): a
+sinkage measured from the wheel at rest (the data's ``sinkage_from``) is compared with the
+prediction less its sinkage at zero slip; :func:`datum_check` is the check, with no fitted
+constant, that flags a data set whose sinkage looks measured so.
 """
 
 from __future__ import annotations
