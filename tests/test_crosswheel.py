@@ -310,6 +310,8 @@ def test_cli_validate_data_json_rows(tmp_path):
     assert "pull/W" in text.stdout
     assert "sinkage datum check" in text.stdout
     assert "far below" not in text.stdout  # Ding's sinkage starts near its static one
+    assert "my-wheel: inside its training sets' range" in text.stdout  # Ding's own values
+    assert all(r["outside_training"] == {} for r in rows)
     (check,) = result["sinkage_datum"]
     assert check["dataset"] == "my-wheel"
     assert check["suspect"] is False
@@ -344,6 +346,27 @@ def test_cli_validate_data_flags_a_sinkage_that_looks_measured_from_rest(tmp_pat
     assert len(flagged) == 1
     assert flagged[0].strip().startswith("my-wheel: sinkage 1.0 mm")
     assert "sinkage_from = rest" in flagged[0]
+
+
+def test_reach_names_what_a_held_out_set_holds_beyond_its_training_sets(shipped):
+    """The Rashid rig's wheel is smaller and narrower, and presses harder, than any other
+    data set's: held out, its fold extrapolates, and the check says in what and how far; Ding's
+    smooth wheel lies inside the others' range; a set trained on itself is inside."""
+    by = {ds.name: ds for ds in shipped}
+    rig = by["rashid-rig"]
+    others = [ds for ds in shipped if ds is not rig]
+    beyond = cw.outside_training(rig, others)
+    assert beyond["wheel.radius"] == {"value": [0.05, 0.05], "trained": [0.085, pytest.approx(
+        max(p.values["wheel.radius"] for ds in others for p in ds.points))]}
+    assert {"wheel.width", "pressure"} <= set(beyond)
+    assert beyond["pressure"]["value"][0] == pytest.approx(62.0 / (2 * 0.05 * 0.075))
+    assert "grouser.height" not in beyond
+    assert "slip" not in beyond
+    ding = by["ding2011-smooth"]
+    assert cw.outside_training(ding, [ds for ds in shipped if ds is not ding]) == {}
+    assert cw.outside_training(rig, shipped) == {}
+    (line,) = cw.format_reach([{"dataset": "rashid-rig", "outside_training": beyond}])
+    assert line.startswith("rashid-rig: extrapolates in wheel.radius 0.05 m (trained on 0.085-")
 
 
 def test_mechanisms_act_as_documented(shipped):
@@ -383,7 +406,7 @@ def test_steady_interval_brackets_the_prediction():
 
 NESTED_KEYS = {"protocol", "dataset", "model", "drawbar_pull_mae", "sinkage_mae",
                "drawbar_pull_mae_per_load", "sinkage_mae_per_radius", "interval_coverage",
-               "trained_on"}
+               "trained_on", "outside_training"}
 
 
 @pytest.fixture

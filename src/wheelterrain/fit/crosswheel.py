@@ -524,8 +524,10 @@ def nested_rows(sets: Sequence[Dataset], starts: int = 3,
     (it has nothing to choose)."""
     rows = []
     for row in line_rows(sets):
-        rows.append({**row, "protocol": NESTED,
-                     "trained_on": [ds.name for ds in sets if ds.name != row["dataset"]]})
+        held = next(ds for ds in sets if ds.name == row["dataset"])
+        train = [ds for ds in sets if ds.name != row["dataset"]]
+        rows.append({**row, "protocol": NESTED, "trained_on": [ds.name for ds in train],
+                     "outside_training": outside_training(held, train)})
         if progress:
             progress(f"line without {row['dataset']}")
     for held in sets:
@@ -547,7 +549,8 @@ def nested_fold(sets: Sequence[Dataset], held_name: str, starts: int = 3,
                       inner=[f.constants for f in inner[name]]) for name in near]
     row = widened(folds[0], folds[1:]).as_row()
     row.update(protocol=NESTED, trained_on=[ds.name for ds in train],
-               selection={"rule": SELECTION, "scores": scores, "within_reach": near})
+               selection={"rule": SELECTION, "scores": scores, "within_reach": near},
+               outside_training=outside_training(held, train))
     return row
 
 
@@ -598,9 +601,10 @@ def user_rows(user: Sequence[Dataset], shipped: Sequence[Dataset], starts: int =
     any that bears the user's data set's name (a shipped data set given back is judged held
     out, so its row reproduces the leave-one-dataset-out row); never on the user's data."""
     rows = []
-    for row in line_rows(shipped, user):
-        row.update(protocol="user-data", trained_on=[s.name for s in shipped
-                                                     if s.name != row["dataset"]])
+    for row, ds in zip(line_rows(shipped, user), user, strict=True):
+        train = [s for s in shipped if s.name != ds.name]
+        row.update(protocol="user-data", trained_on=[s.name for s in train],
+                   outside_training=outside_training(ds, train))
         rows.append(row)
     for form in sorted(FORMS, key=lambda f: f.name != DEFAULT_FORM):
         fits: dict[tuple[str, ...], tuple] = {}
@@ -611,11 +615,66 @@ def user_rows(user: Sequence[Dataset], shipped: Sequence[Dataset], starts: int =
                 fits[key] = (fit_constants(form, train, starts),
                              held_out_discrepancy(form, train, starts))
             row = judge(form, *fits[key], ds).as_row()
-            row.update(protocol="user-data", trained_on=list(key))
+            row.update(protocol="user-data", trained_on=list(key),
+                       outside_training=outside_training(ds, train))
             rows.append(row)
         if progress:
             progress(form.name)
     return rows
+
+
+REACH = {"wheel.radius": "m", "wheel.width": "m", "grouser.height": "m", "load": "N",
+         "slip": "1", "pressure": "Pa", "soil.n0": "1", "soil.k_phi": "1", "soil.cohesion": "Pa",
+         "soil.phi": "rad"}
+"""What :func:`outside_training` compares: the wheel, the test, the nominal ground pressure
+(load / (width * diameter)) and the soil values of the pressure and the shear."""
+
+
+def _described(pt: Point) -> dict[str, float]:
+    out = {name: pt.values[name] for name in REACH if name in pt.values}
+    out.update(load=pt.load, slip=pt.slip,
+               pressure=pt.load / (2 * pt.values["wheel.radius"] * pt.values["wheel.width"]))
+    return out
+
+
+def outside_training(held: Dataset, train: Sequence[Dataset]) -> dict[str, dict]:
+    """Where ``held`` lies outside every one of its ``train`` sets: per :data:`REACH` name
+    with a value beyond the training points' range, ``held``'s range and the training range.
+    A fold that predicts such a data set extrapolates; nothing here is fitted, and nothing in a
+    fold's choice or interval depends on it (it explains a miss, it does not widen it)."""
+    inside = [_described(p) for ds in train for p in ds.points]
+    if not inside:
+        return {}
+    out = {}
+    for name in REACH:
+        values = [_described(p)[name] for p in held.points]
+        lo, hi = (min(d[name] for d in inside), max(d[name] for d in inside))
+        tol = 1e-9 * max(abs(lo), abs(hi), 1e-12)
+        if min(values) < lo - tol or max(values) > hi + tol:
+            out[name] = {"value": [min(values), max(values)], "trained": [lo, hi]}
+    return out
+
+
+def format_reach(rows: Sequence[dict]) -> list[str]:
+    """One text line per data set of ``rows`` (nested or user-data rows, which carry
+    ``outside_training``): the values it holds beyond its training sets' range."""
+    seen: dict[str, dict] = {}
+    for r in rows:
+        if "outside_training" in r and r["dataset"] not in seen:
+            seen[r["dataset"]] = r["outside_training"]
+    lines = []
+    for name, beyond in seen.items():
+        if not beyond:
+            lines.append(f"{name}: inside its training sets' range")
+            continue
+        parts = []
+        for key, entry in beyond.items():
+            (a, b), (lo, hi) = entry["value"], entry["trained"]
+            value = f"{a:.4g}" if a == b else f"{a:.4g}-{b:.4g}"
+            unit = "" if REACH[key] == "1" else f" {REACH[key]}"
+            parts.append(f"{key} {value}{unit} (trained on {lo:.4g}-{hi:.4g})")
+        lines.append(f"{name}: extrapolates in " + ", ".join(parts))
+    return lines
 
 
 DATUM_WORDS = {"surface": "the surface", "rest": "the wheel at rest"}

@@ -356,6 +356,11 @@ def format_table(result: dict) -> str:
             f"On all data sets the rule picks {result['default_form']}. Constants at a bound of "
             f"their plausible range in most folds: "
             f"{', '.join(rule['at_bound_in_most_folds']) or 'none'}.")
+    reach = crosswheel.format_reach(result["rows"])
+    if reach:
+        lines += ["", "reach (each data set's values beyond its training sets' range: a fold "
+                  "that predicts it extrapolates; nothing fitted):"]
+        lines += ["  " + line for line in reach]
     if result.get("sinkage_datum"):
         lines += ["", "sinkage datum check (lowest slip against the static sinkage, nothing "
                   "fitted):"]
