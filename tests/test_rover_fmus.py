@@ -253,7 +253,7 @@ def test_earth_s_stall_in_a_one_step_late_engine_closes_on_ours_as_the_step_halv
         assert run["figures"]["step_s"] == ref["figures"]["step_s"] == h
         d = rover_system.difference(ref["result"], run["result"],
                                     rover_system.scenarios("earth")["slope"].settle)
-        assert d["worst"] <= 2e-3, d
+        assert d["worst"] <= 1e-3, d  # measured 7.3e-4 and 7.2e-4
         gap[h] = ref["figures"]["stall_slope_deg"] - run["figures"]["stall_slope_deg"]
     assert gap[1e-3] > 0  # the delayed stiff spring stalls it early
     assert 0 < gap[5e-4] <= gap[1e-3] / 2, gap

@@ -600,23 +600,22 @@ def user_rows(user: Sequence[Dataset], shipped: Sequence[Dataset], starts: int =
     `validate --data`'s rows. The constants are fitted on the shipped data sets, leaving out
     any that bears the user's data set's name (a shipped data set given back is judged held
     out, so its row reproduces the leave-one-dataset-out row); never on the user's data."""
+    trains = [[s for s in shipped if s.name != ds.name] for ds in user]
+    reach = [outside_training(ds, train) for ds, train in zip(user, trains, strict=True)]
     rows = []
-    for row, ds in zip(line_rows(shipped, user), user, strict=True):
-        train = [s for s in shipped if s.name != ds.name]
+    for row, train, beyond in zip(line_rows(shipped, user), trains, reach, strict=True):
         row.update(protocol="user-data", trained_on=[s.name for s in train],
-                   outside_training=outside_training(ds, train))
+                   outside_training=beyond)
         rows.append(row)
     for form in sorted(FORMS, key=lambda f: f.name != DEFAULT_FORM):
         fits: dict[tuple[str, ...], tuple] = {}
-        for ds in user:
-            train = [s for s in shipped if s.name != ds.name]
+        for ds, train, beyond in zip(user, trains, reach, strict=True):
             key = tuple(s.name for s in train)
             if key not in fits:
                 fits[key] = (fit_constants(form, train, starts),
                              held_out_discrepancy(form, train, starts))
             row = judge(form, *fits[key], ds).as_row()
-            row.update(protocol="user-data", trained_on=list(key),
-                       outside_training=outside_training(ds, train))
+            row.update(protocol="user-data", trained_on=list(key), outside_training=beyond)
             rows.append(row)
         if progress:
             progress(form.name)
@@ -645,9 +644,10 @@ def outside_training(held: Dataset, train: Sequence[Dataset]) -> dict[str, dict]
     inside = [_described(p) for ds in train for p in ds.points]
     if not inside:
         return {}
+    mine = [_described(p) for p in held.points]
     out = {}
     for name in REACH:
-        values = [_described(p)[name] for p in held.points]
+        values = [d[name] for d in mine]
         lo, hi = (min(d[name] for d in inside), max(d[name] for d in inside))
         tol = 1e-9 * max(abs(lo), abs(hi), 1e-12)
         if min(values) < lo - tol or max(values) > hi + tol:
