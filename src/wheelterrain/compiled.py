@@ -31,7 +31,13 @@ class CompileError(RuntimeError):
 
 
 def compiler() -> str | None:
-    return os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
+    """The C compiler to use: $CC where it names a program that exists, else cc or gcc on
+    PATH; None where there is none (a $CC that does not exist is none: the callers fall back to
+    CasADi's VM, as without a compiler)."""
+    chosen = os.environ.get("CC")
+    if chosen:
+        return chosen if shutil.which(chosen) else None
+    return shutil.which("cc") or shutil.which("gcc")
 
 
 def cache_directory() -> Path:
@@ -114,6 +120,18 @@ def fingerprint(fn: ca.Function) -> str:
     made from this very Function."""
     with tempfile.TemporaryDirectory(prefix="wheelterrain_fp_") as tmp:
         return _digest(_generate(fn, Path(tmp)))
+
+
+def vm_arrays(fn: ca.Function):
+    """``fn`` on CasADi's virtual machine with :meth:`CompiledFunction.arrays`' convention:
+    each output a flat numpy array in CasADi's own (column-major) order, as the compiled
+    buffers hold it; the fallback where no library could be compiled."""
+
+    def evaluate(*inputs) -> list[np.ndarray]:
+        return [np.asarray(out, dtype=np.float64).ravel(order="F") for out in fn.call(
+            list(inputs))]
+
+    return evaluate
 
 
 class CompiledFunction:

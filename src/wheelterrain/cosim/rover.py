@@ -237,7 +237,7 @@ def _evaluator(block: int) -> tuple[Callable, str]:
         c = compiled.CompiledFunction(library, fn)
         return c.arrays, "compiled C"
     except compiled.CompileError:
-        return (lambda *a: [np.array(v).ravel().tolist() for v in fn(*a)]), "CasADi VM"
+        return compiled.vm_arrays(fn), "CasADi VM"
 
 
 @dataclass

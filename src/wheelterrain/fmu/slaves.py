@@ -27,8 +27,6 @@ from functools import partial
 from pathlib import Path
 from types import MappingProxyType
 
-import numpy as np
-
 from wheelterrain import compiled as native
 from wheelterrain.errors import ParameterError
 from wheelterrain.fmu import functions as fmu_model
@@ -52,9 +50,10 @@ def compiled_or_vm(fn, resources: str | None = None):
             except (OSError, native.CompileError):
                 continue  # another platform or another version: the VM gives the same numbers
 
-    def vm(*args):  # fn.call: a list of outputs, also for a Function with one output
-        return [np.asarray(x, dtype=float).ravel().tolist() if x.numel() > 1 else float(x)
-                for x in fn.call(list(args))]
+    arrays = native.vm_arrays(fn)  # a list of outputs, also for a Function with one output
+
+    def vm(*args):
+        return [x.tolist() if x.size > 1 else float(x[0]) for x in arrays(*args)]
 
     return vm, "CasADi VM"
 
