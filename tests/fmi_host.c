@@ -18,6 +18,9 @@
  * FMI_HOST_EXIT (FMI 2) "terminate": return from main after fmi2Terminate without
  * fmi2FreeInstance; "none": without either (as hosts that leave cleanup to the process exit);
  * else both.
+ * FMI_HOST_RELOAD (FMI 2), if set: after the first instance is initialised, the library is
+ * closed and opened again (as ecos does between two instances of one FMU, the first one alive)
+ * and a second instance runs beside the first; every step both must give the same values.
  * Exit status 0 if every call returned fmi2OK, else 1 (the failing call is printed).
  */
 #include <stdarg.h>
@@ -32,6 +35,7 @@
 #include <windows.h>
 typedef HMODULE Library;
 static Library open_library(const char *path) { return LoadLibraryA(path); }
+static void close_library(Library lib) { FreeLibrary(lib); }
 static void *symbol(Library lib, const char *name) { return (void *)GetProcAddress(lib, name); }
 static double now(void) {
     LARGE_INTEGER count, frequency;
@@ -44,6 +48,7 @@ static double now(void) {
 #include <time.h>
 typedef void *Library;
 static Library open_library(const char *path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
+static void close_library(Library lib) { dlclose(lib); }
 static void *symbol(Library lib, const char *name) { return dlsym(lib, name); }
 static double now(void) {
     struct timespec ts;
@@ -175,6 +180,71 @@ static int run3(Library lib, const char *token, int steps, double h, int n_set,
     return 0;
 }
 
+/* The FMI 2 functions the host calls. */
+typedef struct {
+    fmi2InstantiateTYPE *instantiate;
+    fmi2SetupExperimentTYPE *setup;
+    fmi2EnterInitializationModeTYPE *enter;
+    fmi2ExitInitializationModeTYPE *leave;
+    fmi2SetRealTYPE *set_real;
+    fmi2SetBooleanTYPE *set_boolean;
+    fmi2SetIntegerTYPE *set_integer;
+    fmi2GetRealTYPE *get_real;
+    fmi2DoStepTYPE *do_step;
+    fmi2TerminateTYPE *terminate;
+    fmi2FreeInstanceTYPE *free_instance;
+} Fmi2;
+
+/* 1 if ``lib`` has every function of Fmi2. */
+static int load2(Library lib, Fmi2 *f) {
+    f->instantiate = (fmi2InstantiateTYPE *)symbol(lib, "fmi2Instantiate");
+    f->setup = (fmi2SetupExperimentTYPE *)symbol(lib, "fmi2SetupExperiment");
+    f->enter = (fmi2EnterInitializationModeTYPE *)symbol(lib, "fmi2EnterInitializationMode");
+    f->leave = (fmi2ExitInitializationModeTYPE *)symbol(lib, "fmi2ExitInitializationMode");
+    f->set_real = (fmi2SetRealTYPE *)symbol(lib, "fmi2SetReal");
+    f->set_boolean = (fmi2SetBooleanTYPE *)symbol(lib, "fmi2SetBoolean");
+    f->set_integer = (fmi2SetIntegerTYPE *)symbol(lib, "fmi2SetInteger");
+    f->get_real = (fmi2GetRealTYPE *)symbol(lib, "fmi2GetReal");
+    f->do_step = (fmi2DoStepTYPE *)symbol(lib, "fmi2DoStep");
+    f->terminate = (fmi2TerminateTYPE *)symbol(lib, "fmi2Terminate");
+    f->free_instance = (fmi2FreeInstanceTYPE *)symbol(lib, "fmi2FreeInstance");
+    return f->instantiate && f->setup && f->enter && f->leave && f->set_real &&
+           f->set_boolean && f->set_integer && f->get_real && f->do_step && f->terminate &&
+           f->free_instance;
+}
+
+#define CHECK_NULL(call)                                                                     \
+    do {                                                                                     \
+        if ((int)(call) != 0) {                                                              \
+            fprintf(stderr, "%s failed\n", #call);                                           \
+            return NULL;                                                                     \
+        }                                                                                    \
+    } while (0)
+
+/* An instance, initialised with the SET values; NULL (said) if a call failed. */
+static fmi2Component instantiate2(const Fmi2 *f, const char *name, const char *guid,
+                                  const fmi2CallbackFunctions *callbacks, int n_set,
+                                  const fmi2ValueReference *set_vr, const double *set_value,
+                                  const int *kind) {
+    fmi2Component c = f->instantiate(name, fmi2CoSimulation, guid, resources(), callbacks,
+                                     fmi2False, fmi2False);
+    if (!c) {
+        fprintf(stderr, "fmi2Instantiate failed\n");
+        return NULL;
+    }
+    CHECK_NULL(f->setup(c, fmi2False, 0.0, 0.0, fmi2False, 0.0));
+    CHECK_NULL(f->enter(c));
+    for (int i = 0; i < n_set; i++) {
+        fmi2Boolean on = set_value[i] != 0.0;
+        fmi2Integer whole = (fmi2Integer)set_value[i];
+        if (kind[i] == SET_BOOLEAN) CHECK_NULL(f->set_boolean(c, &set_vr[i], 1, &on));
+        else if (kind[i] == SET_INTEGER) CHECK_NULL(f->set_integer(c, &set_vr[i], 1, &whole));
+        else CHECK_NULL(f->set_real(c, &set_vr[i], 1, &set_value[i]));
+    }
+    CHECK_NULL(f->leave(c));
+    return c;
+}
+
 int main(int argc, char **argv) {
     const char *exit_mode = getenv("FMI_HOST_EXIT");
     int leave_at_exit = exit_mode == NULL              ? 0
@@ -209,51 +279,47 @@ int main(int argc, char **argv) {
         return run3(lib, argv[2], steps, h, n_set, set_vr, set_value, kind, n_ramp, ramp_vr,
                     ramp_start, ramp_slope, n_get, get_vr);
     {
-        fmi2InstantiateTYPE *instantiate = (fmi2InstantiateTYPE *)symbol(lib, "fmi2Instantiate");
-        fmi2SetupExperimentTYPE *setup = (fmi2SetupExperimentTYPE *)symbol(lib,
-                                                                           "fmi2SetupExperiment");
-        fmi2EnterInitializationModeTYPE *enter =
-            (fmi2EnterInitializationModeTYPE *)symbol(lib, "fmi2EnterInitializationMode");
-        fmi2ExitInitializationModeTYPE *leave =
-            (fmi2ExitInitializationModeTYPE *)symbol(lib, "fmi2ExitInitializationMode");
-        fmi2SetRealTYPE *set_real = (fmi2SetRealTYPE *)symbol(lib, "fmi2SetReal");
-        fmi2SetBooleanTYPE *set_boolean = (fmi2SetBooleanTYPE *)symbol(lib, "fmi2SetBoolean");
-        fmi2SetIntegerTYPE *set_integer = (fmi2SetIntegerTYPE *)symbol(lib, "fmi2SetInteger");
-        fmi2GetRealTYPE *get_real = (fmi2GetRealTYPE *)symbol(lib, "fmi2GetReal");
-        fmi2DoStepTYPE *do_step = (fmi2DoStepTYPE *)symbol(lib, "fmi2DoStep");
-        fmi2TerminateTYPE *terminate = (fmi2TerminateTYPE *)symbol(lib, "fmi2Terminate");
-        fmi2FreeInstanceTYPE *free_instance = (fmi2FreeInstanceTYPE *)symbol(lib,
-                                                                             "fmi2FreeInstance");
-        if (!instantiate || !setup || !enter || !leave || !set_real || !set_boolean ||
-            !set_integer || !get_real || !do_step ||
-            !terminate || !free_instance) {
+        Fmi2 f;
+        fmi2Component c2 = NULL;
+        double out2[MAX_VARS];
+        if (!load2(lib, &f)) {
             fprintf(stderr, "%s lacks an fmi2 function\n", argv[1]);
             return 1;
         }
-        c = instantiate("host", fmi2CoSimulation, argv[2], resources(), &callbacks, fmi2False,
-                        fmi2False);
-        if (!c) {
-            fprintf(stderr, "fmi2Instantiate failed\n");
-            return 1;
+        c = instantiate2(&f, "host", argv[2], &callbacks, n_set, set_vr, set_value, kind);
+        if (!c) return 1;
+        if (getenv("FMI_HOST_RELOAD")) {
+            close_library(lib);
+            lib = open_library(argv[1]);
+            if (!lib || !load2(lib, &f)) {
+                fprintf(stderr, "cannot load %s again\n", argv[1]);
+                return 1;
+            }
+            c2 = instantiate2(&f, "host2", argv[2], &callbacks, n_set, set_vr, set_value, kind);
+            if (!c2) return 1;
         }
-        CHECK(setup(c, fmi2False, 0.0, 0.0, fmi2False, 0.0));
-        CHECK(enter(c));
-        for (int i = 0; i < n_set; i++) {
-            fmi2Boolean on = set_value[i] != 0.0;
-            fmi2Integer whole = (fmi2Integer)set_value[i];
-            if (kind[i] == SET_BOOLEAN) CHECK(set_boolean(c, &set_vr[i], 1, &on));
-            else if (kind[i] == SET_INTEGER) CHECK(set_integer(c, &set_vr[i], 1, &whole));
-            else CHECK(set_real(c, &set_vr[i], 1, &set_value[i]));
-        }
-        CHECK(leave(c));
         started = now();
         for (int k = 0; k < steps; k++) {
             double ramp[MAX_VARS];
             ramp_at(t, n_ramp, ramp_start, ramp_slope, ramp);
-            if (n_ramp) CHECK(set_real(c, ramp_vr, (size_t)n_ramp, ramp));
-            CHECK(do_step(c, t, h, fmi2True));
+            if (n_ramp) CHECK(f.set_real(c, ramp_vr, (size_t)n_ramp, ramp));
+            CHECK(f.do_step(c, t, h, fmi2True));
+            if (c2) {
+                if (n_ramp) CHECK(f.set_real(c2, ramp_vr, (size_t)n_ramp, ramp));
+                CHECK(f.do_step(c2, t, h, fmi2True));
+            }
             t = (k + 1) * h;
-            CHECK(get_real(c, get_vr, (size_t)n_get, out));
+            CHECK(f.get_real(c, get_vr, (size_t)n_get, out));
+            if (c2) {
+                CHECK(f.get_real(c2, get_vr, (size_t)n_get, out2));
+                for (int i = 0; i < n_get; i++) {
+                    if (out2[i] != out[i]) {
+                        fprintf(stderr, "the second instance differs at t = %g: %.17g != "
+                                "%.17g\n", t, out2[i], out[i]);
+                        return 1;
+                    }
+                }
+            }
             if (timed) {
                 for (int i = 0; i < n_get; i++) checksum += out[i];
                 continue;
@@ -262,9 +328,11 @@ int main(int argc, char **argv) {
         }
         if (timed) printf("%.9g %.17g\n", (now() - started) / steps, checksum);
         if (leave_at_exit == 2) return 0; /* neither fmi2Terminate nor fmi2FreeInstance */
-        CHECK(terminate(c));
+        CHECK(f.terminate(c));
+        if (c2) CHECK(f.terminate(c2));
         if (leave_at_exit == 1) return 0; /* terminated, never freed */
-        free_instance(c);
+        f.free_instance(c);
+        if (c2) f.free_instance(c2);
     }
     return 0;
 }

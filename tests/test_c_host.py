@@ -38,15 +38,17 @@ def host(tmp_path_factory) -> Path:
 
 
 def run_in_c_host(host: Path, fmu: Path, folder: Path, steps: int, get: str,
-                  set_: str = "-", at_exit: str = "free") -> subprocess.CompletedProcess:
+                  set_: str = "-", at_exit: str = "free",
+                  reload: bool = False) -> subprocess.CompletedProcess:
     """Unzip ``fmu`` into ``folder`` and run it in the C host; the embedded interpreter finds
     numpy and casadi on this Python's path. ``at_exit``: what the host calls before it returns
-    from main (FMI_HOST_EXIT of tests/fmi_host.c)."""
+    from main (FMI_HOST_EXIT of tests/fmi_host.c); ``reload``: the library closed and opened
+    again with the first instance alive, a second one beside it (FMI_HOST_RELOAD)."""
     unzip = Path(extract(str(fmu), unzipdir=str(folder)))
     md = read_model_description(str(fmu))
     library = unzip / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
     env = {**ssp.c_host_environment(), "FMI_HOST_RESOURCES": (unzip / "resources").as_uri(),
-           "FMI_HOST_EXIT": at_exit}
+           "FMI_HOST_EXIT": at_exit, **({"FMI_HOST_RELOAD": "1"} if reload else {})}
     return subprocess.run([str(host), str(library), md.guid, str(steps), "0.01", set_, "-", get],
                           capture_output=True, text=True, env=env, timeout=300, check=False)
 
@@ -97,3 +99,19 @@ def test_a_host_that_exits_without_freeing_exits_with_status_0(fmu_dir, host, tm
                             at_exit=at_exit)
         assert run.returncode == 0, (run.returncode, run.stderr[-2000:])
         assert len(run.stdout.splitlines()) == 5
+
+
+@pytest.mark.parametrize(("name", "output"), [("WheelTerrain", "normal_force"),
+                                              ("Terrain", "q1.rut_met")])
+def test_a_host_that_unloads_the_library_between_two_instances_runs_both(fmu_dir, host,
+                                                                         tmp_path, name,
+                                                                         output):
+    """ecos closes an FMU's library and opens it again between two instances of one model,
+    the first alive. The guard's exit handler then ran at the unload and freed the live
+    instance; the reloaded guard handed the next instance the same memory: wrong numbers,
+    then SIGSEGV (Rover-level.ssp on the pythonfmu FMUs, 3 of 3 SSPs with two instances of one
+    model). The guard is linked never to be unloaded (-z nodelete)."""
+    fmu = fmu_dir / f"{name}.fmu"
+    run = run_in_c_host(host, fmu, tmp_path / "run", 20, str(vr(fmu, output)), reload=True)
+    assert run.returncode == 0, (run.returncode, run.stderr[-2000:])
+    assert len(run.stdout.splitlines()) == 20  # both instances, the same values every step

@@ -7,7 +7,8 @@
 - FMU states owned by the guard: a truncated, overwritten, foreign or freed state is fmi2Error
   and the instance goes on;
 - a host's misuse of doStep is fmi2Error; fmi2Terminated only where the FMU cannot go on;
-- an unzip folder named with a literal %20 is refused with a message, not a crash;
+- an unzip folder named with a literal %20 is refused with a message, not a crash; so is a
+  resource location that is not the FMU's resources folder;
 - after fmi2Fatal every call but fmi2FreeInstance is refused, not a crash.
 The C host's exit without fmi2FreeInstance is in tests/test_c_host.py.
 """
@@ -292,6 +293,62 @@ def test_an_unzip_folder_named_with_a_literal_percent_20_is_refused_with_a_messa
     assert "refused:" in run.stdout
     assert "which pythonfmu 0.7 reads as a space" in run.stdout + run.stderr
 
+
+
+# --- a resource location that is not the FMU's resources folder -------------------------
+
+RESOURCE_LOCATIONS = """
+import ctypes, sys
+from pathlib import Path
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2CoSimulation, calloc,
+                       free)
+fmu, scratch = sys.argv[1], Path(sys.argv[2])
+md = read_model_description(fmu)
+said = []
+callbacks = fmi2CallbackFunctions()
+callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, cat, msg:
+                                          said.append(msg.decode()))
+callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+for kind, folder in [("missing", "plain"), ("root", "plain"), ("raw", "a%20b"), ("raw", "a#b")]:
+    # each in a folder of its own: a library is never rewritten while it is loaded
+    root = Path(extract(fmu, unzipdir=str(scratch / kind / folder)))
+    uri = {"missing": (root / "nothere").as_uri(), "root": root.as_uri(),
+           "raw": "file://" + str(root / "resources")}[kind]  # raw: not percent-encoded
+    slave = FMU2Slave(guid=md.guid, unzipDirectory=str(root), instanceName="x",
+                      modelIdentifier=md.coSimulation.modelIdentifier)
+    said.clear()
+    c = slave.fmi2Instantiate(b"x", fmi2CoSimulation, md.guid.encode(), uri.encode(),
+                              ctypes.byref(callbacks), 0, 0)
+    print(kind, folder, "instantiated" if c else "refused", said[-1] if said else "")
+    if c:
+        slave.fmi2FreeInstance(c)
+"""
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_a_resource_location_that_is_not_the_resources_folder_is_refused_with_a_reason(
+        fmu_dir, tmp_path, name):
+    """pythonfmu crashed the host (SIGSEGV, 16 of 16) in fmi2Instantiate on a resource folder
+    that does not exist, on the unzip root given instead of resources/, and on a URI written
+    raw (not percent-encoded) whose folder name decodes to another (a%20b). The guard refuses
+    each with a logged reason and NULL; a raw URI that names the folder (a#b) runs. In a fresh
+    process, so that a crash fails here."""
+    run = subprocess.run([sys.executable, "-c", RESOURCE_LOCATIONS, str(fmu_dir / f"{name}.fmu"),
+                          str(tmp_path)], capture_output=True, text=True, timeout=300,
+                         check=False)
+    assert run.returncode == 0, (run.returncode, run.stderr[-2000:])
+    lines = dict(((kind, folder), rest) for kind, folder, rest in
+                 (line.split(" ", 2) for line in run.stdout.splitlines()))
+    assert lines[("missing", "plain")].startswith("refused")
+    assert "nothere does not exist" in lines[("missing", "plain")]
+    assert lines[("root", "plain")].startswith("refused")
+    assert "it is not this FMU's resources folder" in lines[("root", "plain")]
+    assert lines[("raw", "a%20b")].startswith("refused")
+    assert "raw/a b/resources does not exist" in lines[("raw", "a%20b")]
+    assert lines[("raw", "a#b")].startswith("instantiated")
 
 
 # --- fmi2Fatal: a Python exception escaped the slave --------------------------------------

@@ -8,7 +8,8 @@
  * binary instead: it checks what pythonfmu cannot and forwards every call to pythonfmu's
  * library, which does the work:
  *   - fmi2Instantiate: co-simulation only, the GUID, a file: resource URI decoded whole
- *     (every %XX) before pythonfmu sees it;
+ *     (every %XX) before pythonfmu sees it, naming this FMU's resources folder (pythonfmu
+ *     crashed the host on a folder that does not exist or is not resources/);
  *   - the FMI 2 co-simulation call sequence (fmi2Error and a logged reason when violated);
  *   - value references: each must name a variable of the called type; outputs cannot be set;
  *   - Real and Integer values against the declared ranges (fmi2Error, as the native flavour);
@@ -36,6 +37,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "fmi2Functions.h"
 
@@ -345,6 +348,43 @@ static int decode_uri(const char *uri, char *out, size_t size) {
     return *p == '\0';
 }
 
+/* 1 if ``folder`` is a pythonfmu FMU's resources folder as pythonfmu reads it: a folder
+   holding a readable slavemodule.txt and the slave script it names; else 0, the reason in
+   ``why``. pythonfmu 0.7 does not check it and crashed the host (SIGSEGV) in fmi2Instantiate
+   on a folder that does not exist or is another (the unzip root given instead). */
+static int resources_ok(const char *folder, char *why, size_t size) {
+    struct stat st;
+    char path[4400], module[256];
+    size_t n;
+    FILE *f;
+    if (stat(folder, &st) != 0) {
+        snprintf(why, size, "the resource folder %s does not exist", folder);
+        return 0;
+    }
+    if (!S_ISDIR(st.st_mode)) {
+        snprintf(why, size, "the resource location %s is not a folder", folder);
+        return 0;
+    }
+    snprintf(path, sizeof path, "%s/slavemodule.txt", folder);
+    if ((f = fopen(path, "r")) == NULL) {
+        snprintf(why, size, "%s holds no readable slavemodule.txt: it is not this FMU's "
+                 "resources folder (give the unzipped FMU's resources/ folder)", folder);
+        return 0;
+    }
+    n = fread(module, 1, sizeof module - 1, f);
+    fclose(f);
+    while (n > 0 && (module[n - 1] == '\n' || module[n - 1] == '\r' || module[n - 1] == ' '))
+        n--;
+    module[n] = '\0';
+    snprintf(path, sizeof path, "%s/%s.py", folder, module);
+    if (n == 0 || access(path, R_OK) != 0) {
+        snprintf(why, size, "the slave script %s.py named by %s/slavemodule.txt is missing or "
+                 "unreadable", module, folder);
+        return 0;
+    }
+    return 1;
+}
+
 /* ---- the FMI 2 functions --------------------------------------------------------------- */
 
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
@@ -376,7 +416,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
                               fmi2String resources, const fmi2CallbackFunctions *callbacks,
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
     static int exit_handler;
-    char uri[4096];
+    char uri[4096], why[8600];
     const char *problem;
     Guard *g;
     name = name ? name : "";
@@ -401,6 +441,11 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
                   "contains the text '%%20', which pythonfmu 0.7 reads as a space; unzip the "
                   "FMU into a folder whose path has no '%%20' (or use the native flavour)",
                   GUARD_NAME, uri + 7);
+        return NULL;
+    }
+    if (!resources_ok(uri + 7, why, sizeof why)) {
+        log_error(callbacks, name, "fmi2Instantiate: %s: %s (resource location '%s')",
+                  GUARD_NAME, why, resources);
         return NULL;
     }
     if ((problem = load_library()) != NULL) {

@@ -71,7 +71,11 @@ def guard_binary(model: str, root: ET.Element) -> bytes | None:
         out = Path(tmp) / f"{model}.so"
         command = [cc, "-O2", "-shared", "-fPIC", "-std=c99", "-Wall", "-Wextra", "-Werror",
                    "-I", tmp, "-I", str(fmi_headers()), str(source_dir() / "native" / SOURCE),
-                   "-o", str(out), "-pthread", "-ldl", "-lm"]
+                   "-o", str(out), "-pthread", "-ldl", "-lm",
+                   # never unmapped while the process lives: a host that unloads the library
+                   # with an instance alive (ecos, between two instances of one FMU) ran the
+                   # exit handler then, which freed the live instance (see free_at_exit)
+                   "-Wl,-z,nodelete"]
         run = subprocess.run(command, capture_output=True, text=True, check=False)
         if run.returncode != 0:
             raise BuildError(f"compiling the pythonfmu guard for {model} failed:\n"
