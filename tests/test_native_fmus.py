@@ -547,7 +547,7 @@ def test_native_steps_must_continue_and_states_must_be_their_own(flavours):
         foreign = r.fmu.getFMUstate()
         with pytest.raises(FMICallException):
             t.fmu.setFMUstate(foreign)
-        assert any("not a state of WheelTerrain" in m for m in t.errors()), t.log
+        assert any("not made by this instance of WheelTerrain" in m for m in t.errors()), t.log
         r.fmu.freeFMUstate(foreign)
     finally:
         t.close()
@@ -1310,3 +1310,157 @@ def test_the_compliance_checker_passes_every_fmu_alone(built_root, tmp_path, fol
     assert "\t0 Warning(s)" in out, out[-3000:]
     assert "\t0 Error(s)" in out, out[-3000:]
     assert "Simulation finished successfully" in out, out[-3000:]
+
+
+# --- FMU states: owned by the instance, serialized with their model's id, length, checksum ----
+
+def _native(flavours, name: str, fmi: int, label: str = "s") -> Instance:
+    """A started native instance of ``name``, FMI 2 or 3 (co-simulation), stepped once."""
+    folder = ("native", name) if fmi == 2 else ("fmi3", name)
+    path = flavours["root"] / "native" / ("" if fmi == 2 else "fmi3") / f"{name}.fmu"
+    inst = Instance(path, flavours["unzip"][folder], label, log=True).start({})
+    inst.fmu.doStep(0.0, 1e-3)
+    return inst
+
+
+def _state_calls(inst: Instance, fmi: int) -> tuple:
+    """(get, set, free, serialize, deserialize) of the instance's standard."""
+    f = inst.fmu.raw if fmi == 3 else inst.fmu
+    if fmi == 3:
+        return (f.getFMUState, f.setFMUState, f.freeFMUState, f.serializeFMUState,
+                f.deserializeFMUState)
+    return (f.getFMUstate, f.setFMUstate, f.freeFMUstate, f.serializeFMUstate,
+            f.deSerializeFMUstate)
+
+
+DAMAGES = ("a flipped bit", "a random body", "another model's body", "truncated",
+           "the rut record rewritten")
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("damage", DAMAGES)
+def test_the_native_fmus_refuse_an_altered_serialized_state(flavours, name, fmi, damage):
+    """The native flavour took any bytes with the right header and size as a state with fmi2OK
+    (a flipped byte, random bodies, another model's body under this model's header, and a
+    rewritten rut record, which silently changed 705 of 2000 rut_met reads). A serialized
+    state now carries its model's GUID, its length and a checksum of its body: each is
+    fmi2Error with the reason, and the instance goes on from its own state."""
+    import random
+
+    inst = _native(flavours, name, fmi)
+    other = _native(flavours, "SingleWheelRig" if name != "SingleWheelRig" else "Terrain", fmi,
+                    "other")
+    try:
+        get, set_, free, serialize, deserialize = _state_calls(inst, fmi)
+        state = get()
+        blob = bytearray(serialize(state))
+        free(state)
+        o_get, _, o_free, o_serialize, _ = _state_calls(other, fmi)
+        o_state = o_get()
+        foreign = bytes(o_serialize(o_state))
+        o_free(o_state)
+        header = 112  # the id (96 bytes) with the length and the checksum (8 each)
+        rng = random.Random(7)
+        if damage == "a flipped bit":
+            bad = blob[:]
+            bad[len(blob) // 2] ^= 0x10
+        elif damage == "a random body":
+            bad = blob[:header] + bytearray(rng.randbytes(len(blob) - header))
+        elif damage == "another model's body":
+            bad = blob[:header] + bytearray(foreign[header:])
+        elif damage == "truncated":
+            bad = blob[:-7]
+        else:  # the last values of the body: a Terrain's rut record, the others' last states
+            bad = blob[:]
+            bad[len(blob) - 600: len(blob) - 520] = bytes(rng.randbytes(80))
+        assert bytes(bad) != bytes(blob)
+        with pytest.raises(FMICallException) as info:
+            deserialize(bytes(bad))
+        assert info.value.status == 3  # fmi2Error, fmi3Error
+        said = " ".join(inst.errors())
+        assert ("checksum does not match" in said or "truncated" in said
+                or "not a serialized state" in said), said
+        set_(deserialize(bytes(blob)))  # its own state still works
+        inst.fmu.doStep(1e-3, 1e-3)
+    finally:
+        inst.close()
+        other.close()
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_a_state_pointer_the_instance_did_not_make_or_has_freed_is_refused(flavours, fmi):
+    """A freed state pointer was read (valgrind: 169-721 invalid reads) and Terrain accepted it;
+    another instance's state was taken. Each instance owns its states: any other pointer is
+    fmi2Error, compared with the instance's list, never read (valgrind in
+    test_no_state_call_reads_freed_memory)."""
+    inst = _native(flavours, "Terrain", fmi)
+    twin = _native(flavours, "Terrain", fmi, "twin")
+    try:
+        get, set_, free, serialize, _ = _state_calls(inst, fmi)
+        t_get, _, t_free, _, _ = _state_calls(twin, fmi)
+        own = get()
+        stale = type(own)(own.value)
+        free(own)
+        for call in (lambda: set_(stale), lambda: serialize(stale), lambda: free(stale)):
+            with pytest.raises(FMICallException):
+                call()
+        theirs = t_get()
+        with pytest.raises(FMICallException):
+            set_(theirs)
+        assert any("was not made by this instance" in m for m in inst.errors()), inst.log
+        t_free(theirs)
+        kept = get()  # states left to the instance are freed with it
+        set_(kept)
+        inst.fmu.doStep(1e-3, 1e-3)
+    finally:
+        inst.close()
+        twin.close()
+
+
+STATE_MISUSE = """
+import sys
+from fmpy import extract
+from fmpy.fmi1 import FMICallException
+from wheelterrain.fmu.instance import Instance
+for path in sys.argv[1:]:
+    inst = Instance(path, extract(path), "v", log=True).start({})
+    fmu = inst.fmu.raw if "fmi3" in path else inst.fmu
+    get, set_, free, serialize = ((fmu.getFMUState, fmu.setFMUState, fmu.freeFMUState,
+                                   fmu.serializeFMUState) if "fmi3" in path else
+                                  (fmu.getFMUstate, fmu.setFMUstate, fmu.freeFMUstate,
+                                   fmu.serializeFMUstate))
+    own = get()
+    stale = type(own)(own.value)
+    free(own)
+    refused = 0
+    for call in (lambda: set_(stale), lambda: serialize(stale), lambda: free(stale)):
+        try:
+            call()
+        except FMICallException:
+            refused += 1
+    inst.close()
+    print(path, refused)
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(shutil.which("valgrind") is None, reason="needs valgrind (.ci/run installs it)")
+def test_no_state_call_reads_freed_memory(flavours, tmp_path):
+    """Under memcheck: a freed state given to set, serialize and free, in every native FMU,
+    FMI 2 and 3: each refused, and no invalid read, write or free in the FMUs' binaries."""
+    paths = [str(flavours["root"] / "native" / sub / f"{n}.fmu") for n in NAMES
+             for sub in ("", "fmi3")]
+    log = tmp_path / "memcheck.log"
+    run = subprocess.run(["valgrind", "--error-limit=no", "--num-callers=20",
+                          f"--log-file={log}", sys.executable, "-c", STATE_MISUSE, *paths],
+                         capture_output=True, text=True, check=False, timeout=1800,
+                         env={**os.environ, "PYTHONMALLOC": "malloc"})
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert [line.split()[-1] for line in run.stdout.splitlines()] == ["3"] * len(paths)
+    text = log.read_text()
+    assert "ERROR SUMMARY" in text
+    blocks = re.split(r"\n==\d+== \n", text)
+    bad = [b for b in blocks if re.search(r"== (Invalid (read|write|free)|Mismatched free)", b)
+           and "binaries/" in b]
+    assert not bad, bad[0][:3000]

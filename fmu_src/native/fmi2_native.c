@@ -97,8 +97,26 @@ typedef struct {
 
 #define BLOCK_MAGIC 0x57544632u /* "WTF2" */
 
+/* An FMU state this instance made (fmi2GetFMUstate, fmi2DeSerializeFMUstate) and has not
+   freed: the host's fmi2FMUstate points at one of these. A pointer that is not in the
+   instance's list (freed, made by another instance or FMU, or never made) is refused without
+   being read. */
+typedef struct StateNode {
+    Block b;
+    struct StateNode *next;
+} StateNode;
+
+/* A serialized state: SERIAL_TAG and the model's GUID (zero-padded to SERIAL_ID bytes), the
+   body's length and an FNV-1a checksum of the body (8 bytes each, little-endian), then the
+   body, the Block. Another model's, a truncated or an altered state is refused. */
+#define SERIAL_TAG "wheelterrain native state "
+#define SERIAL_ID 96
+#define SERIAL_HEADER (SERIAL_ID + 16)
+#define SERIAL_SIZE (SERIAL_HEADER + sizeof(Block))
+
 typedef struct Instance {
     Block b;
+    StateNode *states; /* the FMU states this instance made and has not freed */
     fmi2CallbackFunctions cb;
     char *name;
     int model_exchange; /* instantiated as fmi2ModelExchange (else co-simulation) */
@@ -326,6 +344,11 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
 void fmi2FreeInstance(fmi2Component comp) {
     Instance *c = (Instance *)comp;
     if (c == NULL) return;
+    while (c->states != NULL) { /* the states the host did not free go with the instance */
+        StateNode *next = c->states->next;
+        c->cb.freeMemory(c->states);
+        c->states = next;
+    }
     c->cb.freeMemory(c->iw);
     c->cb.freeMemory(c->w);
     c->cb.freeMemory((void *)c->arg);
@@ -532,73 +555,168 @@ fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[], size
 
 /* ---- FMU state ------------------------------------------------------------------------------ */
 
+/* The instance's node ``state`` points at, else NULL: compared, never read. */
+static StateNode *own_state(Instance *c, fmi2FMUstate state) {
+    for (StateNode *n = c->states; n != NULL; n = n->next)
+        if ((void *)n == (void *)state) return n;
+    return NULL;
+}
+
+/* The node of ``state`` if this instance made it and has not freed it; else NULL (logged). */
+static StateNode *checked_state(Instance *c, const char *function, fmi2FMUstate state) {
+    StateNode *n = own_state(c, state);
+    if (n == NULL)
+        LOG_ERROR(c, "%s: the FMU state %p was not made by this instance of %s, or has been "
+                  "freed (fmi2FreeFMUstate)", function, (void *)state, MODEL_NAME);
+    return n;
+}
+
+/* A new node in the instance's list holding ``block``; NULL when out of memory (logged). */
+static StateNode *new_state(Instance *c, const char *function, const Block *block) {
+    StateNode *n = (StateNode *)c->cb.allocateMemory(1, sizeof(StateNode));
+    if (n == NULL) {
+        LOG_ERROR(c, "%s: out of memory", function);
+        return NULL;
+    }
+    n->b = *block;
+    n->next = c->states;
+    c->states = n;
+    return n;
+}
+
+/* FNV-1a, 64 bits, of ``n`` bytes. */
+static unsigned long long checksum(const unsigned char *bytes, size_t n) {
+    unsigned long long h = 1469598103934665603ULL;
+    for (size_t i = 0; i < n; i++) {
+        h ^= bytes[i];
+        h *= 1099511628211ULL;
+    }
+    return h;
+}
+
+static void put_u64(unsigned char *out, unsigned long long v) {
+    for (int k = 0; k < 8; k++) out[k] = (unsigned char)(v >> (8 * k));
+}
+
+static unsigned long long get_u64(const unsigned char *in) {
+    unsigned long long v = 0;
+    for (int k = 7; k >= 0; k--) v = (v << 8) | in[k];
+    return v;
+}
+
+/* The id a serialized state of this model starts with: SERIAL_TAG, the GUID, zeros. */
+static void serial_id(unsigned char id[SERIAL_ID]) {
+    memset(id, 0, SERIAL_ID);
+    snprintf((char *)id, SERIAL_ID, "%s%s", SERIAL_TAG, MODEL_GUID);
+}
+
 fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate *state) {
     Instance *c = (Instance *)comp;
-    Block *copy;
+    StateNode *n;
     if (!allowed(c, "fmi2GetFMUstate", SETTABLE | S_TERMINATED | S_ERROR)) return fmi2Error;
-    copy = (Block *)(*state ? *state : c->cb.allocateMemory(1, sizeof(Block)));
-    if (copy == NULL) {
-        LOG_ERROR(c, "fmi2GetFMUstate: out of memory");
+    if (state == NULL) {
+        LOG_ERROR(c, "fmi2GetFMUstate: no place for the state (NULL)");
         return fmi2Error;
     }
-    *copy = c->b;
-    *state = copy;
+    if (*state != NULL) { /* an earlier state of this instance, overwritten */
+        if ((n = checked_state(c, "fmi2GetFMUstate", *state)) == NULL) return fmi2Error;
+        n->b = c->b;
+        return fmi2OK;
+    }
+    if ((n = new_state(c, "fmi2GetFMUstate", &c->b)) == NULL) return fmi2Error;
+    *state = n;
     return fmi2OK;
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate state) {
     Instance *c = (Instance *)comp;
-    const Block *copy = (const Block *)state;
+    StateNode *n;
     if (!allowed(c, "fmi2SetFMUstate", SETTABLE | S_TERMINATED | S_ERROR)) return fmi2Error;
-    if (copy == NULL || copy->magic != BLOCK_MAGIC ||
-        strncmp(copy->guid, MODEL_GUID, sizeof copy->guid) != 0) {
-        LOG_ERROR(c, "fmi2SetFMUstate: not a state of %s (GUID %s)", MODEL_NAME, MODEL_GUID);
-        return fmi2Error;
-    }
-    c->b = *copy;
+    if ((n = checked_state(c, "fmi2SetFMUstate", state)) == NULL) return fmi2Error;
+    c->b = n->b;
     return fmi2OK;
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component comp, fmi2FMUstate *state) {
     Instance *c = (Instance *)comp;
+    StateNode **at;
     if (c == NULL || state == NULL) return fmi2Error;
-    if (*state) c->cb.freeMemory(*state);
-    *state = NULL;
-    return fmi2OK;
+    if (*state == NULL) return fmi2OK;
+    for (at = &c->states; *at != NULL; at = &(*at)->next) {
+        if ((void *)*at == (void *)*state) {
+            StateNode *n = *at;
+            *at = n->next;
+            c->cb.freeMemory(n);
+            *state = NULL;
+            return fmi2OK;
+        }
+    }
+    checked_state(c, "fmi2FreeFMUstate", *state); /* logs why */
+    return fmi2Error;
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component comp, fmi2FMUstate state, size_t *size) {
-    (void)comp, (void)state;
-    *size = sizeof(Block);
+    Instance *c = (Instance *)comp;
+    if (c == NULL || size == NULL) return fmi2Error;
+    if (checked_state(c, "fmi2SerializedFMUstateSize", state) == NULL) return fmi2Error;
+    *size = SERIAL_SIZE;
     return fmi2OK;
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component comp, fmi2FMUstate state, fmi2Byte bytes[],
                                  size_t size) {
     Instance *c = (Instance *)comp;
-    if (state == NULL || size < sizeof(Block)) {
+    StateNode *n;
+    unsigned char *out = (unsigned char *)bytes;
+    if (c == NULL) return fmi2Error;
+    if ((n = checked_state(c, "fmi2SerializeFMUstate", state)) == NULL) return fmi2Error;
+    if (bytes == NULL || size < SERIAL_SIZE) {
         LOG_ERROR(c, "fmi2SerializeFMUstate: buffer of %zu bytes, %zu needed", size,
-                  sizeof(Block));
+                  (size_t)SERIAL_SIZE);
         return fmi2Error;
     }
-    memcpy(bytes, state, sizeof(Block));
+    serial_id(out);
+    put_u64(out + SERIAL_ID, sizeof(Block));
+    memcpy(out + SERIAL_HEADER, &n->b, sizeof(Block));
+    put_u64(out + SERIAL_ID + 8, checksum(out + SERIAL_HEADER, sizeof(Block)));
     return fmi2OK;
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte bytes[], size_t size,
                                    fmi2FMUstate *state) {
     Instance *c = (Instance *)comp;
-    Block *copy;
-    if (size != sizeof(Block) || ((const Block *)bytes)->magic != BLOCK_MAGIC ||
-        strncmp(((const Block *)bytes)->guid, MODEL_GUID, sizeof((Block *)0)->guid) != 0) {
+    const unsigned char *in = (const unsigned char *)bytes;
+    unsigned char id[SERIAL_ID];
+    Block block;
+    StateNode *n;
+    if (c == NULL || state == NULL) return fmi2Error;
+    serial_id(id);
+    if (bytes == NULL || size < SERIAL_HEADER || memcmp(in, id, SERIAL_ID) != 0) {
         LOG_ERROR(c, "fmi2DeSerializeFMUstate: not a serialized state of %s (GUID %s)",
                   MODEL_NAME, MODEL_GUID);
         return fmi2Error;
     }
-    copy = (Block *)c->cb.allocateMemory(1, sizeof(Block));
-    if (copy == NULL) return fmi2Error;
-    memcpy(copy, bytes, sizeof(Block));
-    *state = copy;
+    if (get_u64(in + SERIAL_ID) != sizeof(Block) || size < SERIAL_SIZE) {
+        /* a longer buffer is allowed (the host's size is its buffer's): the state is whole */
+        LOG_ERROR(c, "fmi2DeSerializeFMUstate: a state of %s holds %zu bytes; this one says "
+                  "%llu and has %zu (truncated, or of another build)", MODEL_NAME,
+                  (size_t)SERIAL_SIZE, (unsigned long long)get_u64(in + SERIAL_ID) +
+                  SERIAL_HEADER, size);
+        return fmi2Error;
+    }
+    if (get_u64(in + SERIAL_ID + 8) != checksum(in + SERIAL_HEADER, sizeof(Block))) {
+        LOG_ERROR(c, "fmi2DeSerializeFMUstate: the state's checksum does not match its body "
+                  "(the bytes were altered after fmi2SerializeFMUstate wrote them)");
+        return fmi2Error;
+    }
+    memcpy(&block, in + SERIAL_HEADER, sizeof(Block));
+    if (block.magic != BLOCK_MAGIC || strncmp(block.guid, MODEL_GUID, sizeof block.guid) != 0) {
+        LOG_ERROR(c, "fmi2DeSerializeFMUstate: not a serialized state of %s (GUID %s)",
+                  MODEL_NAME, MODEL_GUID);
+        return fmi2Error;
+    }
+    if ((n = new_state(c, "fmi2DeSerializeFMUstate", &block)) == NULL) return fmi2Error;
+    *state = n;
     return fmi2OK;
 }
 
