@@ -38,7 +38,8 @@ import casadi as ca
 import numpy as np
 
 from wheelterrain import model, presets
-from wheelterrain.model import contact, lanes, solve
+from wheelterrain.model import functions as model_functions
+from wheelterrain.model import lanes, solve
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -86,7 +87,7 @@ def main(argv: list[str] | None = None) -> None:
     def say(text: str) -> None:
         print(text, file=out)
 
-    fns = contact.build()
+    fns = model_functions.build()
     p = presets.load("paper-table2-arc").vector()
     rng = np.random.default_rng(0)
     z = rng.uniform(0.005, 0.045, n)

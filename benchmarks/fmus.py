@@ -38,7 +38,7 @@ from fmpy import extract
 from wheelterrain import presets
 from wheelterrain.cosim import master as cosim
 from wheelterrain.fmu.instance import Instance
-from wheelterrain.model import contact
+from wheelterrain.model import functions as model_functions
 from wheelterrain.parameters import TABLE
 
 
@@ -198,7 +198,7 @@ def main() -> None:
     # the elastic soil: on the soil with memory paper-table2-arc's 49 mm at C4 digs in to full
     # burial and the case ends (the same work per step either way)
     ps = presets.load(ARC_PRESET).with_values({"model.soil_memory": 0})
-    fn, p = contact.build().contact, ps.vector()
+    fn, p = model_functions.build().contact, ps.vector()
 
     def core(count):
         for _ in range(count):

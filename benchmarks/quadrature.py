@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from wheelterrain.model import contact
+from wheelterrain.model import functions as model_functions
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -48,7 +49,7 @@ def main() -> None:
     figures = {}
     for count in (int(x) for x in args.nodes.split(",")):
         nodes = (count, contact.DEFAULT_NODES[1])
-        fn = contact.build(nodes).contact
+        fn = model_functions.build(nodes).contact
         errors = []
         for name, ps, z, frac, slip, want in points:
             values = np.array(fn(z, 0, slip, 0, ps.vector())).ravel()

@@ -35,12 +35,12 @@ from pathlib import Path
 from wheelterrain import presets
 from wheelterrain.cosim import SSP_ENGINES, rover_fmus, ssp
 from wheelterrain.cosim import rover as rover_system
-from wheelterrain.model import contact
+from wheelterrain.model import functions as model_functions
 
 
 def baseline_rtf(seconds: float, step: float) -> float:
     """Real-time factor of four Python calls of the contact Function per step."""
-    fns = contact.build()
+    fns = model_functions.build()
     p = presets.load(presets.DEFAULT_PRESET).vector()
     n = max(int(seconds / step / 20), 50)  # a sample of the steps
     t = time.perf_counter()

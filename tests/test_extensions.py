@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from wheelterrain import model
-from wheelterrain.model import contact
+from wheelterrain.model import soil
 from wheelterrain.parameters import INDEX
 
 
@@ -37,7 +37,7 @@ def test_ripple_off_when_both_coefficients_are_zero(table2):
 def test_wong_hump_peaks_at_K_and_tends_to_the_residual_ratio(table2):
     j = ca.SX.sym("j")
     p = ca.SX.sym("p", len(INDEX))
-    g = ca.Function("g", [j, p], [contact.shear_function(j, contact._P(p))])
+    g = ca.Function("g", [j, p], [soil.shear_function(j, soil.Params(p))])
     ps = table2.with_values({"model.shear_model": 1, "soil.residual_ratio": 0.6}).vector()
     K = table2["soil.shear_modulus"]
     assert float(g(K, ps)) == pytest.approx(1.0, rel=1e-14)

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from wheelterrain import model
-from wheelterrain.model import contact
+from wheelterrain.model import functions as model_functions
+from wheelterrain.model import solve
 from wheelterrain.parameters import NAMES, TABLE
 
 STEP = 1e-6
@@ -57,7 +58,7 @@ def _check(name: str, analytic: np.ndarray, numeric: np.ndarray, out_scale: np.n
 @pytest.mark.parametrize("slip", [0.05, 0.3, 0.8, -0.4])
 @pytest.mark.parametrize("sinkage", [0.002, 0.02, 0.05])
 def test_contact_jacobian_matches_central_differences(point_params, slip, sinkage):
-    fns = contact.build()
+    fns = model_functions.build()
     p = point_params.vector()
     x = np.array([sinkage, 0.01, slip])
     angle = 0.13 / 12 * 2 * np.pi  # ripple near its crest: sigma + ripple > 0 everywhere
@@ -85,12 +86,12 @@ def test_contact_jacobian_matches_central_differences(point_params, slip, sinkag
 @pytest.mark.parametrize("slip", [0.05, 0.3, 0.8])
 @pytest.mark.parametrize("load", [5.0, 30.0, 62.0])
 def test_steady_jacobian_matches_central_differences(point_params, slip, load):
-    fns = contact.build()
+    fns = model_functions.build()
     p = point_params.vector()
     keys = ("sinkage", "normal_force", "drawbar_pull", "torque")
 
     def steady(load_, slip_, p_):
-        out = dict(zip(contact.STEADY_OUTPUTS, fns.steady(load_, slip_, p_), strict=True))
+        out = dict(zip(solve.STEADY_OUTPUTS, fns.steady(load_, slip_, p_), strict=True))
         return np.array([float(out[k]) for k in keys])
 
     jac = model.steady_jacobian(point_params, load, slip)
@@ -109,7 +110,7 @@ def test_steady_jacobian_matches_central_differences(point_params, slip, load):
 
 def test_jacobians_cover_every_soil_parameter():
     """The params Jacobian has one column per table row, in table order."""
-    fns = contact.build()
+    fns = model_functions.build()
     assert fns.contact_jacobian.size_out("d_params") == (3, len(NAMES))
     assert fns.steady_jacobian.size_out("d_params") == (4, len(NAMES))
     assert fns.steady_jacobian.size_out("d_inputs") == (4, 2)

@@ -18,6 +18,7 @@ from wheelterrain import compiled as native
 from wheelterrain import presets
 from wheelterrain.model import api as model_api
 from wheelterrain.model import contact, lanes, solve
+from wheelterrain.model import functions as model_functions
 
 pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
 
@@ -57,7 +58,7 @@ def random_points(n: int, seed: int):
 def reference(points, P: np.ndarray) -> np.ndarray:
     n = len(points[0])
     P = P if P.ndim == 2 else np.tile(P[:, None], (1, n))
-    return np.array(contact.build().contact.map(n)(*points, P)).reshape(-1, n)
+    return np.array(model_functions.build().contact.map(n)(*points, P)).reshape(-1, n)
 
 
 def assert_agrees(got: np.ndarray, ref: np.ndarray) -> None:
@@ -168,7 +169,7 @@ int run(long n, const double* const* in, double* const* out) {
                                           ref[k][~close])
 
 
-ROW = {name: row for row, name in enumerate(contact.STEADY_OUTPUTS)}
+ROW = {name: row for row, name in enumerate(solve.STEADY_OUTPUTS)}
 CONTACT_ROWS = slice(ROW["normal_force"], ROW["normal_force_static"] + 1)
 
 
@@ -180,7 +181,7 @@ def converged(out: np.ndarray) -> np.ndarray:
 def steady_reference(load, slip, P: np.ndarray) -> np.ndarray:
     n = len(load)
     P = P if P.ndim == 2 else np.tile(P[:, None], (1, n))
-    return np.array(contact.build().steady.map(n)(load, slip, P)).reshape(-1, n)
+    return np.array(model_functions.build().steady.map(n)(load, slip, P)).reshape(-1, n)
 
 
 def assert_same_steady_state(got: np.ndarray, ref: np.ndarray) -> None:
@@ -203,7 +204,7 @@ def test_lane_solve_equals_the_steady_state(lane_solve, name):
     rng = np.random.default_rng(len(name))
     n = 1501
     slip = rng.uniform(-0.6, 0.9, n)
-    capacity = np.array(contact.build().capacity.map(n)(slip, np.tile(p[:, None], (1, n))))
+    capacity = np.array(model_functions.build().capacity.map(n)(slip, np.tile(p[:, None], (1, n))))
     load = rng.uniform(0.0, 1.2, n) * capacity.ravel()
     load[:7] = 0.0
     got = lane_solve(load, slip, np.nan, np.nan, np.nan, p)
@@ -230,7 +231,7 @@ def test_a_warm_start_reaches_the_cold_solution(lane_solve, name):
     rng = np.random.default_rng(17 + len(name))
     n = 999
     slip = rng.uniform(0.0, 0.8, n)
-    capacity = np.array(contact.build().capacity.map(n)(slip, np.tile(p[:, None], (1, n))))
+    capacity = np.array(model_functions.build().capacity.map(n)(slip, np.tile(p[:, None], (1, n))))
     load = rng.uniform(0.01, 0.9, n) * capacity.ravel()
     cold = lane_solve(load, slip, np.nan, np.nan, np.nan, p)
     guess = cold[ROW["sinkage"]] * rng.uniform(0.5, 2.0, n)
@@ -256,23 +257,23 @@ def test_the_lane_warm_start_is_steady_from(lane_solve, name):
     rng = np.random.default_rng(29 + len(name))
     n = 60
     slip = rng.uniform(-0.6, 0.9, n)
-    capacity = np.array(contact.build().capacity.map(n)(slip, np.tile(p[:, None], (1, n))))
+    capacity = np.array(model_functions.build().capacity.map(n)(slip, np.tile(p[:, None], (1, n))))
     load = rng.uniform(0.01, 0.9, n) * capacity.ravel()
     cold = lane_solve(load, slip, np.nan, np.nan, np.nan, p)
     guess = cold[ROW["sinkage"]] * rng.uniform(0.3, 3.0, n)
     got = lane_solve(load, slip, guess, np.nan, np.nan, p)
     assert np.all(converged(got))  # so steady_from keeps its warm result: no retry
-    ref = np.array(contact.build().steady_from.map(n)(load, slip, np.tile(p[:, None], (1, n)),
-                                                      guess)).reshape(-1, n)
+    steady_from = model_functions.build().steady_from.map(n)
+    ref = np.array(steady_from(load, slip, np.tile(p[:, None], (1, n)), guess)).reshape(-1, n)
     assert_same_steady_state(got, ref)
 
 
 def test_steady_from_solves_again_cold_where_the_warm_start_fails(monkeypatch, table2):
     """With one Newton iteration allowed, a warm start from the root converges and stands; one
     from 30 % off does not, and steady_from returns the cold solve's outputs, bit for bit."""
-    root = contact.build().steady(40.0, 0.3, table2.vector())[0]
+    root = model_functions.build().steady(40.0, 0.3, table2.vector())[0]
     monkeypatch.setattr(solve, "NEWTON_ITERATIONS", 1)
-    fns = contact.build.__wrapped__(contact.DEFAULT_NODES)  # not the cached build
+    fns = model_functions.build.__wrapped__(contact.DEFAULT_NODES)  # not the cached build
     p = table2.vector()
     cold = np.array(fns.steady(40.0, 0.3, p)).ravel()
     assert not converged(cold)  # one iteration is not enough from the scan's bracket
@@ -353,8 +354,8 @@ def test_a_warm_start_that_fails_is_solved_again_cold(monkeypatch, lane_cache, t
         out = real(load, slip, guess, first, last, p)
         warm = np.isfinite(np.broadcast_to(guess, load.shape))
         calls.append(int(np.sum(warm)))
-        out[contact.STEADY_OUTPUTS.index("residual"), warm] = 1.0
-        out[contact.STEADY_OUTPUTS.index("last_step"), warm] = 1.0
+        out[solve.STEADY_OUTPUTS.index("residual"), warm] = 1.0
+        out[solve.STEADY_OUTPUTS.index("last_step"), warm] = 1.0
         return out
 
     monkeypatch.setattr(model_api, "_steady_many", lambda: failing_when_warm)

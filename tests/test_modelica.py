@@ -26,6 +26,7 @@ import pytest
 import modelica_points as mp
 from wheelterrain import presets
 from wheelterrain.model import api, contact
+from wheelterrain.model import functions as model_functions
 from wheelterrain.modelica import library, reference, translate
 from wheelterrain.parameters import NAMES
 
@@ -293,7 +294,7 @@ def test_the_export_kernels_are_the_models_contact_and_steady_state():
     """export_kernels (what the library reproduces) against build().contact_memory and the
     steady state's own contact (1e-12 relative, the lane kernels' tolerance: a kernel is the
     same expression, CSE'd on its own)."""
-    fns = contact.build()
+    fns = model_functions.build()
     for name in presets.available():
         p = presets.load(name).vector()
         case, forms = contact.export_kernels(True)

@@ -17,7 +17,7 @@ TOL = 1e-9  # relative: the same equations, two implementations (brentq to 1e-15
 
 
 def _shear(j: float, K: float, Kr: float, hump: int) -> float:
-    """g(j) of Janosi or Wong's hump form, odd in j (as contact.shear_function)."""
+    """g(j) of Janosi or Wong's hump form, odd in j (as soil.shear_function)."""
     E = math.exp(-abs(j) / K)
     g = 1 - E if not hump else Kr * (1 + (1 / (Kr * (1 - math.exp(-1))) - 1) * math.e * E) * (1 - E)
     return math.copysign(g, j)

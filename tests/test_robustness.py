@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from wheelterrain import model, presets
 from wheelterrain.errors import LoadTooLargeError
-from wheelterrain.model import contact
+from wheelterrain.model import functions as model_functions
 from wheelterrain.parameters import TABLE, ParameterSet
 
 
@@ -111,6 +111,6 @@ def test_all_table_minima_and_maxima():
     hi = ParameterSet({p.name: p.max for p in TABLE})
     for ps in (lo, hi):
         for slip in (-0.9, 0.99):
-            out = contact.build().contact(model.contact_radius(ps) / 2, 0.0, slip, 1.0,
+            out = model_functions.build().contact(model.contact_radius(ps) / 2, 0.0, slip, 1.0,
                                           ps.vector())
             assert np.all(np.isfinite([float(v) for v in out]))

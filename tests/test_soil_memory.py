@@ -14,7 +14,8 @@ from click.testing import CliRunner
 
 from wheelterrain import model, presets
 from wheelterrain.cli import main
-from wheelterrain.model import contact, multipass
+from wheelterrain.model import contact, multipass, soil
+from wheelterrain.model import functions as model_functions
 from wheelterrain.parameters import INDEX
 
 FORMS = {"patch": "rashid-patch", "arc": "rashid-calibrated"}
@@ -39,7 +40,7 @@ def _contact(fns, z, rate, slip, p, angle=0.3) -> dict:
 @pytest.mark.parametrize("form", FORMS)
 def test_memory_off_is_the_elastic_soil_bit_for_bit(form):
     """model.soil_memory = 0: the rut and the plastic sinkage change nothing, to the bit."""
-    fns = contact.build()
+    fns = model_functions.build()
     off = _vector(FORMS[form], model__soil_memory=0)
     rutted = _vector(FORMS[form], model__soil_memory=0, soil__rut_depth=0.012)
     for z, rate, slip in ((0.004, 0.01, 0.2), (0.02, -0.02, 0.6), (0.013, 0.0, -0.3)):
@@ -61,7 +62,7 @@ def test_memory_off_is_the_elastic_soil_bit_for_bit(form):
 def test_memory_on_without_a_rut_or_unloading_is_the_elastic_soil_bit_for_bit(form):
     """Virgin soil, a wheel that presses at least as deep as it ever did: the same numbers
     as without memory (the switch's default changes nothing there)."""
-    fns = contact.build()
+    fns = model_functions.build()
     on, off = _vector(FORMS[form]), _vector(FORMS[form], model__soil_memory=0)
     for z, rate, slip in ((0.004, 0.01, 0.2), (0.02, -0.02, 0.6)):
         ref = _contact(fns, z, rate, slip, off)
@@ -80,7 +81,7 @@ def test_unloading_follows_the_elastic_line_of_the_unloading_stiffness():
     """Patch form, no cohesion, ripple and damper off: lifted by d from where it yielded, the
     wheel's normal force falls along F0*(1 - K_u*d/p) = F0 - K_u*b*l*d, the elastic line of
     the table's stiffness per contact area, to 0 at d = p/K_u (it lifts off)."""
-    fns = contact.build()
+    fns = model_functions.build()
     p = _vector("rashid-patch", ripple__k_g=0.0, ripple__k_0=0.0, soil__cohesion=0.0)
     ku, b = p[INDEX["soil.unloading_stiffness"]], p[INDEX["wheel.width"]]
     zy = 0.015
@@ -97,7 +98,7 @@ def test_unloading_follows_the_elastic_line_of_the_unloading_stiffness():
 
 @pytest.mark.parametrize("form", FORMS)
 def test_in_a_rut_the_pressure_is_continuous_and_the_contact_begins_at_its_surface(form):
-    fns = contact.build()
+    fns = model_functions.build()
     rut = 0.01
     p = _vector(FORMS[form], soil__rut_depth=rut, ripple__k_g=0.0, ripple__k_0=0.0)
     # above the rut's surface the wheel touches nothing
@@ -117,7 +118,7 @@ def test_in_a_rut_the_pressure_is_continuous_and_the_contact_begins_at_its_surfa
 
 
 def test_the_plastic_sinkage_yields_at_once_and_relaxes_over_a_contact_length():
-    fns = contact.build()
+    fns = model_functions.build()
     p = _vector("rashid-patch")
     # pressed deeper: it follows at once
     assert float(fns.plastic_step(0.02, 0.015, 0.03, p, 1e-3)) == 0.02
@@ -134,7 +135,7 @@ def test_the_plastic_sinkage_yields_at_once_and_relaxes_over_a_contact_length():
 def test_the_model_exchange_rate_integrates_to_the_co_simulation_step():
     """d(z_p)/dt (model exchange) integrated with small steps over an input that goes down
     and up converges to the co-simulation steps of the same input (first order in the step)."""
-    fns = contact.build()
+    fns = model_functions.build()
     p = _vector("rashid-patch")
     t_end, v = 2.0, 0.03
 
@@ -185,12 +186,12 @@ def test_multipass_sinks_less_each_pass_and_leaves_a_rut_near_its_sinkage(form):
 def test_the_patch_mean_after_a_sheared_rut_is_the_mean_of_the_shear_law(hump):
     """patch_shear_mean_after(a0, a) is the mean of g over [a0, a0 + a] (Gauss-Legendre, 200
     nodes), odd in (a0, a) together, and at a0 = 0 the patch mean of virgin soil."""
-    P = contact._P(ca.DM(_vector("rashid-patch", model__shear_model=hump)))
+    P = soil.Params(ca.DM(_vector("rashid-patch", model__shear_model=hump)))
     K = float(P["soil.shear_modulus"])
     x, w = np.polynomial.legendre.leggauss(200)
     for a0, a in ((0.3, 0.7), (2.0, 0.05), (1e-4, 3.0), (0.8, 1e-5), (0.0, 0.4)):
         u = a0 + a * (x + 1) / 2
-        g = np.array([float(contact.shear_function(ca.DM(v * K), P)) for v in u])
+        g = np.array([float(soil.shear_function(ca.DM(v * K), P)) for v in u])
         mean = float(np.dot(w, g) / 2)
         got = float(contact.patch_shear_mean_after(ca.DM(a0), ca.DM(a), P))
         assert got == pytest.approx(mean, rel=1e-9, abs=1e-12)
@@ -205,7 +206,7 @@ def test_the_shear_a_rut_remembers_raises_the_thrust_in_a_rut_only(form):
     a wheel that counts its shear on from the rut maker's has more gross thrust at the same
     sinkage and slip, and (patch form, where the shear adds nothing to them) the same normal
     force and compaction resistance."""
-    fns = contact.build()
+    fns = model_functions.build()
     for z, rate, slip in ((0.004, 0.0, 0.2), (0.02, 0.01, 0.6)):
         on, off = _vector(FORMS[form], model__rut_shear=1), _vector(FORMS[form])
         assert _memory(fns, z, rate, slip, z, on) == _memory(fns, z, rate, slip, z, off)
@@ -224,7 +225,7 @@ def test_a_rut_deeper_than_the_wheel_keeps_the_remembered_shear_finite(form):
     """A rut deeper than the contact radius (soil.rut_depth up to 0.5 m, a 1 cm wheel): its
     maker is taken buried to the axle, so the shear it left, and every output, stays finite
     (the property tests found NaN here before the maker's depth was capped)."""
-    fns = contact.build()
+    fns = model_functions.build()
     p = _vector(FORMS[form], wheel__radius=0.01, wheel__width=0.005, grouser__height=0.0,
                 grouser__count=0.0, soil__rut_depth=0.5, model__rut_shear=1)
     for z, slip in ((0.5 + 1e-6, -0.9), (0.505, 0.3), (1e-6, 0.5)):

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from wheelterrain import presets
-from wheelterrain.model import contact, solve
+from wheelterrain.model import contact, soil, solve
+from wheelterrain.model import functions as model_functions
 from wheelterrain.parameters import NAMES, TABLE
 
 PRESETS = ("paper-table2-arc", "rashid-patch", "paper-table1", "paper-table2", "rashid-calibrated")
@@ -24,8 +25,8 @@ def random_parameters(rng: np.random.Generator) -> np.ndarray:
 @pytest.fixture(scope="module")
 def bound_and_force():
     th, sl, pp = ca.SX.sym("theta_f"), ca.SX.sym("slip"), ca.SX.sym("p", len(NAMES))
-    bound = ca.Function("bound", [th, sl, pp], [contact.static_bound(th, sl, contact._P(pp))])
-    return bound, solve._static_functions(contact.DEFAULT_NODES)[1]
+    bound = ca.Function("bound", [th, sl, pp], [contact.static_bound(th, sl, soil.Params(pp))])
+    return bound, solve.static_functions(contact.DEFAULT_NODES)[1]
 
 
 def test_the_bound_is_above_the_static_normal_force_everywhere_in_range(bound_and_force):
@@ -67,9 +68,9 @@ def test_the_bound_is_close_enough_to_prune(bound_and_force):
 
 
 def full_scan_start(load, slip, p):
-    fz = solve._static_functions(contact.DEFAULT_NODES)[1]
+    fz = solve.static_functions(contact.DEFAULT_NODES)[1]
     values = [fz(t, slip, p) for t in solve.scan_angles()]
-    return solve._solve_start(load, values)
+    return solve.solve_start(load, values)
 
 
 @pytest.mark.parametrize("name", PRESETS)
@@ -77,15 +78,15 @@ def test_the_pruned_scan_brackets_exactly_as_the_full_scan(name):
     """The Newton state, capacity and load scale after the pruned scan are those of the full
     13-point scan, bit for bit: loads from 0 to past the capacity, driving and braking."""
     load, slip, pp = ca.MX.sym("load"), ca.MX.sym("slip"), ca.MX.sym("p", len(NAMES))
-    P = contact._P(pp)
-    pruned = ca.Function("pruned", [load, slip, pp], list(solve._solve_start(
-        load, solve._scan_values(load, slip, P, contact.DEFAULT_NODES))))
+    P = soil.Params(pp)
+    pruned = ca.Function("pruned", [load, slip, pp], list(solve.solve_start(
+        load, solve.scan_values(load, slip, P, contact.DEFAULT_NODES))))
     full = ca.Function("full", [load, slip, pp], list(full_scan_start(load, slip, pp)))
     p = presets.load(name).vector()
     rng = np.random.default_rng(len(name))
     n = 400
     slip_v = rng.uniform(-0.9, 0.95, n)
-    capacity = np.asarray(contact.build().capacity.map(n)(slip_v, np.tile(p[:, None], n)))
+    capacity = np.asarray(model_functions.build().capacity.map(n)(slip_v, np.tile(p[:, None], n)))
     load_v = rng.uniform(0.0, 1.2, n) * capacity.ravel()
     load_v[:5] = 0.0
     for a, b in zip(pruned.map(n)(load_v, slip_v, p), full.map(n)(load_v, slip_v, p),
@@ -98,7 +99,7 @@ def count_evaluations(load: float, slip: float, p: np.ndarray) -> tuple[int, int
     """(Fz_static values, Fz_static-with-derivative evaluations) of a cold solve, replayed
     through the lane solve's pieces in the order the generated driver calls them."""
     k = solve.solve_lane_kernels(contact.DEFAULT_NODES)
-    fz_d, fz, _ = solve._static_functions(contact.DEFAULT_NODES)
+    fz_d, fz, _ = solve.static_functions(contact.DEFAULT_NODES)
     scan = solve.scan_angles()
     plan = np.asarray(k["scan_plan"](load, slip, p)).ravel()
     values = [np.nan] + [float(fz(scan[j], slip, p)) if plan[j - 1] else np.nan

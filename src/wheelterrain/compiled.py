@@ -40,6 +40,14 @@ def compiler() -> str | None:
     return shutil.which("cc") or shutil.which("gcc")
 
 
+def no_compiler_reason() -> str:
+    """Why :func:`compiler` found none, for an error message."""
+    chosen = os.environ.get("CC")
+    if chosen:
+        return f"no C compiler: $CC is {chosen!r}, which names no program"
+    return "no C compiler (cc/gcc, or $CC) on PATH"
+
+
 def cache_directory() -> Path:
     """Where libraries compiled at run time are kept between runs ($WHEELTERRAIN_CACHE, else
     the user's cache directory)."""
@@ -55,7 +63,7 @@ def compile_function(fn: ca.Function, out_dir: Path, jacobian: bool = False,
     for first derivatives. ``optimisation``: the compiler's -O flag."""
     cc = compiler()
     if cc is None:
-        raise CompileError("no C compiler (cc/gcc, or $CC) on PATH")
+        raise CompileError(no_compiler_reason())
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     library = out_dir / f"{fn.name()}.so"

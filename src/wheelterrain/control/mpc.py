@@ -198,7 +198,7 @@ def compiled_interval() -> ca.Function:
     """:func:`interval_residual` as generated C with its Jacobian, compiled once per model
     version (the C's SHA-256 names the cache entry) and loaded with ``ca.external``.
 
-    Not expanded to SX: the contact stays a switch over its forms (``contact._forms``), so an
+    Not expanded to SX: the contact stays a switch over its forms (``contact.form_switch``), so an
     evaluation and its derivative run the preset's form only (on the default preset 0.8 us and
     5 us per interval, against 12 us and 54 us expanded, where every form is evaluated). The
     soil and rig parameters and the interval length are declared non-differentiable: the NLP

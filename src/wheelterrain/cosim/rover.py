@@ -3,7 +3,7 @@
 Two ways to run the same equations:
 
 - in process (:func:`simulate`): one CasADi Function steps the whole system (the chassis'
-  ``rover_step`` and the four contacts of :func:`wheelterrain.model.contact.build`, coupled as
+  ``rover_step`` and the four contacts of :func:`wheelterrain.model.functions.build`, coupled as
   the co-simulation master couples the FMUs: the chassis' wheel states at t give the forces at
   t, held over the step), mapped over a block of steps and compiled to C where a compiler is
   available: the fastest master;
@@ -30,6 +30,7 @@ from wheelterrain import compiled
 from wheelterrain.errors import ParameterError, WheelTerrainError
 from wheelterrain.fmu import functions
 from wheelterrain.model import contact, ground, rover
+from wheelterrain.model import functions as model_functions
 from wheelterrain.parameters import NAMES, ParameterSet
 
 STEP = 1e-3  # s: communication step. Engines that pass the forces one step late (Jacobi:
@@ -62,7 +63,7 @@ def _coupled_forces(xs: list, p: dict, pt: ca.MX, angles, plastics=None) -> tupl
     The slip is evaluated inside the contact model's domain (a state outside it ends a run:
     :func:`simulate`). Also returns per wheel (traction slip, sinkage, contact outputs by
     name)."""
-    fns = contact.build()
+    fns = model_functions.build()
     s = dict(zip(rover.STATES, xs, strict=True))
     u, wheels = {}, []
     for k, w in enumerate(rover.WHEELS):
@@ -195,7 +196,7 @@ def _system_step() -> ca.Function:
            for w, (traction, z, out) in zip(rover.WHEELS, wheels, strict=True)]
     nxt, _ = rover.step(tuple(xs), u, p, h)
     new_angles = [angles[k] + h * s[f"{w}.wheel_speed"] for k, w in enumerate(rover.WHEELS)]
-    fns = contact.build()
+    fns = model_functions.build()
     new_plastics = [fns.plastic_step(z, plastics[k], s["speed"], soils[:, k], h)
                     for k, (_, z, _) in enumerate(wheels)]
     s["effective_slope"], s["effective_towing_force"] = rover.effective_inputs(xs, u, p)

@@ -12,7 +12,7 @@ WheelTerrain
     ``terrain_quasi_static(u, p, guess) -> (y, status, info)`` with u = TERRAIN_INPUTS, y =
     TERRAIN_OUTPUTS (without wheel_angle and plastic_sinkage, the wrapper's states); ``guess``
     the sinkage [m] the solve starts Newton from (``warm_start``: the last contact_sinkage
-    output), 0 for a cold solve (``contact.build().steady_from``). ``status``: STATUS_OK,
+    output), 0 for a cold solve (``model_functions.build().steady_from``). ``status``: STATUS_OK,
     STATUS_SLIP (traction slip outside [-1, 1], or the wheel or the carriage moving backward;
     ``info`` is the slip), STATUS_LOAD (load beyond the capacity; ``info`` is the capacity),
     STATUS_UNCONVERGED (the solve's convergence check failed), STATUS_BURIED (dynamic mode:
@@ -44,7 +44,8 @@ from wheelterrain.fmu.variables import (
     TERRAIN_INPUTS,
     TERRAIN_OUTPUTS,
 )
-from wheelterrain.model import contact, ground, rig, rover, solve
+from wheelterrain.model import contact, ground, rig, rover, soil, solve
+from wheelterrain.model import functions as model_functions
 from wheelterrain.model.slip import reference_radius
 from wheelterrain.parameters import INDEX, NAMES
 
@@ -151,7 +152,7 @@ UNDEFINED_OUTPUTS = ("slip_paper", "sensor.slip_paper")
 
 def slip_radius(p):
     """Radius R_ref the slip is referenced to, from the table parameter vector ``p``."""
-    return reference_radius(contact._P(p))
+    return reference_radius(soil.Params(p))
 
 
 def with_rut_met(p, rut_met):
@@ -168,7 +169,7 @@ def terrain_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
     wheel's plastic sinkage (WheelTerrain's second state) and gives its rate (model exchange);
     ``terrain_memory(u, plastic, p, h) -> plastic_next`` advances it over a co-simulation
     step with the inputs held, :func:`wheelterrain.model.contact.plastic_update`."""
-    fns = contact.build()
+    fns = model_functions.build()
     u, angle, given = ca.MX.sym("u", len(TERRAIN_INPUTS)), ca.MX.sym("angle"), ca.MX.sym(
         "p", len(NAMES))
     plastic = ca.MX.sym("plastic")
@@ -186,7 +187,7 @@ def terrain_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
     out.update(contact_sinkage=sinkage, slip=traction, slip_paper=paper)
     y = ca.vertcat(*(out[k] for k in TERRAIN_OUTPUTS))
     # sinkage R_c below the surface the contact begins at (a rut's): the soil at the axle
-    full_burial = contact._radii(contact._P(p))[0] + contact.rut_surface(contact._P(p))
+    full_burial = contact.radii(soil.Params(p))[0] + soil.rut_surface(soil.Params(p))
     status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(
         sinkage > full_burial, STATUS_BURIED, ca.if_else(
             _finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE)))
@@ -200,7 +201,7 @@ def terrain_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
                          ["u", "plastic", "p", "h"], ["plastic_next"])
 
     guess = ca.MX.sym("guess")
-    steady = dict(zip(contact.STEADY_OUTPUTS, fns.steady_from(load, safe_slip, p, guess),
+    steady = dict(zip(solve.STEADY_OUTPUTS, fns.steady_from(load, safe_slip, p, guess),
                       strict=True))
     steady.update(contact_sinkage=steady["sinkage"], slip=traction, slip_paper=paper,
                   ripple_amplitude=0)
@@ -232,7 +233,7 @@ RIG_MESSAGES = {
 def _contact_with_damper(z, z_rate, traction, angle, plastic, speed, p) -> dict:
     """``contact_memory``'s outputs by name, and ``damper_force``: the contact damper's share
     of the normal force (the normal force less its value at zero sinkage rate)."""
-    fns = contact.build()
+    fns = model_functions.build()
     names = (*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS)
     out = dict(zip(names, fns.contact_memory(z, z_rate, traction, angle, plastic, speed, p),
                    strict=True))

@@ -1,11 +1,18 @@
 """The model: the wheel-terrain contact physics and the rig, written once.
 
+Layers inside the package, each importing only those above it in this list:
+
 - :mod:`.slip`: the two slip definitions and the slip's reference radius (no CasADi).
-- :mod:`.contact`: the contact model (arc and patch forms) and :func:`.contact.build`, which
-  makes every CasADi Function of the model, exact Jacobians included.
-- :mod:`.solve`: the quasi-static sinkage solve those Functions contain (scan, Newton, the
-  acceptance test).
-- :mod:`.rig`: the single-wheel test rig (carriage, wheel drive, vertical motion).
+- :mod:`.soil`: the soil's laws (pressure-sinkage, shear, strength, bulldozing, the
+  elastic-plastic soil a rut remembers).
+- :mod:`.contact`: the contact's geometry and forms (arc and patch) on those laws, the wheel's
+  plastic sinkage.
+- :mod:`.solve`: the quasi-static sinkage solve (scan, Newton, the acceptance test).
+- :mod:`.functions`: :func:`.functions.build` assembles every CasADi Function of the model
+  from the contact and the solve, exact Jacobians included.
+- :mod:`.rig`, :mod:`.rover`, :mod:`.ground`, :mod:`.multipass`: the single-wheel rig
+  (carriage, wheel drive, vertical motion), the rover's chassis, the terrain map and rut
+  record, the passes of one wheel over one strip.
 - :mod:`.api`: the validated float API, also reachable here: ``model.steady_state``,
   ``model.contact_forces``, ``model.capacity``, ``model.steady_jacobian``, and for many points
   at once ``model.steady_states``, ``model.steady_map`` and ``model.contact_forces_many``

@@ -17,6 +17,7 @@ import numpy as np
 
 from wheelterrain.errors import InputError, LoadTooLargeError, SolveError
 from wheelterrain.model import contact as _contact
+from wheelterrain.model import functions as _functions
 from wheelterrain.model import solve as _solve
 from wheelterrain.model.slip import (
     DEFAULT_DEFINITION,
@@ -70,7 +71,7 @@ def contact_forces(params: Mapping[str, float] | ParameterSet, sinkage: float, s
     rate = _finite("sinkage_rate", sinkage_rate)
     angle = _finite("wheel_angle", wheel_angle)
     i = to_traction(slip, slip_definition)
-    fns = _contact.build()
+    fns = _functions.build()
     out = fns.contact(z, rate, i, angle, ps.vector())
     return _named(out, _contact.CONTACT_OUTPUTS)
 
@@ -80,7 +81,7 @@ def capacity(params: Mapping[str, float] | ParameterSet, slip: float,
     """Static normal force [N] with the wheel buried to its contact radius: the largest load."""
     ps = _params(params)
     i = to_traction(slip, slip_definition)
-    return float(_contact.build().capacity(i, ps.vector()))
+    return float(_functions.build().capacity(i, ps.vector()))
 
 
 def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: float,
@@ -88,7 +89,7 @@ def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: 
     """Quasi-static operating point: the sinkage at which the static normal force carries ``load``.
 
     load [N] >= 0 (0 gives zero sinkage and zero forces). The result is the grouser-period mean
-    (ripple-free, zero sinkage rate) and holds every ``contact.STEADY_OUTPUTS`` plus ``load``,
+    (ripple-free, zero sinkage rate) and holds every ``solve.STEADY_OUTPUTS`` plus ``load``,
     ``slip`` (traction) and ``slip_paper``.
 
     Raises LoadTooLargeError if the wheel cannot carry the load fully buried, SolveError if the
@@ -97,7 +98,7 @@ def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: 
     ps = _params(params)
     w = _finite("load", load, lo=0.0)
     i = to_traction(slip, slip_definition)
-    out = _named(_contact.build().steady(w, i, ps.vector()), _contact.STEADY_OUTPUTS)
+    out = _named(_functions.build().steady(w, i, ps.vector()), _solve.STEADY_OUTPUTS)
     if w > out["capacity"]:
         raise LoadTooLargeError(w, out["capacity"], contact_radius(ps))
     if not _converged(out["residual"], out["last_step"]):
@@ -125,7 +126,7 @@ def steady_jacobian(params: Mapping[str, float] | ParameterSet, load: float, sli
     """
     ps = _params(params)
     state = state if state is not None else steady_state(ps, load, slip)
-    jac = _contact.build().steady_jacobian(state["load"], state["slip"], ps.vector(),
+    jac = _functions.build().steady_jacobian(state["load"], state["slip"], ps.vector(),
                                            state["sinkage"])
     return {"d_inputs": np.array(jac[0]), "d_params": np.array(jac[1])}
 
@@ -145,7 +146,7 @@ def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,
                   slip_definition: str = DEFAULT_DEFINITION, guess=None,
                   over_capacity: str = "raise") -> dict[str, np.ndarray]:
     """:func:`steady_state` at many points at once: ``load`` and ``slip`` are arrays of one
-    length (or scalars, shared). Returns one array per ``contact.STEADY_OUTPUTS`` key plus
+    length (or scalars, shared). Returns one array per ``solve.STEADY_OUTPUTS`` key plus
     ``load``, ``slip`` (traction) and ``slip_paper``.
 
     Runs the lane-parallel C of :mod:`wheelterrain.model.lanes` (compiled on first use, about
@@ -170,7 +171,7 @@ def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,
     return _solve_points(ps, load, i, guess, (np.nan, np.nan), over_capacity)
 
 
-_STEADY_ROW = {name: k for k, name in enumerate(_contact.STEADY_OUTPUTS)}
+_STEADY_ROW = {name: k for k, name in enumerate(_solve.STEADY_OUTPUTS)}
 
 
 def _solve_points(ps: ParameterSet, load: np.ndarray, i: np.ndarray, guess, ends,
@@ -273,7 +274,7 @@ def _contact_many():
     """The lane-parallel contact, or (no C compiler) CasADi's map of build().contact."""
     from wheelterrain.model import lanes
 
-    return _lanes_or_vm(lanes.compiled_contact, _contact.build().contact, used=(0, 1, 2, 3))
+    return _lanes_or_vm(lanes.compiled_contact, _functions.build().contact, used=(0, 1, 2, 3))
 
 
 def _lanes_or_vm(compiled, function: ca.Function, used: tuple[int, ...]):
@@ -351,7 +352,7 @@ def _steady_many():
     STEADY_OUTPUTS rows; the scan's ends are then unused."""
     from wheelterrain.model import lanes
 
-    steady_from = _contact.build().steady_from
+    steady_from = _functions.build().steady_from
     load, slip, guess = ca.MX.sym("load"), ca.MX.sym("slip"), ca.MX.sym("guess")
     p = ca.MX.sym("p", steady_from.size1_in(2))
     in_lane_order = ca.Function("steady_guess", [load, slip, guess, p],

@@ -45,7 +45,7 @@ switch from the parameter vector, so the FMUs, the MPC, the calibration and the 
 The cross-wheel mechanisms (kappa = ``model.shear_length_ratio``, rho =
 ``model.interface_ratio``, h_e = ``model.grouser_shear_height``, m =
 ``model.diameter_exponent``, beta = ``model.bulldozing``; :func:`effective_shear_modulus`,
-:func:`shear_strength`, :func:`_reece`, :func:`bulldozing`) act in both forms and are off at
+:func:`shear_strength`, :func:`reece`, :func:`bulldozing`) act in both forms and are off at
 their defaults (kappa = 0, rho = 1, m = 0, beta = 0), where the expressions reduce to the
 classical ones exactly.
 
@@ -82,29 +82,42 @@ split at the offset of that reversal (found by safeguarded Newton) into sub-pane
 it. DEFAULT_NODES = (16, 10) nodes per panel before and after the split; measured against adaptive
 quadrature over the test grid (tests/test_classical.py): ~1e-9 relative driving, ~1e-7 braking.
 
-Evaluation: every Function below calls a CasADi switch over three SX Functions (the arc, the arc
-split at a shear reversal, the patch; :func:`_forms`), so an evaluation runs only the form and
-the rule that apply: no reversal search and no second sub-panel where the shear keeps its sign,
-no arc at all for the patch. A node costs one sine and one cosine. The sinkage solve's Newton
-iterations are switches too and stop once converged
-(:func:`wheelterrain.model.solve._newton_iteration`).
+Evaluation: every Function of the model calls a CasADi switch over three SX Functions (the arc,
+the arc split at a shear reversal, the patch; :func:`form_switch`), so an evaluation runs only
+the form and the rule that apply: no reversal search and no second sub-panel where the shear
+keeps its sign, no arc at all for the patch. A node costs one sine and one cosine. The sinkage
+solve's Newton iterations are switches too and stop once converged
+(:mod:`wheelterrain.model.solve`).
 
-This module holds the physics of the contact forms and :func:`build`, which assembles the
-model's Functions; the quasi-static sinkage solve (scan, Newton, its acceptance test) is
-:mod:`wheelterrain.model.solve`.
+This module holds the contact's geometry and forms, on the soil's laws of
+:mod:`wheelterrain.model.soil`; the quasi-static sinkage solve (scan, Newton, its acceptance
+test) is :mod:`wheelterrain.model.solve`; :func:`wheelterrain.model.functions.build` assembles
+the model's Functions from both (``build().contact`` below).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from functools import lru_cache
 
 import casadi as ca
 import numpy as np
 
 from wheelterrain.model.slip import reference_radius
-from wheelterrain.parameters import INDEX, NAMES
+from wheelterrain.model.soil import (
+    Params,
+    Rut,
+    bulldozing,
+    effective_shear_modulus,
+    in_rut,
+    reece,
+    rut,
+    rut_surface,
+    shear_function,
+    shear_peak,
+    shear_strength,
+)
+from wheelterrain.parameters import NAMES
 
 DEFAULT_NODES = (16, 10)  # per panel: up to the shear reversal, after it
 GRADING = 3
@@ -120,8 +133,6 @@ CONTACT_OUTPUTS = (
 )
 MEMORY_OUTPUTS = ("yield_sinkage", "plastic_rate")
 """``contact_memory``'s outputs beyond CONTACT_OUTPUTS: z_y = max(z_p, z) and d(z_p)/dt."""
-STEADY_INPUTS = ("load", "slip", "p")
-STEADY_OUTPUTS = ("sinkage", *CONTACT_OUTPUTS, "residual", "last_step", "capacity")
 FORCES = ("normal_force", "drawbar_pull", "torque")
 
 
@@ -251,92 +262,14 @@ class _Displacement:
         return (1 - self.soil) * wheel + self.soil * soil
 
 
-class _P:
-    """Attribute access to the symbolic parameter vector by table name (``P['soil.phi']``)."""
-
-    def __init__(self, p: ca.SX) -> None:
-        self.p = p
-
-    def __getitem__(self, name: str) -> ca.SX:
-        return self.p[INDEX[name]]
-
-
-def _radii(P: _P) -> tuple[ca.SX, ca.SX, ca.SX]:
+def radii(P: Params) -> tuple[ca.SX, ca.SX, ca.SX]:
     R, h = P["wheel.radius"], P["grouser.height"]
     return (R + P["model.contact_radius_factor"] * h,
             R + P["model.shear_radius_factor"] * h,
             reference_radius(P))
 
 
-def shear_function(j: ca.SX, P: _P, K: ca.SX | None = None) -> ca.SX:
-    """Mobilised fraction g(j) of the shear strength (odd in j), for the shear deformation
-    modulus ``K`` (the contact forms pass :func:`effective_shear_modulus`; by default the
-    soil's Janosi K).
-
-    Janosi: 1 - exp(-j/K). Wong's hump form (paper eq. 3, with its last factor restored):
-    K_r*(1 + (1/(K_r*(1 - 1/e)) - 1)*exp(1 - j/K))*(1 - exp(-j/K)), peak 1 at j = K, tending to K_r.
-    """
-    Kr, hump = P["soil.residual_ratio"], P["model.shear_model"]
-    K = P["soil.shear_modulus"] if K is None else K
-    E = ca.exp(-ca.fabs(j) / K)
-    janosi = 1 - E
-    wong = Kr * (1 + (1 / (Kr * (1 - math.exp(-1))) - 1) * math.e * E) * (1 - E)
-    return ca.sign(j) * ((1 - hump) * janosi + hump * wong)
-
-
-def effective_shear_modulus(length: ca.SX, P: _P) -> ca.SX:
-    """K_eff = K + kappa*l: the shear deformation modulus of a shearing surface of length ``l``
-    (the contact length), kappa = ``model.shear_length_ratio``. The shear stress-displacement
-    curve of a soil depends on the size of the surface sheared (Wiendieck 1968); with kappa > 0
-    the patch mobilisation x*l/K_eff tends to x/kappa on long contacts rather than to full
-    strength, and stays x*l/K on short ones. kappa = 0 is Janosi's K exactly."""
-    return P["soil.shear_modulus"] + P["model.shear_length_ratio"] * length
-
-
-def shear_strength(P: _P) -> tuple[ca.SX, ca.SX]:
-    """(c_eff, tan(phi_eff)): the Mohr-Coulomb strength of the wheel's shearing surface.
-
-    A share chi of it is soil on soil at the grouser tips (strength c, tan(phi)); the rest is
-    the rim on soil (adhesion rho*c, interface friction tan(rho*phi), Potyondy 1961), with
-    rho = ``model.interface_ratio`` and chi = h_g/(h_g + h_e) for a grousered wheel
-    (h_e = ``model.grouser_shear_height``; 0 for a smooth rim): Higa, Nagaoka & Yoshida 2019
-    find nearly all of a grousered wheel's traction at its grousers. Written as the soil's
-    strength minus the rim's deficit, so rho = 1 gives c and tan(phi) exactly."""
-    c, phi = P["soil.cohesion"], P["soil.phi"]
-    h_g, rho = P["grouser.height"], P["model.interface_ratio"]
-    chi = ca.if_else(h_g > 0, h_g / (h_g + P["model.grouser_shear_height"]), 0)
-    tan_phi = ca.tan(phi)
-    rim = 1 - chi
-    return c - rim * (1 - rho) * c, tan_phi - rim * (tan_phi - ca.tan(rho * phi))
-
-
-DIAMETER_REFERENCE = 0.5  # m: below it the flat-plate law fails (Meirion-Griffith & Spenko)
-
-
-def bulldozing(z: ca.SX, P: _P) -> ca.SX:
-    """Bulldozing resistance [N] of the soil wedge ahead of a wheel sunk by ``z``: the share
-    ``model.bulldozing`` of the Rankine passive force over the depth z on the width b,
-    b*(gamma*z**2*K_p/2 + 2*c*z*sqrt(K_p)), K_p = tan(pi/4 + phi/2)**2 (Bekker 1960; Wong,
-    *Theory of Ground Vehicles*, ch. 4). It grows as z**2: where slip digs the wheel in, the
-    resistance follows. 0 at the default share."""
-    c, gamma = P["soil.cohesion"], P["soil.gamma"]
-    k_p = ca.tan(math.pi / 4 + P["soil.phi"] / 2) ** 2
-    depth = ca.fmax(z, 0)
-    return P["model.bulldozing"] * P["wheel.width"] * (
-        0.5 * gamma * depth**2 * k_p + 2 * c * depth * ca.sqrt(k_p))
-
-
-def shear_peak(P: _P) -> ca.SX:
-    """The largest |g(j)| of :func:`shear_function` over all j: 1 for Janosi; for Wong's hump
-    K_r*max over E in [0, 1] of (1 + C*e*E)*(1 - E), K_r*(C*e + 1)**2/(4*C*e) at
-    E = (C*e - 1)/(2*C*e) when C*e > 1, else K_r at E = 0 (1.05 at K_r = 1)."""
-    Kr, hump = P["soil.residual_ratio"], P["model.shear_model"]
-    ce = (1 / (Kr * (1 - math.exp(-1))) - 1) * math.e
-    wong = Kr * ca.if_else(ce > 1, (ce + 1) ** 2 / (4 * ca.fmax(ce, 1)), 1)
-    return (1 - hump) + hump * wong
-
-
-def exit_angle(theta_f: ca.SX, P: _P) -> ca.SX:
+def exit_angle(theta_f: ca.SX, P: Params) -> ca.SX:
     """theta_r = -arccos(1 - lambda*z/R_c), lambda = ``model.exit_ratio``, written through
     sin(theta_f/2) (finite derivatives in theta_f at lambda = 0).
 
@@ -349,94 +282,13 @@ def exit_angle(theta_f: ca.SX, P: _P) -> ca.SX:
     return -2 * ca.asin(root * ca.sin(theta_f / 2))
 
 
-def _reece(slip: ca.SX, P: _P) -> tuple[ca.SX, ca.SX]:
-    """Reece's pressure-sinkage law: the exponent n = n0 + n1*|i| (Ding et al. 2011) and the
-    modulus (c*k_c' + gamma*b*k_phi')*(2R/D_ref)**m (p = modulus*(z/b)**n), shared by both
-    contact forms. The diameter factor, m = ``model.diameter_exponent`` and D_ref =
-    DIAMETER_REFERENCE, is the small-wheel correction in the form of Meirion-Griffith & Spenko
-    2011 (a power of the diameter); m = 0 is the flat-plate law exactly."""
-    n = P["soil.n0"] + P["soil.n1"] * ca.fabs(slip)
-    diameter = (2 * P["wheel.radius"] / DIAMETER_REFERENCE) ** P["model.diameter_exponent"]
-    modulus = (P["soil.cohesion"] * P["soil.k_c"]
-               + P["soil.gamma"] * P["wheel.width"] * P["soil.k_phi"]) * diameter
-    return n, modulus
-
-
-@dataclass(frozen=True)
-class Rut:
-    """The rut a wheel meets, with ``model.soil_memory`` = 1 and ``soil.rut_depth`` > 0
-    (``on``; else every field describes virgin soil and ``on`` is 0).
-
-    The elastic-plastic soil of repetitive loading (Wong, *Theory of Ground Vehicles*, ch. 2;
-    the Soil Contact Model's soil node, Krenn & Hirzinger 2009): soil that was pressed to a
-    yield depth y carried the pressure p(y) of the pressure-sinkage law there; pressed again it
-    answers along a stiff elastic line up to p(y) and along the law beyond. Unloaded, its
-    surface sprang back by the elastic rebound p(y)/K_u (K_u = ``soil.unloading_stiffness``)
-    to the rut's free surface, ``soil.rut_depth`` (what a profile of the rut measures). So a
-    point at depth d below the rut's surface carries::
-
-        p = p(surface + d)            d >= layer   (plastic: the law, from the original surface)
-        p = p(surface + layer)*d/layer  d < layer  (elastic reloading)
-        layer = p(surface)/K_u        the rebound, p at the surface: first order in layer/y
-
-    ``surface`` [m], ``layer`` [m] and ``yield_depth`` = surface + layer; ``n`` and
-    ``modulus`` of :func:`_reece` (p(z) = modulus*(z/b)**n). The contact begins at the rut's
-    surface (:func:`rut_surface`): both forms take the entry angle of the depth below it.
-    Where ``on`` is 0 the fields describe a stand-in rut of depth b, so that the branch a
-    switch does not take has finite derivatives (CasADi's derivative of ``if_else`` multiplies
-    the branch not taken by 0, and 0*inf is NaN); every use selects by ``on``. Virgin soil,
-    ``soil.rut_depth`` = 0, is a kink: the exact Jacobians report the virgin branch's
-    derivative there, 0 for that column, although a rut's one-sided effect is not 0 (the
-    patch form's chord begins at the rut's surface); differentiate from a rut above 0."""
-
-    on: ca.SX
-    surface: ca.SX
-    layer: ca.SX
-    yield_depth: ca.SX
-    n: ca.SX
-    modulus: ca.SX
-    width: ca.SX
-
-    def law(self, depth: ca.SX) -> ca.SX:
-        """The pressure-sinkage law p at ``depth`` > 0 from the original surface."""
-        return self.modulus * ca.exp(self.n * ca.log(depth / self.width))
-
-    def pressure(self, d: ca.SX) -> ca.SX:
-        """The pressure at depth ``d`` >= 0 below the rut's surface (``on`` only)."""
-        plastic = self.law(self.surface + ca.fmax(d, self.layer))
-        elastic = self.law(self.yield_depth) * d / self.layer
-        return ca.if_else(d >= self.layer, plastic, elastic)
-
-
-def _in_rut(P: _P) -> ca.SX:
-    """1 where the wheel meets a rut it remembers: model.soil_memory = 1, soil.rut_depth > 0."""
-    return ca.logic_and(P["model.soil_memory"] == 1, P["soil.rut_depth"] > 0)
-
-
-def rut(slip: ca.SX, P: _P) -> Rut:
-    """The :class:`Rut` under the wheel at traction slip ``slip``."""
-    n, modulus = _reece(slip, P)
-    b = P["wheel.width"]
-    on = _in_rut(P)
-    surface = ca.if_else(on, P["soil.rut_depth"], b)  # the stand-in where off
-    layer = modulus * ca.exp(n * ca.log(surface / b)) / P["soil.unloading_stiffness"]
-    return Rut(on, surface, layer, surface + layer, n, modulus, b)
-
-
-def rut_surface(P: _P) -> ca.SX:
-    """Depth [m] of the surface a wheel's contact begins at: the rut's (``soil.rut_depth``)
-    with ``model.soil_memory`` = 1, else the original surface, 0. Sinkage is counted from the
-    original surface; the contact's geometry from this one."""
-    return ca.if_else(_in_rut(P), P["soil.rut_depth"], 0)
-
-
-def rut_left(theta_f: ca.SX, ground: Rut, P: _P) -> ca.SX:
+def rut_left(theta_f: ca.SX, ground: Rut, P: Params) -> ca.SX:
     """Depth of the rut a wheel leaves (its free surface, from the original surface) at entry
     angle ``theta_f`` below ``ground``'s surface: the deepest point it pressed the soil to,
     surface + R_c*(1 - cos(theta_f)), less the elastic rebound p/K_u there; never shallower
     than the rut it met (a wheel that only reloaded the soil elastically leaves it as it was).
     0 with ``model.soil_memory`` = 0 (elastic soil closes behind the wheel)."""
-    Rc, _, _ = _radii(P)
+    Rc, _, _ = radii(P)
     surface = rut_surface(P)
     depth = surface + 2 * Rc * ca.sin(theta_f / 2) ** 2
     rebound = ground.law(ca.fmax(depth, 1e-300)) / P["soil.unloading_stiffness"]
@@ -444,7 +296,7 @@ def rut_left(theta_f: ca.SX, ground: Rut, P: _P) -> ca.SX:
     return ca.if_else(P["model.soil_memory"] == 1, left, 0)
 
 
-def _max_stress_ratio(slip: ca.SX, P: _P) -> ca.SX:
+def _max_stress_ratio(slip: ca.SX, P: Params) -> ca.SX:
     """theta_m/theta_f = a0 + a1*i (Wong & Reece 1967)."""
     return P["model.a0"] + P["model.a1"] * slip
 
@@ -461,16 +313,16 @@ def _offset_trig(sin_f: ca.SX, cos_f: ca.SX, x: ca.SX) -> dict:
             "cos_drop": 2 * sa * sh, "sin_drop": 2 * cs * sh}
 
 
-def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tuple[int, int],
+def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, nodes: tuple[int, int],
               ripple: bool, reversal: bool) -> dict:
     """The arc form: all contact quantities for a given entry angle (no damping).
     ``ripple=False`` drops the ripple. ``reversal=True`` splits the panels at the shear reversal
     (:func:`_reversal_offset`); ``False`` is the rule without it, exact where
     :func:`_reverses` is 0 (there the split rule's second sub-panel has zero weight)."""
-    Rc, Rs, Rref = _radii(P)
+    Rc, Rs, Rref = radii(P)
     b = P["wheel.width"]
     c, tan_phi = shear_strength(P)
-    n, modulus = _reece(slip, P)
+    n, modulus = reece(slip, P)
     k_eq = modulus * (Rc / b) ** n
 
     theta_r = exit_angle(theta_f, P)
@@ -552,7 +404,7 @@ def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, nodes: tup
     }
 
 
-def _grouser_thrust(theta_f, front, rear, w_front, w_rear, g_front, g_rear, P: _P, Rc):
+def _grouser_thrust(theta_f, front, rear, w_front, w_rear, g_front, g_rear, P: Params, Rc):
     """Grouser thrust by passive earth pressure (``model.grouser_thrust`` = 1), as the
     grouser-period mean: (horizontal, vertical, torque about the axle).
 
@@ -578,7 +430,7 @@ def _grouser_thrust(theta_f, front, rear, w_front, w_rear, g_front, g_rear, P: _
     return horizontal, vertical, torque
 
 
-def _grouser_force(cos_t, theta_f, P: _P, Rc):
+def _grouser_force(cos_t, theta_f, P: Params, Rc):
     """Passive earth force per unit width on a grouser at cos(theta) = ``cos_t`` (see
     :func:`_grouser_thrust`); non-decreasing in ``cos_t`` (soil parameters >= 0)."""
     R, h_g = P["wheel.radius"], P["grouser.height"]
@@ -591,7 +443,7 @@ def _grouser_force(cos_t, theta_f, P: _P, Rc):
             + gamma * top * height * k_p)
 
 
-def _grouser_density(P: _P):
+def _grouser_density(P: Params):
     """The grouser thrust's factor: on/off times width times grousers per radian."""
     return P["model.grouser_thrust"] * P["wheel.width"] * P["grouser.count"] / (2 * math.pi)
 
@@ -599,7 +451,7 @@ def _grouser_density(P: _P):
 SMALL_MOBILISATION = 1e-3  # |x*l/K| below which the patch-mean shear uses its Taylor series
 
 
-def patch_shear_mean(a: ca.SX, P: _P) -> ca.SX:
+def patch_shear_mean(a: ca.SX, P: Params) -> ca.SX:
     """Mean mobilised shear fraction over a patch whose displacement grows linearly from 0 at
     the front to ``a`` = x*l/K at the rear (x the shearing slip, l the patch length):
     (1/a)*int_0^a g(u*K) du for the shear law of ``model.shear_model``, odd in ``a`` as g is.
@@ -633,7 +485,7 @@ def _mean_decay(m: ca.SX) -> ca.SX:
     return ca.if_else(small, 1 - m / 2 + m**2 / 6 - m**3 / 24, -ca.expm1(-safe) / safe)
 
 
-def patch_shear_mean_after(a0: ca.SX, a: ca.SX, P: _P) -> ca.SX:
+def patch_shear_mean_after(a0: ca.SX, a: ca.SX, P: Params) -> ca.SX:
     """:func:`patch_shear_mean` for soil that arrives already sheared by ``a0`` = j0/K (the
     displacement a wheel before this one left, same sign as ``a``): the mean of g(u*K) over
     u in [a0, a0 + a], (G(a0 + a) - G(a0))/a with G the integral of g. With E the mean of
@@ -652,29 +504,29 @@ def patch_shear_mean_after(a0: ca.SX, a: ca.SX, P: _P) -> ca.SX:
     return ca.sign(a) * ((1 - hump) * janosi + hump * wong)
 
 
-def _cumulative(P: _P) -> ca.SX:
+def _cumulative(P: Params) -> ca.SX:
     """1 where a wheel's shear counts on from the rut's (``model.rut_shear`` = 1 in a rut)."""
-    return ca.logic_and(_in_rut(P), P["model.rut_shear"] == 1)
+    return ca.logic_and(in_rut(P), P["model.rut_shear"] == 1)
 
 
-def _contact_length(theta_f: ca.SX, P: _P) -> ca.SX:
+def _contact_length(theta_f: ca.SX, P: Params) -> ca.SX:
     """R_c*(sin(theta_f) - sin(theta_r)): the contact length of both forms at entry angle
     ``theta_f`` (theta_r = :func:`exit_angle`)."""
-    Rc, _, _ = _radii(P)
+    Rc, _, _ = radii(P)
     return Rc * (ca.sin(theta_f) - ca.sin(exit_angle(theta_f, P)))
 
 
-def _maker_angle(ground: Rut, P: _P) -> ca.SX:
+def _maker_angle(ground: Rut, P: Params) -> ca.SX:
     """Entry angle of the wheel that made ``ground``'s rut, read as a wheel of this radius that
     pressed virgin soil to the rut's yield depth; at most FULL_BURIAL (a rut deeper than the
     contact radius R_c: its maker is taken buried to the axle); 0 where the shear is not
     cumulative."""
-    Rc, _, _ = _radii(P)
+    Rc, _, _ = radii(P)
     depth = ca.if_else(_cumulative(P), ca.fmin(ground.yield_depth, Rc), 0)
-    return _entry_angle(depth, P)
+    return entry_angle(depth, P)
 
 
-def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: bool) -> dict:
+def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, ripple: bool) -> dict:
     """The patch form (``model.contact_form`` = 1): all contact quantities for a given entry
     angle (no damping), the keys of :func:`_arc_form`.
 
@@ -700,10 +552,10 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
     (a0, a1) have no meaning on a uniform patch and are not used (max_stress_angle is reported
     as 0).
     """
-    Rc, Rs, Rref = _radii(P)
+    Rc, Rs, Rref = radii(P)
     b = P["wheel.width"]
     c, tan_phi = shear_strength(P)
-    n, modulus = _reece(slip, P)
+    n, modulus = reece(slip, P)
     half = ca.sin(theta_f / 2)
     z = 2 * Rc * half**2  # R_c*(1 - cos(theta_f)) without cancellation
     theta_r = exit_angle(theta_f, P)
@@ -758,7 +610,7 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: _P, ripple: 
 BOUND_MARGIN = 1 + 1e-9  # covers rounding where the bound is the value itself (the patch)
 
 
-def static_bound(theta_f: ca.SX, slip: ca.SX, P: _P) -> ca.SX:
+def static_bound(theta_f: ca.SX, slip: ca.SX, P: Params) -> ca.SX:
     """A cheap upper bound on Fz_static at entry angle ``theta_f`` in (0, pi/2], for either
     contact form and any quadrature rule with non-negative panel weights summing to one:
     the sinkage solve's scan skips angles where it is below the load (there Fz_static is too).
@@ -776,9 +628,9 @@ def static_bound(theta_f: ca.SX, slip: ca.SX, P: _P) -> ca.SX:
     parameters in their declared ranges (all soil parameters >= 0); tests check it against the
     quadrature over random points of those ranges; where an assumption above fails (inputs
     outside the declared ranges), it is +inf: no angle is skipped."""
-    Rc, Rs, _ = _radii(P)
+    Rc, Rs, _ = radii(P)
     b, c, tan_phi = P["wheel.width"], P["soil.cohesion"], ca.tan(P["soil.phi"])
-    n, modulus = _reece(slip, P)
+    n, modulus = reece(slip, P)
     k_eq = modulus * (Rc / b) ** n
     half = ca.sin(theta_f / 2)
     sigma_max = k_eq * ca.exp(n * ca.log(2 * half**2))  # k_eq*(1 - cos(theta_f))**n
@@ -800,22 +652,22 @@ def static_bound(theta_f: ca.SX, slip: ca.SX, P: _P) -> ca.SX:
              P["grouser.height"] >= 0, Rc > 0, Rs > 0]
     bound = ca.if_else(P["model.contact_form"] == 1, patch, arc)
     # where an assumption fails (inputs outside the model's ranges) there is no bound: +inf
-    return ca.if_else(_all(holds), BOUND_MARGIN * bound, math.inf)
+    return ca.if_else(all_of(holds), BOUND_MARGIN * bound, math.inf)
 
 
-def _all(conditions: list) -> ca.SX:
+def all_of(conditions: list) -> ca.SX:
     out = conditions[0]
     for condition in conditions[1:]:
         out = ca.logic_and(out, condition)
     return out
 
 
-ARC, ARC_REVERSAL, PATCH = 0, 1, 2  # the cases of the contact switch (:func:`_forms`)
+ARC, ARC_REVERSAL, PATCH = 0, 1, 2  # the cases of the contact switch (:func:`form_switch`)
 FORMS = ("arc", "arc_reversal", "patch")  # their kernels' names, in case order
 
 
 @lru_cache(maxsize=8)
-def _forms(nodes: tuple[int, int], ripple: bool) -> tuple[ca.Function, ca.Function]:
+def form_switch(nodes: tuple[int, int], ripple: bool) -> tuple[ca.Function, ca.Function]:
     """``(case, switch)``: every contact quantity at an entry angle, evaluating only the form
     and the rule that apply.
 
@@ -829,7 +681,7 @@ def _forms(nodes: tuple[int, int], ripple: bool) -> tuple[ca.Function, ca.Functi
     second sub-panel and, for the patch, the whole arc."""
     th, sl, angle, pp = (ca.SX.sym("theta_f"), ca.SX.sym("slip"), ca.SX.sym("wheel_angle"),
                          ca.SX.sym("p", len(NAMES)))
-    P = _P(pp)
+    P = Params(pp)
     tag = "" if ripple else "_static"
 
     def kernel(name: str, out: dict) -> ca.Function:
@@ -841,39 +693,39 @@ def _forms(nodes: tuple[int, int], ripple: bool) -> tuple[ca.Function, ca.Functi
                                                   reversal=True))
     patch = kernel(FORMS[PATCH], _patch_form(th, sl, angle, P, ripple))
 
-    Rc, Rs, Rref = _radii(P)
+    Rc, Rs, Rref = radii(P)
     reverses = _reverses(th, exit_angle(th, P), _Displacement(th, sl, P, Rc, Rs, Rref))
     case = ca.Function("contact_case" + tag, [th, sl, pp], [ca.if_else(
         P["model.contact_form"] == 1, PATCH, ca.if_else(reverses, ARC_REVERSAL, ARC))])
     return case, ca.Function.conditional("contact_form" + tag, [arc, split], patch)
 
 
-def _at_entry_angle(theta_f, slip, wheel_angle, P: _P, nodes: tuple[int, int],
+def _at_entry_angle(theta_f, slip, wheel_angle, P: Params, nodes: tuple[int, int],
                     ripple: bool) -> dict:
     """Every contact quantity at entry angle ``theta_f`` in the form ``model.contact_form``
-    selects (0 arc, 1 patch), through :func:`_forms`' switch: only the selected form is
+    selects (0 arc, 1 patch), through :func:`form_switch`' switch: only the selected form is
     evaluated, so neither form's value leaks into the other's."""
-    case, switch = _forms(nodes, ripple)
+    case, switch = form_switch(nodes, ripple)
     out = switch(case(theta_f, slip, P.p), theta_f, slip, wheel_angle, P.p)
     return {k: out[i] for i, k in enumerate(CONTACT_OUTPUTS)}
 
 
-def _entry_angle(z, P: _P):
+def entry_angle(z, P: Params):
     """theta_f = arccos(1 - z/R_c) in its half-angle form, accurate for tiny sinkage (1 - z/R_c
     rounds); 0 for z <= 0."""
-    Rc, _, _ = _radii(P)
+    Rc, _, _ = radii(P)
     return 2 * ca.asin(ca.sqrt(ca.fmax(z, 0) / (2 * Rc)))
 
 
 SCALED = ("normal_force", "drawbar_pull", "torque", "gross_thrust", "compaction_resistance",
           "normal_force_static", "bulldozing_resistance")
-"""The contact outputs the elastic unloading of :func:`_contact` scales (forces, torque)."""
+"""The contact outputs the elastic unloading of :func:`contact_at` scales (forces, torque)."""
 
 
-def _contact(z, z_rate, slip, wheel_angle, P: _P, nodes: tuple[int, int], ripple: bool,
+def contact_at(z, z_rate, slip, wheel_angle, P: Params, nodes: tuple[int, int], ripple: bool,
              form: ca.Function | None = None, plastic=None) -> dict:
     """Contact quantities at sinkage z (m, to the contact circle), with damping C_f*dz/dt.
-    ``form``: one of :func:`_forms`' kernels to use in place of the switch (the lane kernels of
+    ``form``: one of :func:`form_switch`' kernels to use in place of the switch (the lane kernels of
     :func:`lane_kernels`); by default the switch picks it.
 
     ``plastic``: the wheel's plastic sinkage z_p, the deepest it has pressed the soil under it
@@ -890,7 +742,7 @@ def _contact(z, z_rate, slip, wheel_angle, P: _P, nodes: tuple[int, int], ripple
     with ``model.soil_memory`` = 0) this is the contact without it, exactly."""
     yielded = _yield_sinkage(z, plastic, P)
     below = yielded - rut_surface(P)  # depth below the surface the contact begins at
-    theta_f = _entry_angle(below, P)
+    theta_f = entry_angle(below, P)
     if form is None:
         out = _at_entry_angle(theta_f, slip, wheel_angle, P, nodes, ripple)
     else:
@@ -907,7 +759,7 @@ def _contact(z, z_rate, slip, wheel_angle, P: _P, nodes: tuple[int, int], ripple
     return out
 
 
-def _yield_sinkage(z, plastic, P: _P):
+def _yield_sinkage(z, plastic, P: Params):
     """z_y: the sinkage the soil under the wheel has yielded to, max(z_p, z) with
     ``model.soil_memory`` = 1; z without memory (or without a plastic sinkage)."""
     if plastic is None:
@@ -915,15 +767,15 @@ def _yield_sinkage(z, plastic, P: _P):
     return ca.if_else(P["model.soil_memory"] == 1, ca.fmax(plastic, z), z)
 
 
-def _imprint_decay(yielded, speed, P: _P):
+def _imprint_decay(yielded, speed, P: Params):
     """|V|/l: the rate at which a wheel rolling at ``speed`` replaces the soil under it, l the
     contact length at the yield sinkage (R_c*(sin(theta_f) - sin(theta_r)), the contact
     forms' own)."""
-    length = _contact_length(_entry_angle(yielded - rut_surface(P), P), P)
+    length = _contact_length(entry_angle(yielded - rut_surface(P), P), P)
     return ca.fabs(speed) / ca.fmax(length, 1e-300)
 
 
-def plastic_rate(z, z_rate, plastic, speed, P: _P):
+def plastic_rate(z, z_rate, plastic, speed, P: Params):
     """d(z_p)/dt of the wheel's plastic sinkage (model exchange; :func:`plastic_update` is the
     co-simulation step): while the wheel presses the soil (z >= z_p) z_p follows the sinkage
     down, max(dz/dt, 0); lifted (z < z_p) the imprint relaxes toward the wheel as it rolls onto
@@ -935,7 +787,7 @@ def plastic_rate(z, z_rate, plastic, speed, P: _P):
     return ca.if_else(P["model.soil_memory"] == 1, rate, 0)
 
 
-def plastic_update(z, plastic, speed, P: _P, h):
+def plastic_update(z, plastic, speed, P: Params, h):
     """The wheel's plastic sinkage z_p after a co-simulation step of ``h`` s with the sinkage
     ``z`` and carriage speed ``speed`` held: the wheel yields the
     soil at once to z_y = max(z_p, z) (the step's start), and the imprint under it is replaced
@@ -949,20 +801,20 @@ def plastic_update(z, plastic, speed, P: _P, h):
     return ca.if_else(P["model.soil_memory"] == 1, relaxed, plastic)
 
 
-def _form_kernels(names: list[str], sym: list, z, z_rate, slip, angle, plastic, speed, P: _P,
+def _form_kernels(names: list[str], sym: list, z, z_rate, slip, angle, plastic, speed, P: Params,
                   nodes: tuple[int, int], ripple: bool) -> tuple[ca.Function, tuple]:
     """``(case, forms)`` over the symbols ``sym`` (named ``names``): the case the switch of
-    :func:`_forms` picks, and the contact of :func:`_contact` with each form's kernel in place
-    of the switch; with a ``plastic`` sinkage the outputs add MEMORY_OUTPUTS."""
-    case, switch = _forms(nodes, ripple)
-    theta_f = _entry_angle(_yield_sinkage(z, plastic, P) - rut_surface(P), P)
+    :func:`form_switch` picks, and the contact of :func:`contact_at` with each form's kernel in
+    place of the switch; with a ``plastic`` sinkage the outputs add MEMORY_OUTPUTS."""
+    case, switch = form_switch(nodes, ripple)
+    theta_f = entry_angle(_yield_sinkage(z, plastic, P) - rut_surface(P), P)
     case_fn = ca.Function("contact_case", sym, [case(theta_f, slip, P.p)], names, ["case"],
                           {"cse": True})
     rows = CONTACT_OUTPUTS + (MEMORY_OUTPUTS if plastic is not None else ())
     forms = []
     for name in FORMS:
         kernel = switch.find_function(name + ("" if ripple else "_static"))
-        out = _contact(z, z_rate, slip, angle, P, nodes, ripple, form=kernel, plastic=plastic)
+        out = contact_at(z, z_rate, slip, angle, P, nodes, ripple, form=kernel, plastic=plastic)
         if plastic is not None:
             out["plastic_rate"] = plastic_rate(z, z_rate, plastic, speed, P)
         forms.append(ca.Function(f"contact_{name}", sym, [ca.vertcat(*(out[k] for k in rows))],
@@ -976,9 +828,9 @@ def lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> tuple[ca.Function, t
     that evaluate many points at once (:mod:`wheelterrain.model.lanes`): ``(case, forms)``.
     ``case`` gives the switch's case (ARC, ARC_REVERSAL, PATCH) at each point; ``forms[c]`` is
     the contact with case c's kernel in place of the switch, so at every point where ``case``
-    is c it is the same expression that ``build().contact`` evaluates."""
+    is c it is the same expression that ``functions.build().contact`` evaluates."""
     sym = [ca.SX.sym(name) for name in CONTACT_INPUTS[:-1]] + [ca.SX.sym("p", len(NAMES))]
-    return _form_kernels(list(CONTACT_INPUTS), sym, *sym[:4], None, None, _P(sym[-1]), nodes,
+    return _form_kernels(list(CONTACT_INPUTS), sym, *sym[:4], None, None, Params(sym[-1]), nodes,
                          True)
 
 
@@ -998,7 +850,7 @@ def export_kernels(memory: bool, nodes: tuple[int, int] = DEFAULT_NODES
     (ARC, ARC_REVERSAL, PATCH) and ``forms[case]`` the contact with that form's kernel in place
     of the switch.
 
-    ``memory=True``: the contact of ``build().contact_memory`` (ripple on), inputs
+    ``memory=True``: the contact of ``functions.build().contact_memory`` (ripple on), inputs
     EXPORT_INPUTS[True], outputs CONTACT_OUTPUTS and MEMORY_OUTPUTS. ``memory=False``: the
     quasi-static contact of the steady state (ripple-free, no sinkage rate, no memory), inputs
     EXPORT_INPUTS[False], outputs CONTACT_OUTPUTS: its ``normal_force_static`` equal to the
@@ -1006,117 +858,6 @@ def export_kernels(memory: bool, nodes: tuple[int, int] = DEFAULT_NODES
     names = list(EXPORT_INPUTS[memory])
     sym = [ca.SX.sym(name) for name in names[:-1]] + [ca.SX.sym("p", len(NAMES))]
     if memory:
-        return _form_kernels(names, sym, *sym[:6], _P(sym[-1]), nodes, True)
+        return _form_kernels(names, sym, *sym[:6], Params(sym[-1]), nodes, True)
     z, slip = sym[:2]
-    return _form_kernels(names, sym, z, 0, slip, 0, None, None, _P(sym[-1]), nodes, False)
-
-
-@dataclass(frozen=True)
-class ModelFunctions:
-    """The CasADi Functions of the model, built once per quadrature order.
-
-    - ``contact(sinkage, sinkage_rate, slip, wheel_angle, p)`` -> CONTACT_OUTPUTS (ripple on).
-    - ``contact_memory(sinkage, sinkage_rate, slip, wheel_angle, plastic_sinkage,
-      carriage_speed, p)`` -> CONTACT_OUTPUTS and MEMORY_OUTPUTS: the same with the wheel's
-      plastic sinkage (the elastic-plastic soil of :func:`_contact`); ``contact`` exactly where
-      sinkage >= plastic_sinkage.
-    - ``plastic_step(sinkage, plastic_sinkage, carriage_speed, p, h)`` ->
-      ``plastic_sinkage_next`` after a co-simulation step (:func:`plastic_update`).
-    - ``contact_jacobian`` -> ``d_state`` (3x3: normal_force, drawbar_pull, torque by sinkage,
-      sinkage_rate, slip) and ``d_params`` (3 x len(p)).
-    - ``sinkage_solve(load, slip, p)`` -> ``sinkage``, ``residual`` (relative), ``last_step``
-      (last Newton step in log(theta_f)), ``capacity`` (normal force fully buried). Ripple-free,
-      zero sinkage rate.
-    - ``capacity(slip, p)`` -> ``capacity``: static normal force fully buried (sinkage = R_c),
-      the largest load the wheel can carry; the same expression the solve checks against.
-    - ``steady(load, slip, p)`` -> STEADY_OUTPUTS: the solve plus the ripple-free contact there.
-    - ``steady_from(load, slip, p, guess)`` -> STEADY_OUTPUTS: the same started warm from a
-      sinkage guess (:func:`wheelterrain.model.solve._steady_from`); ``steady`` itself where
-      the guess is not > 0.
-    - ``steady_jacobian(load, slip, p, sinkage)`` -> ``d_inputs`` (4x2: sinkage, normal_force,
-      drawbar_pull, torque by load, slip) and ``d_params`` (4 x len(p)), by the implicit function
-      theorem at a solved ``sinkage``.
-
-    All are MX graphs over the SX Functions of :func:`_forms`: the contact is a called switch,
-    not inlined, so each evaluation runs the one form and rule that apply.
-    """
-
-    contact: ca.Function
-    contact_memory: ca.Function
-    plastic_step: ca.Function
-    contact_jacobian: ca.Function
-    sinkage_solve: ca.Function
-    capacity: ca.Function
-    steady: ca.Function
-    steady_from: ca.Function
-    steady_jacobian: ca.Function
-    nodes: tuple[int, int]
-
-
-def _symbols():
-    return (ca.MX.sym("sinkage"), ca.MX.sym("sinkage_rate"), ca.MX.sym("slip"),
-            ca.MX.sym("wheel_angle"), ca.MX.sym("p", len(NAMES)))
-
-
-@lru_cache(maxsize=4)
-def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
-    """Build (once per ``nodes``) every CasADi Function of the model: the contact here, the
-    sinkage solve from :mod:`wheelterrain.model.solve`."""
-    from wheelterrain.model import solve as sv  # it builds on this module's physics
-
-    z, z_rate, slip, angle, p = _symbols()
-    P = _P(p)
-    out = _contact(z, z_rate, slip, angle, P, nodes, ripple=True)
-    contact = ca.Function("contact", [z, z_rate, slip, angle, p],
-                          [out[k] for k in CONTACT_OUTPUTS], list(CONTACT_INPUTS),
-                          list(CONTACT_OUTPUTS))
-
-    plastic, speed, h = (ca.MX.sym("plastic_sinkage"), ca.MX.sym("carriage_speed"),
-                         ca.MX.sym("h"))
-    held = _contact(z, z_rate, slip, angle, P, nodes, ripple=True, plastic=plastic)
-    held["plastic_rate"] = plastic_rate(z, z_rate, plastic, speed, P)
-    contact_memory = ca.Function(
-        "contact_memory", [z, z_rate, slip, angle, plastic, speed, p],
-        [held[k] for k in (*CONTACT_OUTPUTS, *MEMORY_OUTPUTS)],
-        [*CONTACT_INPUTS[:4], "plastic_sinkage", "carriage_speed", "p"],
-        [*CONTACT_OUTPUTS, *MEMORY_OUTPUTS])
-    plastic_step = ca.Function(
-        "plastic_step", [z, plastic, speed, p, h], [plastic_update(z, plastic, speed, P, h)],
-        ["sinkage", "plastic_sinkage", "carriage_speed", "p", "h"], ["plastic_sinkage_next"])
-
-    forces = ca.vertcat(*(out[k] for k in FORCES))
-    contact_jacobian = ca.Function(
-        "contact_jacobian", [z, z_rate, slip, angle, p],
-        [ca.jacobian(forces, ca.vertcat(z, z_rate, slip)), ca.jacobian(forces, p)],
-        list(CONTACT_INPUTS), ["d_state", "d_params"])
-
-    load = ca.MX.sym("load")
-    solve = sv._sinkage_solve_expr(load, slip, P, nodes)
-    rows = sv._steady_expr(load, slip, P, nodes, solve=solve)
-    solved = ("sinkage", "residual", "last_step", "capacity")
-    # the same solve alone: Fz_static at the final angle, not the whole contact there
-    state, theta, capacity = solve
-    fz_static = sv._static_functions(nodes)[1](theta, slip, p)
-    sinkage_solve = ca.Function(
-        "sinkage_solve", [load, slip, p],
-        [*sv._solve_finish(load, state, fz_static, P), capacity],
-        list(STEADY_INPUTS), list(solved))
-    capacity_fn = ca.Function("capacity", [slip, p], [rows[-1]], ["slip", "p"], ["capacity"])
-    steady = ca.Function("steady", [load, slip, p], rows, list(STEADY_INPUTS),
-                         list(STEADY_OUTPUTS))
-
-    # Implicit function theorem at a solved sinkage: Fz_static(z, slip, p) = load.
-    at = _contact(z, 0, slip, 0, P, nodes, ripple=False)
-    q = ca.vertcat(load, slip)
-    balance = at["normal_force_static"] - load
-    dz_dq = -ca.jacobian(balance, q) / ca.jacobian(balance, z)
-    dz_dp = -ca.jacobian(balance, p) / ca.jacobian(balance, z)
-    ys = ca.vertcat(*(at[k] for k in FORCES))
-    dy_dz = ca.jacobian(ys, z)
-    d_inputs = ca.vertcat(dz_dq, ca.jacobian(ys, q) + dy_dz @ dz_dq)
-    d_params = ca.vertcat(dz_dp, ca.jacobian(ys, p) + dy_dz @ dz_dp)
-    steady_jacobian = ca.Function("steady_jacobian", [load, slip, p, z], [d_inputs, d_params],
-                                  [*STEADY_INPUTS, "sinkage"], ["d_inputs", "d_params"])
-    return ModelFunctions(contact, contact_memory, plastic_step, contact_jacobian, sinkage_solve,
-                          capacity_fn, steady, sv._steady_from(steady, nodes), steady_jacobian,
-                          nodes)
+    return _form_kernels(names, sym, z, 0, slip, 0, None, None, Params(sym[-1]), nodes, False)

@@ -7,8 +7,8 @@ instruction as C over LANES points at once: each instruction becomes a loop over
 which the compiler turns into vector instructions, and on glibc every sine, cosine, exp and pow
 into one call of its vector variant (libmvec, ``#pragma omp declare simd``). Nothing of the
 model is written here: the C is the SX Functions' own instruction list, translated one to one,
-so it is the expression ``contact.build().contact`` evaluates, with the same case switch
-(:func:`~wheelterrain.model.contact._forms`): each point is queued by its case and a full queue
+so it is the expression ``model_functions.build().contact`` evaluates, with the same case switch
+(:func:`~wheelterrain.model.contact.form_switch`): each point is queued by its case and a full queue
 of LANES points runs that case's kernel.
 
 Results equal ``build().contact`` to rounding: libmvec's functions are within 4 ulp and the
@@ -36,7 +36,14 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from wheelterrain.compiled import CompileError, cache_directory, compiler, install, run_compiler
+from wheelterrain.compiled import (
+    CompileError,
+    cache_directory,
+    compiler,
+    install,
+    no_compiler_reason,
+    run_compiler,
+)
 from wheelterrain.model import contact as _contact
 from wheelterrain.model import solve as _solve
 
@@ -186,11 +193,11 @@ static void wt_strides(long n, int n_in, const long* shared, long* js, long* is)
 def solve_source(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> str:
     """The C of ``wt_solve(n, in, shared, out)``: the steady state at n points (inputs load,
     slip, guess, first, last, p; outputs STEADY_OUTPUTS, as ``build().steady``), in chunks of
-    WT_CHUNK points: the pruned scan (:func:`~wheelterrain.model.solve._scan_values`), the
+    WT_CHUNK points: the pruned scan (:func:`~wheelterrain.model.solve.scan_values`), the
     bracket, the refined second iterate, at most NEWTON_ITERATIONS Newton iterations for the
     points not yet converged, the final angle, the ripple-free contact there and the outputs:
     the order in which ``build().steady`` evaluates the same pieces. A point with a sinkage guess
-    (finite, > 0) starts warm instead (:func:`~wheelterrain.model.solve._solve_start_warm`):
+    (finite, > 0) starts warm instead (:func:`~wheelterrain.model.solve.solve_start_warm`):
     the scan's two ends and Newton from the guess; ``first`` and ``last``, where finite, are
     those two ends' Fz_static (from ``wt_scan_ends``: a sweep computes them once per slip)."""
     k = _solve.solve_lane_kernels(nodes)
@@ -203,7 +210,7 @@ def solve_source(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> str:
     fz = ", ".join(f"k_{f.name()}" for f in k["fz"])
     fz_d = ", ".join(f"k_{f.name()}" for f in k["fz_d"])
     static = ", ".join(f"k_{f.name()}" for f in k["static"])
-    rows = {name: row for row, name in enumerate(_contact.STEADY_OUTPUTS)}
+    rows = {name: row for row, name in enumerate(_solve.STEADY_OUTPUTS)}
     f_row = rows["normal_force_static"]
     angles = ", ".join(repr(float(a)) for a in scan)
     size, done = _solve.STATE_SIZE, _solve.STATE_DONE
@@ -262,7 +269,7 @@ int wt_solve(long n, const double* const* in, const long* shared, double* const*
       wt_cases(n_first, first_end, at, at_js, at_is, o, 0, k_case, fz, 3);
     }}
     {{  /* a cold point: the inner angles its scan plan keeps, then its bracket's low end
-         (solve._scan_values); the rest stay NaN, angles below the load */
+         (solve.scan_values); the rest stay NaN, angles below the load */
       const double* a[3] = {{load, slip, p}};
       long a_js[3] = {{js[0], js[1], js[5]}}, a_is[3] = {{is[0], is[1], is[5]}};
       double* o[1] = {{plan}};
@@ -306,7 +313,7 @@ int wt_solve(long n, const double* const* in, const long* shared, double* const*
       double* o[3] = {{state, capacity, w_safe}};
       wt_each(n_warm, warm, k_start_warm, a, a_js, a_is, o, WT_CHUNK);
     }}
-    {{  /* a cold point's second iterate, from Fz_static at its first (solve._refine) */
+    {{  /* a cold point's second iterate, from Fz_static at its first (solve.refine) */
       const double* s_in[1] = {{state}};
       long s_js[1] = {{WT_CHUNK}}, s_is[1] = {{1}};
       double* s_out[1] = {{theta}};
@@ -438,7 +445,7 @@ def compile_source(source: str, name: str) -> tuple[Path, bool]:
     library and whether it uses glibc's vector math."""
     cc = compiler()
     if cc is None:
-        raise CompileError("no C compiler (cc/gcc, or $CC) on PATH")
+        raise CompileError(no_compiler_reason())
     key = hashlib.sha256("\0".join((source, cc, " ".join(_COMMON), _processor())).encode())
     place = cache_directory() / "lanes" / key.hexdigest()[:16]
     for flags in _FLAG_SETS:
@@ -535,7 +542,7 @@ def compiled_solve(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> LaneFunct
     elsewhere (with the scan's end values ``first``, ``last`` where finite: from
     :func:`compiled_scan_ends`); compiled on first use (about 80 s) and cached."""
     library, vector_math = compile_source(solve_source(nodes), "solve_lanes")
-    return LaneFunction(library, "wt_solve", _contact.STEADY_OUTPUTS, vector_math,
+    return LaneFunction(library, "wt_solve", _solve.STEADY_OUTPUTS, vector_math,
                         len(_contact.NAMES))
 
 

@@ -4,7 +4,7 @@ contact (:mod:`wheelterrain.model.contact`) carries the load, as CasADi expressi
 A bracketing scan of Fz_static over log-spaced entry angles (pruned by the contact's static
 bound), a regula-falsi and inverse-quadratic start, then safeguarded Newton in log(theta_f),
 unrolled and switched off once converged; and the acceptance test every caller applies
-(:func:`solve_converged`). :func:`wheelterrain.model.contact.build` makes Functions of it;
+(:func:`solve_converged`). :func:`wheelterrain.model.functions.build` makes Functions of it;
 :mod:`wheelterrain.model.lanes` generates C of the same pieces (:func:`solve_lane_kernels`).
 """
 
@@ -17,21 +17,23 @@ import casadi as ca
 import numpy as np
 
 from wheelterrain.model.contact import (
-    _P,
     CONTACT_OUTPUTS,
     DEFAULT_NODES,
     FORMS,
     FULL_BURIAL,
-    STEADY_INPUTS,
-    STEADY_OUTPUTS,
-    _all,
-    _entry_angle,
-    _forms,
-    _radii,
-    rut_surface,
+    all_of,
+    entry_angle,
+    form_switch,
+    radii,
     static_bound,
 )
+from wheelterrain.model.soil import Params, rut_surface
 from wheelterrain.parameters import NAMES
+
+STEADY_INPUTS = ("load", "slip", "p")
+STEADY_OUTPUTS = ("sinkage", *CONTACT_OUTPUTS, "residual", "last_step", "capacity")
+"""The steady state's inputs and outputs: the solved sinkage, the ripple-free contact there,
+and the solve's residual, last Newton step and the capacity (the normal force fully buried)."""
 
 NEWTON_ITERATIONS = 24  # at most; ~4 when driving (then it stops); a braking corner where
 # Fz_static crosses 0 just below a tiny load (0.1 N against ~500 N/rad) needs 19
@@ -42,7 +44,7 @@ THETA_MIN = 1e-12  # rad: lower end of the sinkage-solve bracket (z ~ 1e-26 m)
 
 @lru_cache(maxsize=4)
 def solve_lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> dict:
-    """The sinkage solve (:func:`_sinkage_solve_expr`) in pieces, as plain SX Functions for
+    """The sinkage solve (:func:`sinkage_solve_expr`) in pieces, as plain SX Functions for
     code generators that solve many points at once (:mod:`wheelterrain.model.lanes`); the
     generated driver calls them in the order ``build().sinkage_solve`` does.
 
@@ -50,18 +52,18 @@ def solve_lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> dict:
       with case c's kernel; ``fz_d[c]``: Fz_static and its derivative by theta_f;
       ``static[c]``: every CONTACT_OUTPUT, ripple-free (the steady state's contact).
     - ``scan_plan(load, slip, p)``, ``scan_low(load, values, plan)``: the pruned scan's decisions
-      (:func:`_scan_values`).
+      (:func:`scan_values`).
     - ``start(load, values)``: (state, capacity, w_safe) from Fz_static at :func:`scan_angles`;
       ``start_warm(load, f_first, f_last, guess, p)``: the same from the scan's two ends and a
-      sinkage guess [m] (:func:`_solve_start_warm`).
+      sinkage guess [m] (:func:`solve_start_warm`).
     - ``refine(state, f, w_safe)``: a cold start's second iterate from Fz_static at its first
-      (:func:`_refine`).
+      (:func:`refine`).
     - ``newton_angle(state)``: the entry angle of the state's iterate;
       ``newton_update(state, f, df, w_safe)``: the next state (state[STATE_DONE]: converged).
     - ``solve_angle(load, state)``, then ``finish(load, state, f, p)``: sinkage, residual,
       last_step."""
     pp = ca.SX.sym("p", len(NAMES))
-    P = _P(pp)
+    P = Params(pp)
     case, fz, fz_d, static = _static_kernels(nodes)
     load, values = ca.SX.sym("load"), ca.SX.sym("values", len(scan_angles()))
     f_first, f_last, guess = ca.SX.sym("f_first"), ca.SX.sym("f_last"), ca.SX.sym("guess")
@@ -70,33 +72,33 @@ def solve_lane_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> dict:
     return {
         "case": case, "fz": fz, "fz_d": fz_d, "static": static, **_scan_kernels(),
         "start": ca.Function("solve_start", [load, values],
-                             list(_solve_start(load, ca.vertsplit(values))), {"cse": True}),
+                             list(solve_start(load, ca.vertsplit(values))), {"cse": True}),
         "start_warm": ca.Function("solve_start_warm", [load, f_first, f_last, guess, pp],
-                                  list(_solve_start_warm(load, f_first, f_last, guess, P)),
+                                  list(solve_start_warm(load, f_first, f_last, guess, P)),
                                   {"cse": True}),
-        "refine": ca.Function("solve_refine", [state, f, w_safe], [_refine(state, f, w_safe)],
+        "refine": ca.Function("solve_refine", [state, f, w_safe], [refine(state, f, w_safe)],
                               {"cse": True}),
         "newton_angle": ca.Function("newton_angle", [state], [ca.exp(state[0])]),
         "newton_update": ca.Function("newton_update", [state, f, df, w_safe],
                                      [_newton_update(state, f, df, w_safe)], {"cse": True}),
         "solve_angle": ca.Function("solve_angle", [load, state], [_solve_angle(load, state)]),
         "finish": ca.Function("solve_finish", [load, state, f, pp],
-                              list(_solve_finish(load, state, f, P)), {"cse": True}),
+                              list(solve_finish(load, state, f, P)), {"cse": True}),
     }
 
 
-def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int], guess=None):
+def sinkage_solve_expr(load, slip, P: Params, nodes: tuple[int, int], guess=None):
     """Quasi-static sinkage: the shallowest entry angle at which Fz_static equals the load
-    (from a sinkage ``guess`` [m]: the root Newton reaches from it, :func:`_solve_start_warm`).
+    (from a sinkage ``guess`` [m]: the root Newton reaches from it, :func:`solve_start_warm`).
 
     1. Scan Fz_static at SCAN_POINTS log-spaced entry angles up to full burial (pi/2) and keep the
        first interval in which it reaches the load: the equilibrium a wheel sinking from the
        surface meets first. (Fz_static(z) is monotone for driving wheels; in extreme braking
        corners the negative shear pulls the wheel down, it is not, and a load can have several
        equilibria.) Angles where :func:`static_bound` is below the load are not evaluated
-       (:func:`_scan_values`): the same bracket from 2-3 contact evaluations instead of 13.
+       (:func:`scan_values`): the same bracket from 2-3 contact evaluations instead of 13.
        The bracket's regula falsi point, evaluated without derivative, then gives by inverse
-       quadratic interpolation a second iterate close to the root (:func:`_refine`).
+       quadratic interpolation a second iterate close to the root (:func:`refine`).
     2. Safeguarded Newton in y = log(theta_f) on that bracket, on asinh(Fz/W) - asinh(1): monotone
        in Fz, ~log(Fz/W) and so nearly linear in y where Fz >> W (Fz grows like
        theta_f**(2n+1)), and of moderate size where braking shear makes Fz negative (a plain
@@ -109,20 +111,20 @@ def _sinkage_solve_expr(load, slip, P: _P, nodes: tuple[int, int], guess=None):
        wheel.
 
     Returns ``(state, theta, capacity)``: the final Newton state, the entry angle and the
-    capacity (Fz_static fully buried). :func:`_solve_finish`, given Fz_static at ``theta``,
+    capacity (Fz_static fully buried). :func:`solve_finish`, given Fz_static at ``theta``,
     makes of them the sinkage, the relative residual of the final iterate and the size of the
     last step in log(theta_f). Callers must check load <= capacity and convergence: a small
     residual, or a last step at rounding level (the root pinned in theta_f when the load is a
     vanishing fraction of force terms that cancel) (``model.steady_state`` does); convergence
     is a checked output, not an assumption.
     """
-    _, fz_only, _ = _static_functions(nodes)
+    _, fz_only, _ = static_functions(nodes)
     scan = scan_angles()
     if guess is None:
-        state, capacity, w_safe = _solve_start(load, _scan_values(load, slip, P, nodes))
-        state = _refine(state, fz_only(ca.exp(state[0]), slip, P.p), w_safe)
+        state, capacity, w_safe = solve_start(load, scan_values(load, slip, P, nodes))
+        state = refine(state, fz_only(ca.exp(state[0]), slip, P.p), w_safe)
     else:
-        state, capacity, w_safe = _solve_start_warm(load, fz_only(scan[0], slip, P.p),
+        state, capacity, w_safe = solve_start_warm(load, fz_only(scan[0], slip, P.p),
                                                     fz_only(scan[-1], slip, P.p), guess, P)
     iteration = _newton_iteration(nodes)
     for _ in range(NEWTON_ITERATIONS):
@@ -139,20 +141,20 @@ def scan_angles() -> np.ndarray:
 MISSING = math.nan  # a scan value the pruned scan did not evaluate (not a crossing)
 
 
-def _scan_values(load, slip, P: _P, nodes: tuple[int, int]) -> list:
-    """Fz_static at :func:`scan_angles` as far as :func:`_solve_start` uses it, evaluating
+def scan_values(load, slip, P: Params, nodes: tuple[int, int]) -> list:
+    """Fz_static at :func:`scan_angles` as far as :func:`solve_start` uses it, evaluating
     only what it can use (each a switch: a skipped angle costs no contact evaluation):
 
     1. fully buried (the capacity), and every inner angle where :func:`static_bound` does not
        rule out that Fz_static reaches the load (``scan_plan``);
     2. the low end of the bracket that leaves, if it was skipped (``scan_low``).
 
-    Every other entry is MISSING: an angle where Fz_static < load, which is all _solve_start
+    Every other entry is MISSING: an angle where Fz_static < load, which is all solve_start
     needs of it. So the bracket, its end values and hence the solve are those of the full
     scan, bit for bit (tests check it); the deep sinkage of a heavy load is bracketed with
     2 contact evaluations instead of 13."""
     kernels = _scan_kernels()
-    fz_only = _static_functions(nodes)[1]
+    fz_only = static_functions(nodes)[1]
     missing = ca.Function("scan_missing", [ca.MX.sym("theta_f"), ca.MX.sym("slip"),
                                            ca.MX.sym("p", len(NAMES))], [MISSING])
     maybe = ca.Function.if_else("scan_value", fz_only, missing)
@@ -170,13 +172,13 @@ def _scan_values(load, slip, P: _P, nodes: tuple[int, int]) -> list:
 
 @lru_cache(maxsize=1)
 def _scan_kernels() -> dict:
-    """The pruned scan's decisions as SX Functions (:func:`_scan_values`; the lane solve
+    """The pruned scan's decisions as SX Functions (:func:`scan_values`; the lane solve
     calls the same): ``scan_plan(load, slip, p)``, 1 at each inner scan angle (1 .. last - 1)
     to evaluate; ``scan_low(load, values, plan)``, the index of the bracket's low end, its
     angle and 1 if its value is MISSING (the first angle, or an inner one the plan skipped)."""
     load, slip, pp = ca.SX.sym("load"), ca.SX.sym("slip"), ca.SX.sym("p", len(NAMES))
     scan = scan_angles()
-    P = _P(pp)
+    P = Params(pp)
     # an angle can be the crossing only where the bound reaches the load (or is NaN)
     maybe = [ca.logic_not(static_bound(ca.SX(t), slip, P) < load) for t in scan[1:-1]]
     plan = ca.Function("scan_plan", [load, slip, pp], [ca.vertcat(*maybe)], {"cse": True})
@@ -192,7 +194,7 @@ def _scan_kernels() -> dict:
     return {"scan_plan": plan, "scan_low": low}
 
 
-def _solve_start(load, values):
+def solve_start(load, values):
     """The bracket of the sinkage solve from Fz_static at :func:`scan_angles` (``values``):
     ``(state, capacity, w_safe)``, the Newton state of :func:`_newton_update` at its first
     iterate."""
@@ -234,15 +236,15 @@ def _first_state(y, lo, hi, h_lo, h_hi):
     return ca.vertcat(y, lo, hi, h_lo, h_hi, -1, math.inf, 0, 0)
 
 
-def _solve_start_warm(load, f_first, f_last, guess, P: _P):
+def solve_start_warm(load, f_first, f_last, guess, P: Params):
     """The warm start: the bracket is the whole scan range, its ends' residuals from Fz_static
     there (``f_first`` at THETA_MIN, ``f_last`` fully buried: the capacity), and the first
     iterate the entry angle of the sinkage ``guess`` [m] when that lies inside the bracket,
-    else regula falsi on it. ``(state, capacity, w_safe)`` as :func:`_solve_start`."""
+    else regula falsi on it. ``(state, capacity, w_safe)`` as :func:`solve_start`."""
     w_safe = _safe_load(load)
     lo, hi = _scan_range(load)
     h_lo, h_hi = _residual(f_first, w_safe), _residual(f_last, w_safe)
-    y = ca.log(ca.fmax(_entry_angle(guess - rut_surface(P), P), THETA_MIN))
+    y = ca.log(ca.fmax(entry_angle(guess - rut_surface(P), P), THETA_MIN))
     y = ca.if_else(ca.logic_and(y > lo, y < hi), y, _fallback(lo, hi, h_lo, h_hi))
     return _first_state(y, lo, hi, h_lo, h_hi), f_last, w_safe
 
@@ -252,9 +254,9 @@ def _solve_angle(load, state):
     return ca.if_else(load > 0, ca.exp(state[0]), 0)
 
 
-def _solve_finish(load, state, f, P: _P):
+def solve_finish(load, state, f, P: Params):
     """Sinkage, relative residual and last step at the final angle, where Fz_static is ``f``."""
-    Rc, _, _ = _radii(P)
+    Rc, _, _ = radii(P)
     theta = _solve_angle(load, state)
     # R_c*(1 - cos(theta)) without cancellation, below the surface the contact begins at
     sinkage = rut_surface(P) + 2 * Rc * ca.sin(theta / 2) ** 2
@@ -287,7 +289,7 @@ def _fallback(lo, hi, h_lo, h_hi):
     return ca.if_else(ca.logic_and(rf >= lo, rf <= hi), rf, (lo + hi) / 2)
 
 
-def _refine(state, f, w_safe):
+def refine(state, f, w_safe):
     """The cold solve's second iterate, from Fz_static ``f`` (no derivative) at its first, the
     regula falsi point y0 of the scan's bracket [lo, hi]: y0 narrows the bracket, and inverse
     quadratic interpolation through the residuals at lo, y0 and hi (log(Fz) is smooth and
@@ -309,12 +311,12 @@ def _refine(state, f, w_safe):
 
 @lru_cache(maxsize=4)
 def _newton_iteration(nodes: tuple[int, int]) -> ca.Function:
-    """One safeguarded Newton iteration of the sinkage solve (:func:`_sinkage_solve_expr`) as a
+    """One safeguarded Newton iteration of the sinkage solve (:func:`sinkage_solve_expr`) as a
     switch on its converged flag: ``iteration(done, state, slip, p, w_safe) -> state``. While
     ``done`` is 0 it iterates; once a Newton step (not a fallback step) inside the bracket was
     shorter than NEWTON_STOP, ``done`` is 1 and the remaining iterations are the identity,
     evaluated as such (no contact evaluation): the solve stops when it has converged."""
-    fz_fun = _static_functions(nodes)[0]
+    fz_fun = static_functions(nodes)[0]
     state, sl, pp, w_safe = (ca.MX.sym("state", STATE_SIZE), ca.MX.sym("slip"),
                              ca.MX.sym("p", len(NAMES)), ca.MX.sym("w_safe"))
     f, df = fz_fun(ca.exp(state[0]), sl, pp)
@@ -356,7 +358,7 @@ def _newton_update(state, f, df, w_safe):
     last_step = ca.fabs(y_next - y)
     predicted = (ca.fabs(theta * df / w_safe) * last_step**3
                  / ca.fmax(step_before, 1e-300) ** 2)
-    quadratic = _all([newton_before == 1, last_step <= step_before / 2,
+    quadratic = all_of([newton_before == 1, last_step <= step_before / 2,
                       predicted <= PREDICTED_STOP])
     done = ca.logic_and(inside, ca.logic_or(last_step <= NEWTON_STOP, quadratic))
     return ca.vertcat(y_next, lo, hi, h_lo, h_hi, below, last_step, done, inside)
@@ -364,12 +366,12 @@ def _newton_update(state, f, df, w_safe):
 
 @lru_cache(maxsize=4)
 def _static_kernels(nodes: tuple[int, int]) -> tuple:
-    """The ripple-free contact at entry angle theta_f, per case of :func:`_forms`' switch, as
+    """The ripple-free contact at entry angle theta_f, per case of :func:`form_switch`' switch, as
     SX Functions of (theta_f, slip, p): ``(case, fz, fz_d, static)``, ``fz[c]`` Fz_static
     with case c's kernel, ``fz_d[c]`` Fz_static and its derivative by theta_f (SX forward
     mode, with common subexpressions shared), ``static[c]`` every CONTACT_OUTPUT."""
     th, sl, pp = ca.SX.sym("theta_f"), ca.SX.sym("slip"), ca.SX.sym("p", len(NAMES))
-    case, switch = _forms(nodes, False)
+    case, switch = form_switch(nodes, False)
     at = CONTACT_OUTPUTS.index("normal_force_static")
     fz, fz_d, static = [], [], []
     for name in FORMS:
@@ -384,7 +386,7 @@ def _static_kernels(nodes: tuple[int, int]) -> tuple:
 
 
 @lru_cache(maxsize=4)
-def _static_functions(nodes: tuple[int, int]) -> tuple[ca.Function, ca.Function, ca.Function]:
+def static_functions(nodes: tuple[int, int]) -> tuple[ca.Function, ca.Function, ca.Function]:
     """Functions of the ripple-free contact at entry angle theta_f: (Fz_static and its
     d/d(theta_f)), Fz_static alone, and every CONTACT_OUTPUT; each a switch over
     :func:`_static_kernels` (the derivative differentiated per kernel in SX: half the cost
@@ -403,19 +405,19 @@ def _static_functions(nodes: tuple[int, int]) -> tuple[ca.Function, ca.Function,
             ca.Function("arc_static", [th, sl, pp], ca.vertsplit(switched(static)[0])))
 
 
-def _steady_expr(load, slip, P: _P, nodes: tuple[int, int], guess=None, solve=None) -> list:
+def steady_expr(load, slip, P: Params, nodes: tuple[int, int], guess=None, solve=None) -> list:
     """STEADY_OUTPUTS of the solve (cold, or from a sinkage ``guess``; ``solve``: the result
-    of :func:`_sinkage_solve_expr` when the caller has it already), the contact taken at the
+    of :func:`sinkage_solve_expr` when the caller has it already), the contact taken at the
     solved angle: no round trip through the sinkage. The residual is that contact's own
     normal_force_static (no separate Fz_static evaluation there, as in the lane solve)."""
-    state, theta, capacity = solve or _sinkage_solve_expr(load, slip, P, nodes, guess)
-    quasi = _static_functions(nodes)[2](theta, slip, P.p)
+    state, theta, capacity = solve or sinkage_solve_expr(load, slip, P, nodes, guess)
+    quasi = static_functions(nodes)[2](theta, slip, P.p)
     f = quasi[CONTACT_OUTPUTS.index("normal_force_static")]
-    sink, residual, last_step = _solve_finish(load, state, f, P)
+    sink, residual, last_step = solve_finish(load, state, f, P)
     return [sink, *quasi, residual, last_step, capacity]
 
 
-def _steady_from(steady: ca.Function, nodes: tuple[int, int]) -> ca.Function:
+def steady_from(steady: ca.Function, nodes: tuple[int, int]) -> ca.Function:
     """``steady_from(load, slip, p, guess)``: ``steady`` started warm from a sinkage guess [m]
     (finite and > 0; else cold, exactly ``steady``). The warm start evaluates of the scan only
     its two ends and starts Newton at the guess; where it does not converge (and the wheel can
@@ -426,7 +428,7 @@ def _steady_from(steady: ca.Function, nodes: tuple[int, int]) -> ca.Function:
     rows = ca.MX.sym("rows", len(STEADY_OUTPUTS))
     args = [load, slip, p, guess]
     warm = ca.Function("steady_warm", args,
-                       [ca.vertcat(*_steady_expr(load, slip, _P(p), nodes, guess))])
+                       [ca.vertcat(*steady_expr(load, slip, Params(p), nodes, guess))])
     cold = ca.Function("steady_cold", args, [ca.vertcat(*steady(load, slip, p))])
     valid = ca.logic_and(guess > 0, guess < math.inf)  # NaN compares false
     first = ca.Function.if_else("steady_start", warm, cold)(valid, *args)
