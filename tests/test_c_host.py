@@ -16,7 +16,7 @@ from fmpy import extract, read_model_description
 
 from wheelterrain import compiled as native
 from wheelterrain.cosim import ssp
-from wheelterrain.fmu import build_native as nativebuild
+from wheelterrain.fmu import toolchain
 
 HERE = Path(__file__).resolve().parent
 
@@ -32,7 +32,7 @@ pytestmark = [
 def host(tmp_path_factory) -> Path:
     binary = tmp_path_factory.mktemp("host") / "fmi_host"
     subprocess.run([native.compiler(), "-O1", "-Wall", "-Werror", "-I",
-                    str(nativebuild.fmi_headers()), str(HERE / "fmi_host.c"), "-o", str(binary),
+                    str(toolchain.fmi_headers()), str(HERE / "fmi_host.c"), "-o", str(binary),
                     "-ldl"], check=True)
     return binary
 

@@ -98,7 +98,7 @@ def test_guid_is_derived_from_the_content_and_the_fmu_names_its_version(fmus, na
     from xml.etree import ElementTree as ET
 
     from wheelterrain import __version__
-    from wheelterrain.fmu.build_pythonfmu import _identify
+    from wheelterrain.fmu.description import identify
 
     with zipfile.ZipFile(fmus[name]) as z:
         root = ET.fromstring(z.read("modelDescription.xml"))
@@ -107,11 +107,11 @@ def test_guid_is_derived_from_the_content_and_the_fmu_names_its_version(fmus, na
     assert "generationDateAndTime" not in root.attrib
     shipped = root.get("guid")
     again = copy.deepcopy(root)
-    _identify(again)
+    identify(again)
     assert again.get("guid") == shipped
     changed = copy.deepcopy(root)
     changed.find("ModelVariables")[0][0].set("start", "0.123")
-    _identify(changed)
+    identify(changed)
     assert changed.get("guid") != shipped
 
 

@@ -25,8 +25,7 @@ from wheelterrain import presets
 from wheelterrain.cosim import master as cosim
 from wheelterrain.cosim import ssp
 from wheelterrain.errors import CosimulationError
-from wheelterrain.fmu import build_native as nativebuild
-from wheelterrain.fmu import variables
+from wheelterrain.fmu import toolchain, variables
 from wheelterrain.fmu.instance import Instance
 from wheelterrain.parameters import TABLE
 
@@ -998,7 +997,7 @@ def test_a_c_host_loads_the_native_binary_without_python(flavours, tmp_path):
                                 "drawbar_pull": vr["drawbar_pull"],
                                 "wheel_angle": vr["wheel_angle"]})
     exe = tmp_path / "host"
-    subprocess.run([native.compiler(), "-O1", "-I", str(nativebuild.fmi_headers()), str(source),
+    subprocess.run([native.compiler(), "-O1", "-I", str(toolchain.fmi_headers()), str(source),
                     "-o", str(exe), "-ldl"], check=True)
     library = f"{unzip}/binaries/linux64/WheelTerrain.so"
     run = subprocess.run([str(exe), library, md.guid], capture_output=True, text=True,

@@ -16,14 +16,14 @@ from fmpy import extract, read_model_description
 
 from wheelterrain import compiled as native
 from wheelterrain.fmu import build_fmi3 as fmi3
-from wheelterrain.fmu import build_native as nativebuild
+from wheelterrain.fmu import toolchain
 
 HERE = Path(__file__).resolve().parent
 WINE = shutil.which("wine") or shutil.which("wine64")
 
 pytestmark = [
     pytest.mark.slow,
-    pytest.mark.skipif(nativebuild.cross_compiler() is None or WINE is None
+    pytest.mark.skipif(toolchain.cross_compiler() is None or WINE is None
                        or native.compiler() is None,
                        reason="needs gcc-mingw-w64-x86-64, wine and a C compiler "
                               "(.ci/run installs them)"),
@@ -36,10 +36,10 @@ def built(tmp_path_factory, native_dir, wine_prefix):
     built = [*native_dir.glob("*.fmu"), *(native_dir / "fmi3").glob("*.fmu")]
     fmus = {("3" if f.parent.name == "fmi3" else "2", f.stem): f for f in built}
     hosts = {"linux64": root / "fmi_host", "win64": root / "fmi_host.exe"}
-    headers = str(nativebuild.fmi_headers())
+    headers = str(toolchain.fmi_headers())
     subprocess.run([native.compiler(), "-O1", "-Wall", "-Werror", "-I", headers,
                     str(HERE / "fmi_host.c"), "-o", str(hosts["linux64"]), "-ldl"], check=True)
-    subprocess.run([nativebuild.cross_compiler(), "-O1", "-Wall", "-Werror", "-I", headers,
+    subprocess.run([toolchain.cross_compiler(), "-O1", "-Wall", "-Werror", "-I", headers,
                     str(HERE / "fmi_host.c"), "-o", str(hosts["win64"])], check=True)
     unzip = {key: extract(str(fmu)) for key, fmu in fmus.items()}
     yield {"fmus": fmus, "unzip": unzip, "hosts": hosts, "prefix": wine_prefix}

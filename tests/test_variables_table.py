@@ -16,8 +16,8 @@ import pytest
 from wheelterrain import compiled as native
 from wheelterrain.cosim import ssp
 from wheelterrain.cosim import sweep as sweeper
-from wheelterrain.fmu import build_pythonfmu, variables
 from wheelterrain.fmu import functions as fmu_model
+from wheelterrain.fmu import variables
 from wheelterrain.model import rig
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -64,7 +64,7 @@ def test_the_derived_lists_are_the_ones_the_faces_use():
     assert sweeper.OUTPUTS == variables.TERRAIN_OUTPUTS
     assert set(ssp.TERRAIN_OUTPUTS) == {v.name for v in variables.TERRAIN_IO
                                         if v.causality == "output"}
-    names = [v.name for v in build_pythonfmu.VARIABLES["WheelTerrain"]()]
+    names = [v.name for v in variables.VARIABLES["WheelTerrain"]()]
     assert names[-len(variables.TERRAIN_IO):] == [v.name for v in variables.TERRAIN_IO]
 
 

@@ -535,10 +535,9 @@ def build(out: str, flavor: str) -> None:
     from pathlib import Path
 
     from wheelterrain.compiled import compiler as native_compiler
-    from wheelterrain.fmu.build_native import WIN64_CC, cross_compiler
     from wheelterrain.fmu.build_native import build as build_native
-    from wheelterrain.fmu.build_pythonfmu import BuildError
     from wheelterrain.fmu.build_pythonfmu import build as build_pythonfmu
+    from wheelterrain.fmu.toolchain import WIN64_CC, BuildError, cross_compiler
 
     try:
         paths = []

@@ -35,8 +35,7 @@ from pathlib import Path
 import casadi as ca
 
 from wheelterrain import compiled
-from wheelterrain.fmu.build_native import cross_compiler
-from wheelterrain.fmu.build_pythonfmu import BuildError
+from wheelterrain.fmu.toolchain import BuildError, cross_compiler
 
 STEM = "WheelTerrainExternal"
 """The C files' and the binaries' name (``Library="WheelTerrainExternal"``)."""
