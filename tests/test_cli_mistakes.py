@@ -12,7 +12,7 @@ import pytest
 from click.testing import CliRunner
 
 from wheelterrain.cli import main
-from wheelterrain.cosim.master import write_atomic
+from wheelterrain.files import write_atomic
 
 
 def _one_line_exit_2(result, needle: str) -> None:
@@ -249,7 +249,7 @@ def test_an_interrupted_set_of_results_is_left_whole_or_not_at_all(tmp_path):
     """Ctrl-C while reproduce wrote its files left part of a set (C1.csv alone, or
     C1.csv C1.png C1.ssp C2.csv) in 4 of 5 tries. The set is written aside and moved in
     once whole."""
-    from wheelterrain.cosim.master import one_set
+    from wheelterrain.files import one_set
 
     out = tmp_path / "out"
     (out / "old.txt").parent.mkdir()

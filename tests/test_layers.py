@@ -16,6 +16,7 @@ PACKAGE = Path(wheelterrain.__file__).resolve().parent
 # at or below its own
 RANK = {
     "__init__": 0, "errors": 0, "data": 0,   # the package's version, errors, shipped data
+    "files": 0,                              # files written whole or not at all
     "parameters": 1, "compiled": 1,          # the parameter table; CasADi Functions as C
     "presets": 2,
     "model": 3,

@@ -18,7 +18,7 @@ import json
 from pathlib import Path
 
 from wheelterrain import presets
-from wheelterrain.cosim.master import write_atomic
+from wheelterrain.files import write_atomic
 from wheelterrain.fit import calibration
 from wheelterrain.parameters import DEG
 

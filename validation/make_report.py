@@ -34,7 +34,7 @@ import model_form_study  # noqa: E402
 from wheelterrain import model, plots, presets  # noqa: E402
 from wheelterrain.cosim import master as cosim  # noqa: E402
 from wheelterrain.cosim import sweep as sweeper  # noqa: E402
-from wheelterrain.cosim.master import write_atomic  # noqa: E402
+from wheelterrain.files import write_atomic  # noqa: E402
 from wheelterrain.fit import calibration, prediction, sensitivity  # noqa: E402
 from wheelterrain.parameters import DEG  # noqa: E402
 

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from wheelterrain import presets
-from wheelterrain.cosim.master import write_atomic
+from wheelterrain.files import write_atomic
 from wheelterrain.fit import calibration
 
 SOIL = ["soil.phi", "soil.k_phi", "soil.n0", "soil.cohesion", "soil.shear_modulus"]

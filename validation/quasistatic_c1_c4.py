@@ -15,7 +15,7 @@ import argparse
 import json
 from pathlib import Path
 
-from wheelterrain import model, presets
+from wheelterrain import files, model, presets
 from wheelterrain.cosim import master as cosim
 
 
@@ -47,7 +47,7 @@ def main(argv: list[str] | None = None) -> None:
     result = compare(args.preset)
     print(render(result))
     if args.json:
-        cosim.write_atomic(args.json, json.dumps(result, indent=2))
+        files.write_atomic(args.json, json.dumps(result, indent=2))
 
 
 if __name__ == "__main__":

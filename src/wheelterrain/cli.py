@@ -16,7 +16,7 @@ import time
 import click
 import numpy as np
 
-from wheelterrain import __version__, model, presets
+from wheelterrain import __version__, files, model, presets
 from wheelterrain.cosim import SSP_ENGINES
 from wheelterrain.errors import (
     CalibrationError,
@@ -162,7 +162,7 @@ def _emit_json(target: str | None, document) -> bool:
     it went to standard output, where it replaces the text."""
     from pathlib import Path
 
-    from wheelterrain.cosim.master import write_atomic
+    from wheelterrain.files import write_atomic
 
     if target is None:
         return False
@@ -355,7 +355,6 @@ def multipass(preset: str, assignments: tuple[str, ...], slip_text: str, slip_de
     from pathlib import Path
 
     from wheelterrain import plots
-    from wheelterrain.cosim import master
     from wheelterrain.model import multipass as mp
 
     _check_file_target(json_target)
@@ -384,7 +383,7 @@ def multipass(preset: str, assignments: tuple[str, ...], slip_text: str, slip_de
     if compare:
         document["compare"] = {"set": list(compare), "rut_shear": int(other["model.rut_shear"]),
                                "runs": compared}
-    with master.one_set(Path(out)) as staging:
+    with files.one_set(Path(out)) as staging:
         plots.multipass(runs, staging / "multipass.png",
                         f"{preset}, {load:g} N" + (f", {' '.join(assignments)}"
                                                     if assignments else ""),
@@ -446,7 +445,7 @@ def energy(preset: str, assignments: tuple[str, ...], system: str, cases: str, g
     """
     from wheelterrain.cosim import energy as ledger
     from wheelterrain.cosim import master
-    from wheelterrain.cosim.rover import GRAVITY
+    from wheelterrain.parameters import GRAVITY
 
     _check_file_target(json_target)
     slips_of = {c["case"]: c["slip_paper"] for c in master.table3()["cases"]}
@@ -664,7 +663,7 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str | None,
         say(f"in-sample: {preset} was fitted on {', '.join(fitted_on)}; its held-out "
             "errors are printed by `wheelterrain validate`")
     experiment = {row["case"]: row["experiment"] for row in paper["cases"]}
-    with cosim.one_set(out_dir) as staging:  # all files, or none if interrupted
+    with files.one_set(out_dir) as staging:  # all files, or none if interrupted
         for r in results:
             cosim.write_csv(staging / f"{r.case}.csv", r)
             plots.time_series(r, experiment[r.case], staging / f"{r.case}.png")
@@ -732,7 +731,7 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
     """
     from pathlib import Path
 
-    from wheelterrain.cosim.master import write_atomic
+    from wheelterrain.files import write_atomic
     from wheelterrain.fit import calibration
 
     _check_file_target(json_target)
@@ -1136,7 +1135,7 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     series = {"time": result.time, **{f"{w}.{k}": v for w, d in result.wheels.items()
                                       for k, v in d.items()},
               **result.chassis, **result.inputs}
-    with cosim.one_set(out_dir) as staging:  # all files, or none if interrupted
+    with files.one_set(out_dir) as staging:  # all files, or none if interrupted
         plots.rover(result, figures, staging / f"{stem}.png")
         cosim.write_series(staging / f"{stem}.csv", series,
                            every=max(len(result.time) // 5000, 1),

@@ -23,6 +23,8 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from wheelterrain.files import replacing
+
 CFLAGS = ("-fPIC", "-shared")  # with the optimisation level compile_function is given
 
 
@@ -101,10 +103,9 @@ def run_compiler(command: list[str]) -> subprocess.CompletedProcess:
 def install(built: Path, library: Path) -> None:
     """Put the library ``built`` (in a temporary folder) at ``library`` atomically: a reader
     never loads half a file, and processes compiling the same library at once do not clash."""
-    part = library.with_suffix(f".{os.getpid()}.part")
     try:
-        shutil.copyfile(built, part)
-        os.replace(part, library)
+        with replacing(library) as partial:
+            shutil.copyfile(built, partial)
     except OSError as err:
         raise CompileError(f"cannot write {library} ({err})") from err
 

@@ -335,7 +335,10 @@ TABLE: tuple[Parameter, ...] = (
 # --- the single-wheel rig (SingleWheelRig.fmu) ------------------------------------------------
 # Same columns; ``fmu`` says which FMU carries the row. The CasADi terrain model's parameter
 # vector is TABLE (the terrain rows); the rig's is RIG_TABLE.
-STANDARD_GRAVITY = 9.80665  # m/s2
+STANDARD_GRAVITY = 9.80665  # m/s2: the rig's load as a mass (rig.mass = load/g)
+GRAVITY = {"earth": 9.81, "moon": 1.62}
+"""m/s2: the gravities a rover runs in (``wheelterrain rover --gravity``; the rover.gravity
+row's default is the Earth's) and the Earth's of the shipped wheel tests' soil weights."""
 
 
 def _R(*args, **kwargs) -> Parameter:
@@ -424,7 +427,7 @@ ROVER_TABLE: tuple[Parameter, ...] = (
     _V("rover.cg_height", "m", 0.10, 0.0, 2.0,
        "Height of the centre of mass above the axles: with the slope it moves load from the "
        "front to the rear axle (load transfer).", f"{_ASSUMED}: 10 cm", quantity="Length"),
-    _V("rover.gravity", "m/s2", 9.81, 0.1, 30.0,
+    _V("rover.gravity", "m/s2", GRAVITY["earth"], 0.1, 30.0,
        "Gravitational acceleration: Earth test bed 9.81 (standard 9.80665), Moon 1.62.",
        "Earth: standard gravity; Moon: 1.62 m/s2", quantity="Acceleration"),
     _V("rover.rim_speed", "m/s", 0.03, 1.0e-4, 10.0,

@@ -3,7 +3,6 @@ means against Table III. matplotlib with the Agg backend (no display needed)."""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import matplotlib
@@ -14,14 +13,15 @@ import numpy as np
 
 from wheelterrain.cosim.master import CaseResult
 from wheelterrain.cosim.rover import LIMIT_SCENARIOS
+from wheelterrain.files import replacing
 
 
 def _save(fig, path: Path) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(f".{path.stem}.part.png")
-    fig.savefig(partial, dpi=120)
-    plt.close(fig)
-    os.replace(partial, path)  # never a half-written plot
+    try:
+        with replacing(path) as partial:  # never a half-written plot
+            fig.savefig(partial, dpi=120, format="png")
+    finally:
+        plt.close(fig)
 
 
 def time_series(result: CaseResult, experiment: dict, path: Path) -> None:

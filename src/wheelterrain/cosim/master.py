@@ -16,12 +16,10 @@ steady state.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
 import os
 import shutil
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -31,6 +29,7 @@ import numpy as np
 
 from wheelterrain import data
 from wheelterrain.errors import CosimulationError, FMUError
+from wheelterrain.files import write_atomic
 from wheelterrain.fmu.instance import Instance, read_description
 from wheelterrain.fmu.variables import COUPLED_FORCES, COUPLED_STATES, RIG_IO, TERRAIN_IO
 from wheelterrain.model import rig
@@ -510,59 +509,6 @@ def format_table(rows: list[dict], mae: dict[str, float]) -> str:
         f"{mae['normal_force_vs_paper_simulation']:.2f} N, sinkage "
         f"{1e3 * mae['sinkage_vs_paper_simulation']:.2f} mm")
     return "\n".join(lines)
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-def file_mode() -> int:
-    """The mode a new file gets from the user's umask (what open() gives): for a result
-    written through a temporary file, which is created 0600."""
-    return 0o666 & ~_umask()
-
-
-@contextlib.contextmanager
-def one_set(out_dir: Path):
-    """A folder to write a set of result files into; they appear in ``out_dir`` together when
-    the block ends without an exception. An interrupted run (Ctrl-C, SIGTERM, an error) leaves
-    ``out_dir`` as it was: never part of a set (C1.csv alone), no temporary folder."""
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(dir=out_dir, prefix=".partial-"))
-    try:
-        yield staging
-        for f in sorted(staging.iterdir()):
-            os.replace(f, out_dir / f.name)
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
-
-
-def write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file: never a half-written result.
-
-    A symbolic link is followed (the file it points to is replaced, the link stays); a path
-    that is neither missing nor a regular file (/dev/null, /dev/stdout, a named pipe) is
-    written in place, never replaced by a regular file."""
-    path = Path(path)
-    if path.is_symlink():
-        path = path.resolve()
-    if path.exists() and not path.is_file() and not path.is_dir():
-        with path.open("w") as f:
-            f.write(text)
-        return
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
-    try:
-        os.chmod(tmp, file_mode())  # mkstemp's 0600 -> the user's normal permissions
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def write_csv(path: Path, result: CaseResult, every: int = 10) -> None:

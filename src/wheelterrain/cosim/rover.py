@@ -31,7 +31,7 @@ from wheelterrain.errors import ParameterError, WheelTerrainError
 from wheelterrain.fmu import functions
 from wheelterrain.model import contact, ground, rover
 from wheelterrain.model import functions as model_functions
-from wheelterrain.parameters import NAMES, ParameterSet
+from wheelterrain.parameters import GRAVITY, NAMES, ParameterSet
 
 STEP = 1e-3  # s: communication step. Engines that pass the forces one step late (Jacobi:
 # libcosim, ecos) need it: at 2 ms the delayed soil damper makes the bounce grow there.
@@ -647,7 +647,6 @@ STALL_SLIP = 0.95
 
 # --- scenarios ----------------------------------------------------------------------------------
 
-GRAVITY = {"earth": 9.81, "moon": 1.62}
 SOFT = ground.SOFT_PATCH
 """The soft patch: k_phi' and phi scaled by these factors (a looser soil)."""
 PATCH_START, PATCH_LENGTH = ground.SOFT_PATCH_START, ground.SOFT_PATCH_LENGTH

@@ -42,7 +42,6 @@ import numpy as np
 
 from wheelterrain.cosim import rover as rover_system
 from wheelterrain.cosim import ssp
-from wheelterrain.cosim.master import file_mode
 from wheelterrain.cosim.rover import (
     CHASSIS_RECORD,
     RECORD,
@@ -52,6 +51,7 @@ from wheelterrain.cosim.rover import (
     from_records,
 )
 from wheelterrain.errors import CosimulationError
+from wheelterrain.files import replacing
 from wheelterrain.fmu import functions
 from wheelterrain.fmu.instance import Instance
 from wheelterrain.fmu.variables import GROUND, QUERY_POINTS
@@ -444,19 +444,10 @@ def system_description(scenario: str, soil: Soil, values: Mapping[str, float],
 def write_ssp(path: Path, fmu_dir: Path, scenario: str, soil: Soil,
               values: Mapping[str, float], stop: float, step: float = STEP) -> Path:
     """Rover.ssp for ``scenario`` (module doc), written atomically."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.NamedTemporaryFile(dir=path.parent, prefix=f".{path.name}.",
-                                     delete=False) as tmp:
-        partial = Path(tmp.name)
-    try:
-        os.chmod(partial, file_mode())  # the temporary file's 0600 -> the umask's mode
-        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
-            z.writestr("SystemStructure.ssd", system_description(scenario, soil, values,
-                                                                 stop, step))
-            for name in fmu_names():
-                z.write(Path(fmu_dir) / f"{name}.fmu", f"resources/{name}.fmu")
-        os.replace(partial, path)
-    finally:
-        partial.unlink(missing_ok=True)
+    with replacing(Path(path)) as partial, zipfile.ZipFile(partial, "w",
+                                                            zipfile.ZIP_DEFLATED) as z:
+        z.writestr("SystemStructure.ssd", system_description(scenario, soil, values, stop,
+                                                             step))
+        for name in fmu_names():
+            z.write(Path(fmu_dir) / f"{name}.fmu", f"resources/{name}.fmu")
     return path

@@ -28,6 +28,7 @@ import numpy as np
 
 from wheelterrain.cosim import SSP_ENGINES
 from wheelterrain.cosim.master import rig_parameters
+from wheelterrain.files import replacing
 from wheelterrain.fmu import variables
 from wheelterrain.model import rig
 from wheelterrain.parameters import TABLE, ParameterSet
@@ -156,14 +157,11 @@ def _binding(p, value) -> tuple[str, int | float]:
 def write(path: Path, fmu_dir: Path, case: str, ps: ParameterSet, slip_paper: float,
           load: float, rim_speed: float, stop: float, step: float) -> Path:
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(f".{path.name}.part")
-    with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
+    with replacing(path) as partial, zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
         z.writestr("SystemStructure.ssd",
                    system_description(case, ps, slip_paper, load, rim_speed, stop, step))
         for name in ("SingleWheelRig", "WheelTerrain"):
             z.write(Path(fmu_dir) / f"{name}.fmu", f"resources/{name}.fmu")
-    os.replace(partial, path)
     return path
 
 

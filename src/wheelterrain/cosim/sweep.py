@@ -244,7 +244,8 @@ def _run_dask(fmu, base, chunks, slip_definition, address, results, progress) ->
 
 
 def write_csv(path: Path, rows: list[dict]) -> None:
-    from wheelterrain.cosim.master import csv_header, write_atomic
+    from wheelterrain.cosim.master import csv_header
+    from wheelterrain.files import write_atomic
     from wheelterrain.fmu.variables import units as variable_units
 
     if not rows:

@@ -30,7 +30,7 @@ import numpy as np
 from wheelterrain import data, model, presets
 from wheelterrain.errors import CalibrationError, WheelTerrainError
 from wheelterrain.fit import calibration, crosswheel, datasets
-from wheelterrain.parameters import DEG, ParameterSet
+from wheelterrain.parameters import DEG, GRAVITY, ParameterSet
 
 CASES = ("C1", "C2", "C3", "C4")
 PAPER_FREE = ("soil.phi", "soil.n0")
@@ -48,7 +48,6 @@ _DING_BEKKER = {"n": 1.10, "k_c": 15.6e3, "k_phi": 2407.4e3, "cohesion": 250.0,
 """The soil of Ding et al. 2011 (their Table 2, as in the data file's header): Bekker form
 p = (k_c/b + k_phi)*z**n with k_c in N/m^(n+1), k_phi in N/m^(n+2); cohesion Pa; bulk density
 kg/m3; Janosi K m."""
-GRAVITY = 9.81  # m/s2: the data were taken on Earth
 
 
 def ding_soil(width: float) -> dict[str, float]:
@@ -60,7 +59,7 @@ def ding_soil(width: float) -> dict[str, float]:
     same for both of Ding's wheels. gamma = density*g.
     """
     s = _DING_BEKKER
-    gamma = s["density"] * GRAVITY
+    gamma = s["density"] * GRAVITY["earth"]  # the data were taken on Earth
     scale = width ** (s["n"] - 1)
     return {"soil.cohesion": s["cohesion"], "soil.phi": s["phi_deg"] * DEG,
             "soil.k_c": s["k_c"] * scale / s["cohesion"], "soil.k_phi": s["k_phi"] * scale / gamma,

@@ -28,6 +28,7 @@ from xml.etree import ElementTree as ET
 import casadi as ca
 
 from wheelterrain import compiled as native
+from wheelterrain.files import replacing
 from wheelterrain.fmu import build_fmi3 as fmi3
 from wheelterrain.fmu import functions as fmu_model
 from wheelterrain.fmu.build_pythonfmu import build as build_pythonfmu
@@ -278,14 +279,13 @@ def build(out: Path, models: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig"
                 libraries["win64"] = tmp / model / f"{model}.dll"
                 _compile(cross, WIN64_CFLAGS, src, libraries["win64"], model, libs=())
             target = out / f"{model}.fmu"
-            partial = target.with_suffix(".fmu.part")
-            with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
+            with replacing(target) as partial, zipfile.ZipFile(partial, "w",
+                                                               zipfile.ZIP_DEFLATED) as z:
                 z.writestr("modelDescription.xml", pretty(root))
                 for platform, library in libraries.items():
                     z.write(library, f"binaries/{platform}/{model}{PLATFORMS[platform]}")
                 for name in SOURCES:
                     z.write(src / name, f"sources/{name}")
-            os.replace(partial, target)
             built.append(target)
             built.append(_build_fmi3(model, root, src, tmp / model, out / "fmi3", cc, cross))
     return built
@@ -311,13 +311,11 @@ def _build_fmi3(model: str, root: ET.Element, src2: Path, work: Path, out: Path,
                  source=fmi3.SOURCE)
     out.mkdir(parents=True, exist_ok=True)
     target = out / f"{model}.fmu"
-    partial = target.with_suffix(".fmu.part")
-    with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
+    with replacing(target) as partial, zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
         z.writestr("modelDescription.xml", pretty(fmi3.description(root)))
         for platform, library in libraries.items():
             z.write(library, f"binaries/{fmi3.PLATFORMS[platform]}/{model}"
                              f"{PLATFORMS[platform]}")
         for path in sorted(src.iterdir()):
             z.write(path, f"sources/{path.name}")
-    os.replace(partial, target)
     return target

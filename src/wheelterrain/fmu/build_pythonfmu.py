@@ -13,7 +13,6 @@ casadi in the host's Python.
 
 from __future__ import annotations
 
-import os
 import shutil
 import tempfile
 import zipfile
@@ -21,6 +20,7 @@ from pathlib import Path
 from xml.etree import ElementTree as ET
 
 from wheelterrain import compiled as native
+from wheelterrain.files import replacing
 from wheelterrain.fmu import build_guard
 from wheelterrain.fmu import functions as fmu_model
 from wheelterrain.fmu.description import describe, pretty
@@ -58,9 +58,8 @@ def build(out: Path, models: tuple[str, ...] = tuple(SLAVE_SCRIPTS),
                                        canGetAndSetFMUstate=True, canSerializeFMUstate=True)
             finish_model_description(Path(fmu), name)
             target = out / f"{name}.fmu"
-            partial = target.with_suffix(".fmu.part")
-            shutil.copyfile(fmu, partial)
-            os.replace(partial, target)  # never a half-written FMU under the final name
+            with replacing(target) as partial:  # never a half-written FMU under the final name
+                shutil.copyfile(fmu, partial)
         built.append(target)
     return built
 
@@ -125,11 +124,9 @@ def finish_model_description(fmu: Path, model: str) -> None:
         if name.startswith("binaries/linux64/") and name.endswith(".so"):
             members[name] = fix_exit_crash(members[name])
     _install_guard(members, model, root)
-    partial = fmu.with_suffix(".rewrite")
-    with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
+    with replacing(fmu) as partial, zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
         for name, data in members.items():
             z.writestr(name, data)
-    os.replace(partial, fmu)
 
 
 def _install_guard(members: dict[str, bytes], model: str, root: ET.Element) -> None:
