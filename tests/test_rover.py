@@ -9,13 +9,15 @@ import pytest
 
 from wheelterrain import model, presets
 from wheelterrain.cosim import rover as rover_system
+from wheelterrain.cosim import rover_limits, rover_scenarios
 from wheelterrain.model import rover
+from wheelterrain.parameters import GRAVITY
 
 
 @pytest.fixture(scope="module")
 def quiet():
     """The default wheel and soil, grouser ripple off: the steady state is an equilibrium."""
-    return presets.load("rashid-patch").with_values(rover_system.NO_RIPPLE)
+    return presets.load("rashid-patch").with_values(rover_scenarios.NO_RIPPLE)
 
 
 @pytest.fixture(scope="module")
@@ -82,15 +84,15 @@ def test_simulated_stall_slope_is_the_predicted_one(quiet, gravity, memory):
     On the soil with memory: 26.96 against 27.01 deg on Earth, 25.09 against 25.22 deg on
     the Moon (with the rut met as a staircase of cells the Moon's run stalled at 24.35 deg:
     tests/test_ground.py)."""
-    run = rover_system.run_scenario("slope", quiet.with_values({"model.soil_memory": memory}),
+    run = rover_scenarios.run_scenario("slope", quiet.with_values({"model.soil_memory": memory}),
                                     gravity)
     r = run["figures"]
     # the scenario's own step: finer on the Moon, where the one-step-late engines need it
-    step = rover_system.FINE_STEP if gravity == "moon" else rover_system.STEP
+    step = rover_scenarios.FINE_STEP if gravity == "moon" else rover_system.STEP
     assert r["step_s"] == run["step"] == step
     assert np.diff(run["result"].time[:3]) == pytest.approx([step, step])
     assert r["stall_slope_deg"] is not None
-    assert r["stall_cause"] in rover_system.STALL_CAUSES
+    assert r["stall_cause"] in rover_limits.STALL_CAUSES
     assert abs(r["stall_slope_deg"] - r["predicted_stall_slope_deg"]) < 0.5
     assert r["stall_slope_deg"] > 1.0
     rows = r["slip_vs_slope"]  # one row per whole degree reached, the slip rising with it
@@ -103,18 +105,18 @@ def test_simulated_stall_slope_is_the_predicted_one(quiet, gravity, memory):
 def test_the_descent_approached_slowly_slides_at_the_predicted_limit(quiet, gravity):
     """The descent scenario tilts at 1 deg/s towards the 20 deg the Rashid rover is specified
     for: not quasi-static, so not a measure of the steady limit. Approached as the climb is
-    (:func:`rover_system.approach`: 0.1 deg/s to KNEE_MARGIN before the prediction, then 0.002
+    (:func:`rover_scenarios.approach`: 0.1 deg/s to KNEE_MARGIN before the prediction, then 0.002
     deg/s), ripple-free on the soil with memory, the rover slides within 0.5 deg of the
     steady prediction, in the slow ramp (measured: Earth 10.68 against 10.96 deg, Moon 7.79
     against 7.82 deg)."""
-    p = {**rover.defaults(), "rover.gravity": rover_system.GRAVITY[gravity]}
-    pred = math.degrees(rover_system.limit_slope(rover_system.terrain_of(quiet), p, -1)["slope"])
-    knee = abs(pred) - rover_system.KNEE_MARGIN
-    values = {"rover.gravity": p["rover.gravity"], **rover_system.approach(knee, -1),
+    p = {**rover.defaults(), "rover.gravity": GRAVITY[gravity]}
+    pred = math.degrees(rover_limits.limit_slope(rover_scenarios.terrain_of(quiet), p, -1)["slope"])
+    knee = abs(pred) - rover_scenarios.KNEE_MARGIN
+    values = {"rover.gravity": p["rover.gravity"], **rover_scenarios.approach(knee, -1),
               "rover.slope_bound": math.radians(20.0)}
-    step = rover_system.FINE_STEP if gravity == "moon" else rover_system.STEP
+    step = rover_scenarios.FINE_STEP if gravity == "moon" else rover_system.STEP
     res = rover_system.simulate(rover_system.Soil(quiet), values,
-                                rover_system.approach_stop(knee), step=step)
+                                rover_scenarios.approach_stop(knee), step=step)
     assert res.left_domain
     assert "slip reached -1" in res.left_domain
     slide = math.degrees(res.inputs["slope"][-1])
@@ -178,14 +180,14 @@ def test_a_stall_inside_a_block_of_steps_ends_the_run(quiet):
     """With the rut's shear remembered the rover stalls on the slope by sliding back within a
     block of the in-process run's steps, further than the rut record's two cells: the run ends
     at the stall with its cause, it does not fail on the record."""
-    run = rover_system.run_scenario("slope", quiet.with_values({"model.rut_shear": 1}), "earth")
+    run = rover_scenarios.run_scenario("slope", quiet.with_values({"model.rut_shear": 1}), "earth")
     r = run["figures"]
     assert r["stall_slope_deg"] is not None
-    assert r["stall_cause"] in rover_system.STALL_CAUSES
+    assert r["stall_cause"] in rover_limits.STALL_CAUSES
 
 
 def test_pull_test_curve_is_four_single_wheel_curves(quiet):
-    r = rover_system.run_scenario("pull-test", quiet, "earth")["figures"]
+    r = rover_scenarios.run_scenario("pull-test", quiet, "earth")["figures"]
     assert len(r["pull_curve"]) >= 8
     assert r["pull_curve_max_error_n"] < 0.05  # N, of a 30 N curve: the quasi-static lag
 
@@ -197,9 +199,9 @@ def test_descent_that_the_wheels_cannot_brake_ends_cleanly(quiet, memory):
     the prediction calls stable (the 1 deg/s ramp lets it go a little further before the
     slide grows); on the soil with memory never steeper than it (measured 1.0 deg before it:
     the prediction's small disturbance dies out on a slope where the ramp's larger one grows,
-    :func:`rover_system.holds`)."""
+    :func:`rover_limits.holds`)."""
     soil = quiet.with_values({"model.soil_memory": memory})
-    r = rover_system.run_scenario("descent", soil, "earth")["figures"]
+    r = rover_scenarios.run_scenario("descent", soil, "earth")["figures"]
     if r["left_domain"] is None:
         assert r["predicted_descent_limit_deg"] <= -20
         return
@@ -208,7 +210,7 @@ def test_descent_that_the_wheels_cannot_brake_ends_cleanly(quiet, memory):
         assert r["slide_slope_deg"] >= r["predicted_descent_limit_deg"] - 0.5
     else:
         assert r["slide_slope_deg"] <= r["predicted_descent_limit_deg"] + 0.05
-    assert r["stall_cause"] in rover_system.STALL_CAUSES
+    assert r["stall_cause"] in rover_limits.STALL_CAUSES
     assert all(w["mean_slip"] is None for w in r["wheels"])  # ended before the window
 
 
@@ -221,7 +223,7 @@ def test_halving_the_step_changes_the_level_means_little(quiet):
 
 
 def test_soft_patch_passes_under_the_front_then_the_rear(quiet):
-    r = rover_system.run_scenario("soft-patch", quiet, "earth")["result"]
+    r = rover_scenarios.run_scenario("soft-patch", quiet, "earth")["result"]
     front, rear = r.wheels["front_left"]["sinkage"], r.wheels["rear_left"]["sinkage"]
     t_front = r.time[np.argmax(front)]
     t_rear = r.time[np.argmax(rear)]

@@ -13,7 +13,7 @@ from fmpy.validation import validate_fmu
 from wheelterrain import compiled as native
 from wheelterrain import presets
 from wheelterrain.cosim import rover as rover_system
-from wheelterrain.cosim import rover_fmus, ssp
+from wheelterrain.cosim import rover_fmus, rover_scenarios, ssp
 from wheelterrain.errors import CosimulationError
 from wheelterrain.model import rover
 
@@ -66,7 +66,7 @@ def _assert_same_means(ours, theirs) -> None:
     """Both runs to the end, every wheel's mean slip, sinkage, load and pull from 2 s on within
     1e-3 relative (a pull that averages to ~0 on level ground judged on the wheel's normal
     force): the measure of the README's engine table (rover.difference)."""
-    d = rover_system.difference(ours, theirs, 2.0)
+    d = rover_scenarios.difference(ours, theirs, 2.0)
     assert d["window"][1] > STOP - 0.01, d
     assert d["worst"] <= 1e-3, d
 
@@ -115,7 +115,7 @@ def _patched(terrain, in_process) -> rover_system.Soil:
     front = [rover.wheel_position(p, float(np.interp(t, in_process.time, x)), "front_left")
              for t in (1.0, 3.0)]
     assert front[1] - front[0] > 0.05  # m: the crossing is not a formality
-    soft = {k: terrain[k] * f for k, f in rover_system.SOFT.items()}
+    soft = {k: terrain[k] * f for k, f in rover_scenarios.SOFT.items()}
     return rover_system.Soil(terrain, soft, front[0], front[1])
 
 
@@ -223,13 +223,13 @@ def test_a_whole_moon_stall_scenario_agrees_in_the_one_step_late_engines(built, 
     means within 1e-3 over the whole run (at 1 ms: 7.5e-4 and 1.2e-3) and the slide within
     0.01 deg."""
     _skip_unless_installed(engine)
-    ref = rover_system.run_scenario("descent", terrain, "moon")
-    run = rover_system.run_scenario("descent", terrain, "moon",
+    ref = rover_scenarios.run_scenario("descent", terrain, "moon")
+    run = rover_scenarios.run_scenario("descent", terrain, "moon",
                                     engine=rover_fmus.runner(engine, built / "native",
                                                              "descent"))
-    assert run["figures"]["step_s"] == ref["figures"]["step_s"] == rover_system.FINE_STEP
-    d = rover_system.difference(ref["result"], run["result"],
-                                rover_system.scenarios("moon")["descent"].settle)
+    assert run["figures"]["step_s"] == ref["figures"]["step_s"] == rover_scenarios.FINE_STEP
+    d = rover_scenarios.difference(ref["result"], run["result"],
+                                rover_scenarios.scenarios("moon")["descent"].settle)
     assert d["window"][1] > 15.0  # compared up to the slide
     assert d["worst"] <= 1e-3, d
     assert run["figures"]["slide_slope_deg"] == pytest.approx(
@@ -246,13 +246,13 @@ def test_earth_s_stall_in_a_one_step_late_engine_closes_on_ours_as_the_step_halv
     _skip_unless_installed("ecos")
     gap = {}
     for h in (1e-3, 5e-4):
-        ref = rover_system.run_scenario("slope", terrain, "earth", step=h)
-        run = rover_system.run_scenario("slope", terrain, "earth", step=h,
+        ref = rover_scenarios.run_scenario("slope", terrain, "earth", step=h)
+        run = rover_scenarios.run_scenario("slope", terrain, "earth", step=h,
                                         engine=rover_fmus.runner("ecos", built / "native",
                                                                  "slope"))
         assert run["figures"]["step_s"] == ref["figures"]["step_s"] == h
-        d = rover_system.difference(ref["result"], run["result"],
-                                    rover_system.scenarios("earth")["slope"].settle)
+        d = rover_scenarios.difference(ref["result"], run["result"],
+                                    rover_scenarios.scenarios("earth")["slope"].settle)
         assert d["worst"] <= 1e-3, d  # measured 7.3e-4 and 7.2e-4
         gap[h] = ref["figures"]["stall_slope_deg"] - run["figures"]["stall_slope_deg"]
     assert gap[1e-3] > 0  # the delayed stiff spring stalls it early
@@ -267,7 +267,7 @@ def test_fmpy_ssp_runner_refuses_a_soil_map_with_the_reason(built, terrain, in_p
                                 _patched(terrain, in_process), {}, STOP)
 
 
-@pytest.mark.parametrize("scenario", rover_system.LIMIT_SCENARIOS)
+@pytest.mark.parametrize("scenario", rover_scenarios.LIMIT_SCENARIOS)
 def test_fmpy_ssp_runner_refuses_a_scenario_that_ends_at_a_limit_before_running(built, terrain,
                                                                                 scenario):
     """slope, descent and pull-test end at a step a wheel refuses, where fmpy.ssp raises and
@@ -317,7 +317,7 @@ def test_an_unconnected_rover_falls_out_of_its_range_and_is_refused(built):
         assert np.all(np.abs(r["heave"]) <= 1.0)
 
 
-@pytest.mark.parametrize("scenario", list(rover_system.scenarios()))
+@pytest.mark.parametrize("scenario", list(rover_scenarios.scenarios()))
 def test_ecos_runs_every_rover_ssp_on_the_pythonfmu_fmus_as_on_the_native_ones(built, terrain,
                                                                               scenario):
     """Each Rover SSP holds four instances of WheelTerrain and two of Terrain. ecos unloads an
@@ -326,8 +326,8 @@ def test_ecos_runs_every_rover_ssp_on_the_pythonfmu_fmus_as_on_the_native_ones(b
     handler freed a live instance). The first 0.5 s of each scenario's SSP, in ecos on both
     flavours: the same record to rounding (the pythonfmu WheelTerrain runs the same C)."""
     _skip_unless_installed("ecos")
-    sc = rover_system.scenarios()[scenario]
-    soil = rover_system.scenario_soil(scenario, terrain)
+    sc = rover_scenarios.scenarios()[scenario]
+    soil = rover_scenarios.scenario_soil(scenario, terrain)
     runs = {flavour: rover_fmus.simulate_ssp("ecos", built / flavour, scenario, soil,
                                              sc.profile, 0.5)
             for flavour in ("pythonfmu", "native")}

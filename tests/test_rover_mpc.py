@@ -14,6 +14,7 @@ from wheelterrain import presets
 from wheelterrain.cli import main
 from wheelterrain.control import mpc, rover_mpc
 from wheelterrain.cosim import rover as rover_system
+from wheelterrain.cosim import rover_scenarios
 from wheelterrain.model import rover
 
 STOP = 7.0  # s: 2 s on the speed loops, then 5 s of control across the patch
@@ -29,7 +30,7 @@ def patched():
     x = probe.chassis["position"]
     edges = [rover.wheel_position(p, float(np.interp(t, probe.time, x)), "front_left")
              for t in (2.5, 5.5)]
-    soft = {k: terrain[k] * f for k, f in rover_system.SOFT.items()}
+    soft = {k: terrain[k] * f for k, f in rover_scenarios.SOFT.items()}
     return rover_system.Soil(terrain, soft, edges[0], edges[1])
 
 
@@ -38,8 +39,8 @@ def runs(patched):
     p = rover.defaults()
     loops = rover_system.simulate(patched, {}, STOP)
     control = rover_mpc.run(patched, {}, STOP)
-    return {"speed": (loops, rover_system.tracking(loops, patched, p)),
-            "mpc": (control, rover_system.tracking(control.result, patched, p))}
+    return {"speed": (loops, rover_scenarios.tracking(loops, patched, p)),
+            "mpc": (control, rover_scenarios.tracking(control.result, patched, p))}
 
 
 def test_the_controllers_hold_the_speed_that_the_speed_loops_let_drop(runs):

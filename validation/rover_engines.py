@@ -25,9 +25,9 @@ import sys
 from pathlib import Path
 
 from wheelterrain import presets
-from wheelterrain.cosim import SSP_ENGINES, rover_fmus, ssp
-from wheelterrain.cosim import rover as rover_system
+from wheelterrain.cosim import SSP_ENGINES, rover_fmus, rover_scenarios, ssp
 from wheelterrain.errors import CosimulationError
+from wheelterrain.parameters import GRAVITY
 
 ENGINES = ("in-process", "fmus", *SSP_ENGINES)
 EVENTS = {"slope": ("stall_slope_deg", "deg"), "pull-test": ("stall_towing_force", "N"),
@@ -42,7 +42,7 @@ def compare(scenario: str, gravity: str, engines: tuple[str, ...], fmu_dir: Path
         print(f"  {scenario:10} {gravity:5} {engine:10} ...", end="", flush=True,
               file=sys.stderr)
         try:
-            run = rover_system.run_scenario(scenario, terrain, gravity, step=step,
+            run = rover_scenarios.run_scenario(scenario, terrain, gravity, step=step,
                                             engine=rover_fmus.runner(engine, fmu_dir, scenario))
         except CosimulationError as err:
             runs[engine] = {"refused": str(err)}
@@ -53,14 +53,14 @@ def compare(scenario: str, gravity: str, engines: tuple[str, ...], fmu_dir: Path
         print(f" {f['simulated_time_s']:.1f} s simulated in {f['wall_time_s']:.1f} s",
               file=sys.stderr)
     ref = runs["in-process"]
-    settle = rover_system.scenarios(gravity)[scenario].settle
+    settle = rover_scenarios.scenarios(gravity)[scenario].settle
     rows = {}
     event = EVENTS.get(scenario)
     for engine, run in runs.items():
         if "refused" in run:
             rows[engine] = {"refused": run["refused"]}
             continue
-        d = rover_system.difference(ref["result"], run["result"], settle)
+        d = rover_scenarios.difference(ref["result"], run["result"], settle)
         row = {"window_s": list(d["window"]), "worst_relative_difference": d["worst"],
                "worst_mean": d["where"], "step_s": run["figures"]["step_s"],
                "simulated_time_s": run["figures"]["simulated_time_s"],
@@ -74,9 +74,9 @@ def compare(scenario: str, gravity: str, engines: tuple[str, ...], fmu_dir: Path
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--gravity", nargs="+", default=["earth", "moon"],
-                    choices=list(rover_system.GRAVITY))
-    ap.add_argument("--scenario", nargs="+", default=list(rover_system.scenarios()),
-                    choices=list(rover_system.scenarios()))
+                    choices=list(GRAVITY))
+    ap.add_argument("--scenario", nargs="+", default=list(rover_scenarios.scenarios()),
+                    choices=list(rover_scenarios.scenarios()))
     ap.add_argument("--engines", nargs="+", default=list(ENGINES), choices=ENGINES)
     ap.add_argument("--fmu-dir", default=Path("build/native"), type=Path)
     ap.add_argument("--step", type=float, default=None,

@@ -1060,12 +1060,14 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     from wheelterrain import plots
     from wheelterrain.cosim import master as cosim
     from wheelterrain.cosim import rover as rover_system
+    from wheelterrain.cosim import rover_scenarios
+    from wheelterrain.parameters import GRAVITY
 
     _check_file_target(json_target)
     _check_out_dir(out)
     if controller == "mpc":
-        if scenario not in rover_system.TRACKED_SCENARIOS:
-            _usage_error(f"--controller mpc runs {' and '.join(rover_system.TRACKED_SCENARIOS)}"
+        if scenario not in rover_scenarios.TRACKED_SCENARIOS:
+            _usage_error(f"--controller mpc runs {' and '.join(rover_scenarios.TRACKED_SCENARIOS)}"
                          f" (each wheel's prediction is a quarter rover on level ground), not "
                          f"{scenario}")
         if engine != "in-process":
@@ -1079,14 +1081,14 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     except WheelTerrainError as err:
         _fail(err)
     if "rover.gravity" in chassis_values:  # it was silently replaced by --gravity's value
-        known = ", ".join(f"{k} {v:g}" for k, v in rover_system.GRAVITY.items())
+        known = ", ".join(f"{k} {v:g}" for k, v in GRAVITY.items())
         _usage_error(f"--set rover.gravity={chassis_values['rover.gravity']:g}: the gravity is "
                      f"--gravity's ({known} m/s2): each scenario's ramps, forces and "
                      "predictions are set for it")
     ps = _load(preset, tuple(a for a in assignments if a not in rover_items))
     from wheelterrain.cosim import rover_fmus, ssp
 
-    soil = rover_system.scenario_soil(scenario, ps)
+    soil = rover_scenarios.scenario_soil(scenario, ps)
     needed = rover_fmus.fmu_names()
     folder = Path(fmu_dir) if fmu_dir else next(
         (d for d in (Path("build/native"), Path("build"))
@@ -1120,7 +1122,7 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     else:
         runner = rover_fmus.runner(engine, folder, scenario)
     try:
-        run = rover_system.run_scenario(scenario, ps, gravity, chassis_values, step=step,
+        run = rover_scenarios.run_scenario(scenario, ps, gravity, chassis_values, step=step,
                                         engine=runner)
     except WheelTerrainError as err:
         _fail(err)

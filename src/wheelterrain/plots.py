@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from wheelterrain.cosim.master import CaseResult
-from wheelterrain.cosim.rover import LIMIT_SCENARIOS
+from wheelterrain.cosim.rover_scenarios import LIMIT_SCENARIOS
 from wheelterrain.files import replacing
 
 

@@ -41,15 +41,16 @@ import numpy as np
 from wheelterrain import compiled
 from wheelterrain.control import mpc
 from wheelterrain.cosim import rover as rover_system
+from wheelterrain.cosim import rover_scenarios
 from wheelterrain.model import ground, rig, rover
 from wheelterrain.parameters import INDEX
 
-SETTLE = rover_system.TRACKING_FROM  # s on the speed loops before the controllers take over
+SETTLE = rover_scenarios.TRACKING_FROM  # s on the speed loops before the controllers take over
 SPEED_WEIGHT = 1.0
 """Default weight of the relative speed error against the slip error (mpc.Settings). Measured
 on soft-patch (Earth): 0.01 lets the speed stray 3.8 % RMS, 0.1 0.5 %, 1 0.08 %, 10 and 100
 0.04 %, the wheels' slip RMS 0.022 throughout; below 0.01 the plan leaves the soil."""
-SCENARIOS = rover_system.TRACKED_SCENARIOS
+SCENARIOS = rover_scenarios.TRACKED_SCENARIOS
 """The scenarios the controllers run: level ground (each prediction is a level quarter rover)."""
 
 
@@ -97,7 +98,7 @@ def run(soil: rover_system.Soil, rover_values: Mapping[str, float], stop: float,
                                      rel_tol=1e-9):
         raise mpc.MPCError(f"interval = {settings.interval!r} s is out of range; valid: a whole "
                            f"number of the rover's steps of {rover_system.STEP:g} s")
-    slip_ref, speed_ref = rover_system.steady_level_motion(soil, p)
+    slip_ref, speed_ref = rover_scenarios.steady_level_motion(soil, p)
     controllers = {w: mpc.Controller(settings, wheel_rig(p, w)) for w in rover.WHEELS}
     common = p["rover.rim_speed"] / p["rover.slip_radius"]
     commands = dict.fromkeys(rover.WHEELS, common)

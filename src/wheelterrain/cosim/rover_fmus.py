@@ -41,7 +41,7 @@ from xml.etree import ElementTree as ET
 import numpy as np
 
 from wheelterrain.cosim import rover as rover_system
-from wheelterrain.cosim import ssp
+from wheelterrain.cosim import rover_scenarios, ssp
 from wheelterrain.cosim.rover import (
     CHASSIS_RECORD,
     RECORD,
@@ -272,7 +272,7 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
             "fmpy's SSP runner sets every connected input to 0 before the first step, and 0 is "
             "outside the declared ranges of the wheels' ground.* inputs (soil.k_phi >= 10, "
             "...): a soil map cannot run there (ecos, libcosim and our master run it)")
-    if engine == "fmpy-ssp" and scenario in rover_system.LIMIT_SCENARIOS:
+    if engine == "fmpy-ssp" and scenario in rover_scenarios.LIMIT_SCENARIOS:
         # refused before the run: fmpy's runner would simulate it whole (minutes) first
         raise CosimulationError(
             f"fmpy's SSP runner cannot run {scenario}: the scenario ends where a wheel leaves "
@@ -320,7 +320,7 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
 
                 def inside(get) -> bool:  # ecos goes on past a refusal: end where ours end
                     now = np.array([[get(i)] for i in ids])
-                    return rover_system._outside(_chassis_slips(now, values)) is None
+                    return rover_system.outside(_chassis_slips(now, values)) is None
 
                 ssp.simulate_with_ecos(path, scenario, stop, step, csv_path, ids, inside)
                 wall = time.perf_counter() - t0
@@ -330,7 +330,7 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
     data = _chassis_slips(data, values)
     # the records end where the model's domain ends, as in our masters (those engines go on
     # past a refused step, with the refusing FMU's outputs frozen: not results)
-    problem = rover_system._outside(data)
+    problem = rover_system.outside(data)
     left = None
     if problem is not None:
         k, why = problem
@@ -342,7 +342,7 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
 
 
 def runner(engine: str, fmu_dir: Path, scenario: str) -> Callable | None:
-    """What :func:`rover_system.run_scenario` takes as its ``engine`` for ``engine``:
+    """What :func:`rover_scenarios.run_scenario` takes as its ``engine`` for ``engine``:
     "in-process" None (its own), "fmus" our master on the FMUs in ``fmu_dir``, an SSP engine
     the scenario's Rover.ssp in it."""
     if engine == "in-process":

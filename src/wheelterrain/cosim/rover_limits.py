@@ -1,0 +1,247 @@
+"""The rover's limits, predicted from its steady motion: the steepest slope it climbs or
+descends, and what ends it (``traction``, ``slip_sinkage``, ``motor_torque``, ``stability``).
+
+The steady motion on a slope is the force balance of :func:`wheelterrain.model.rover.steady_balance`
+(each rear wheel in its front wheel's rut); its stability is the linearisation of the
+continuous-time rover (exact Jacobian of the same Functions) on a soil without memory, or a run
+of the perturbed steady motion on one with memory (:func:`holds`), which has no single
+linearisation. The scenarios (:mod:`.rover_scenarios`) run the rover to these limits and name
+the cause a run met (:func:`run_cause`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from wheelterrain.cosim import ruts
+from wheelterrain.cosim.rover import STEP, RoverResult, Soil, coupled_forces, simulate
+from wheelterrain.errors import WheelTerrainError
+from wheelterrain.model import rover
+from wheelterrain.parameters import NAMES
+
+MOVING = tuple(n for n in rover.STATES if n not in ("position", "elapsed"))
+"""The states of steady motion (the position and the clock only advance): what the
+linearisation keeps (the input profile is off in a prediction)."""
+
+
+@lru_cache(maxsize=1)
+def _closed_loop() -> tuple[ca.Function, ca.Function]:
+    """``rates(x, pt, pr, slope, tow) -> dx`` of the whole rover in continuous time (the
+    contacts' forces at the state, ripple as the terrain parameters say) over MOVING, and its
+    exact Jacobian ``jac(x, pt, pr, slope, tow)`` by MOVING."""
+    x = ca.MX.sym("x", len(rover.STATES))
+    pt = ca.MX.sym("pt", len(NAMES), len(rover.WHEELS))
+    pr = ca.MX.sym("pr", len(rover.ROVER_NAMES))
+    slope, tow = ca.MX.sym("slope"), ca.MX.sym("tow")
+    xs = [x[k] for k in range(len(rover.STATES))]
+    p = rover.named([pr[k] for k in range(len(rover.ROVER_NAMES))])
+    u, _ = coupled_forces(xs, p, pt, [0.0] * len(rover.WHEELS))  # grouser-period mean
+    u.update(slope=slope, towing_force=tow)
+    dx = ca.vertcat(*rover.rates(tuple(xs), u, p))
+    keep = [rover.STATES.index(n) for n in MOVING]
+    f = ca.Function("rover_rates_closed", [x, pt, pr, slope, tow], [dx[keep]])
+    jac = ca.Function("rover_jac_closed", [x, pt, pr, slope, tow],
+                      [ca.jacobian(dx[keep], x)[:, keep]])
+    return f, jac
+
+
+def steady_state_vector(balance: dict, p: Mapping[str, float]) -> np.ndarray:
+    """The rover's state (STATES) in the steady motion of :func:`rover.steady_balance`."""
+    omega = p["rover.rim_speed"] / p["rover.slip_radius"]
+    _, ki = rover.gains(p)
+    zf = balance["wheels"]["front_left"]["sinkage"]
+    zr = balance["wheels"]["rear_left"]["sinkage"]
+    lf, lr = rover.lever(p, "front_left"), rover.lever(p, "rear_left")
+    sin_t = (zf - zr) / (lf - lr)
+    s = dict.fromkeys(rover.STATES, 0.0)
+    s.update(speed=(1 - balance["slip"]) * p["rover.rim_speed"], heave=zf - lf * sin_t,
+             pitch=math.asin(sin_t))
+    for w in rover.WHEELS:
+        s[f"{w}.wheel_speed"] = omega
+        s[f"{w}.speed_error_integral"] = balance["wheels"][w]["torque"] / ki
+    return np.array([s[n] for n in rover.STATES])
+
+
+def growth_rate(terrain: Mapping, p: Mapping[str, float], slope: float, slip: float,
+                balance_tow: bool = False) -> dict:
+    """The largest real part [1/s] of the eigenvalues of the rover's linearisation (exact
+    Jacobian of the same Functions) about its steady motion at ``slip`` on ``slope``: > 0, the
+    steady motion is unstable. The state is polished by Newton on the continuous rates.
+    ``balance_tow``: the towing force is whatever holds the rover at that slip (the pull
+    test), else 0 (``slip`` must then be the slope's steady slip)."""
+    f, jac = _closed_loop()
+    pr = [p[n] for n in rover.ROVER_NAMES]
+    balance = rover.steady_balance(terrain, p, slope, slip)
+    # each rear wheel in its front wheel's rut (the steady rover's soils)
+    pt = np.column_stack([balance["terrain"][w].vector() for w in rover.WHEELS])
+    tow = balance["surplus"] if balance_tow else 0.0
+    x = steady_state_vector(balance, p)
+    keep = [rover.STATES.index(n) for n in MOVING]
+    for _ in range(20):
+        r = np.array(f(x, pt, pr, slope, tow)).ravel()
+        J = np.array(jac(x, pt, pr, slope, tow))
+        step = np.linalg.solve(J, -r)
+        x[keep] += step
+        if np.max(np.abs(step)) < 1e-14 * max(1.0, np.max(np.abs(x))):
+            break
+    eig = np.linalg.eigvals(np.array(jac(x, pt, pr, slope, tow)))
+    top = eig[np.argmax(eig.real)]
+    return {"rate": float(top.real), "frequency_hz": float(abs(top.imag) / (2 * math.pi)),
+            "state": x}
+
+
+def steady_slip(terrain: Mapping, p: Mapping[str, float], slope: float) -> float | None:
+    """The slip of steady motion on ``slope`` in [-0.999, STALL_SLIP], or None (none there:
+    the wheels cannot hold the rover)."""
+    from scipy.optimize import brentq
+
+    def surplus(i: float) -> float:
+        return rover.steady_balance(terrain, p, slope, i)["surplus"]
+
+    lo, hi = -0.999, STALL_SLIP
+    try:
+        if surplus(lo) > 0 or surplus(hi) < 0:
+            return None
+        return brentq(surplus, lo, hi, xtol=1e-12)
+    except WheelTerrainError:
+        return None
+
+
+def has_memory(terrain: Mapping) -> bool:
+    """True where the wheels' soil remembers (``model.soil_memory`` = 1)."""
+    return any(terrain[w]["model.soil_memory"] == 1 for w in rover.WHEELS)
+
+
+PROBE_TIME = 12.0  # s: how long a perturbed steady motion is run (PROBE_KICK's test)
+PROBE_KICK = 1e-4  # rad/s: the pitch rate the steady motion is started with
+
+
+def holds(terrain: Mapping, p: Mapping[str, float], slope: float, slip: float,
+          step: float = STEP, balance_tow: bool = False) -> bool:
+    """Whether the rover's steady motion at ``slip`` on ``slope`` survives a small
+    disturbance, by running it: from the steady state (:func:`steady_state_vector`, each wheel's
+    plastic sinkage at its sinkage) with the pitch rate PROBE_KICK, in process for PROBE_TIME s
+    at that slope; it holds when the normal forces' deviation from the steady motion over the
+    last second is below its largest over the first second (it dies out) and the slip stays
+    below STALL_SLIP. The test for a soil with memory, which has no one linearisation: lifted,
+    a wheel unloads along the stiff elastic line; pressed, it yields along the soft
+    pressure-sinkage law. ``balance_tow``: the towing force is whatever holds the rover at
+    that slip (the pull test), else 0 (``slip`` must be the slope's steady slip)."""
+    balance = rover.steady_balance(terrain, p, slope, slip)
+    tow = balance["surplus"] if balance_tow else 0.0
+    x = steady_state_vector(balance, p)
+    x[rover.STATES.index("pitch_rate")] += PROBE_KICK
+    plastics = [float(rover.wheel_kinematics(list(x), p, w)[0]) for w in rover.WHEELS]
+    x0 = [*x, *([0.0] * len(rover.WHEELS)), *plastics]
+    soil = Soil(terrain["front_left"])
+    res = simulate(soil, dict(p), PROBE_TIME, step=step, slope=slope, towing=tow, x0=x0,
+                   ruts0=ruts.steady_ruts(balance, p, x, soil.map_values()))
+    if res.left_domain or res.time.size < round(PROBE_TIME / step) - 1:
+        return False
+    steady = np.array([balance["wheels"][w]["normal_force"] for w in rover.WHEELS])
+    forces = np.array([res.wheels[w]["normal_force"] for w in rover.WHEELS])
+    deviation = np.max(np.abs(forces - steady[:, None]), axis=0)
+    second = round(1.0 / step)
+    slips = np.array([res.wheels[w]["slip"] for w in rover.WHEELS])
+    return bool(deviation[-second:].max() < deviation[:second].max()
+                and slips.max() < STALL_SLIP)
+
+
+def statically_stable(terrain: Mapping, p: Mapping[str, float], slope: float,
+                      slip: float) -> bool:
+    """The force balance's slope at a steady slip: more slip must give more net forward force
+    (the rover then slows less and the slip falls back). Where sinkage grows with slip faster
+    than the thrust (``soil.n1``, bulldozing), the surplus can fall with slip: the steady
+    motion is then statically unstable and the slip runs away (``slip_sinkage``)."""
+    h = 1e-4
+    lo, hi = max(slip - h, -0.999), min(slip + h, 0.999)
+    return (rover.steady_balance(terrain, p, slope, hi)["surplus"]
+            > rover.steady_balance(terrain, p, slope, lo)["surplus"])
+
+
+STALL_CAUSES = ("traction", "slip_sinkage", "stability", "motor_torque", "domain")
+"""What can end a slope or descent run (``stall_cause``), in the order they are tested."""
+
+
+def steady_cause(terrain: Mapping, p: Mapping[str, float], slope: float,
+                 slip: float | None = None) -> str | None:
+    """Which steady condition fails on ``slope``, or None: no steady slip in
+    [-0.999, STALL_SLIP] (``traction``: the wheels cannot hold the rover; downhill, cannot
+    brake it), the force balance falls with slip there (``slip_sinkage``), or the motors
+    cannot give its torque (``motor_torque``, rover.motor_torque_limit). ``slip``: the
+    slope's steady slip where the caller has it (:func:`steady_slip`)."""
+    i = steady_slip(terrain, p, slope) if slip is None else slip
+    if i is None:
+        return "traction"
+    if not statically_stable(terrain, p, slope, i):
+        return "slip_sinkage"
+    balance = rover.steady_balance(terrain, p, slope, i)
+    if max(abs(balance["wheels"][w]["torque"]) for w in rover.WHEELS) \
+            > p["rover.motor_torque_limit"]:
+        return "motor_torque"
+    return None
+
+
+def run_cause(res: RoverResult, terrain: Mapping, p: Mapping[str, float],
+              slope: float) -> str:
+    """Which of STALL_CAUSES ended a run that stalled or slid at ``slope`` [rad]: ``domain``
+    where it left the model's domain other than by its slip (a non-finite value, a refused
+    step); else the first steady condition that fails there (:func:`steady_cause`, on the
+    ripple-free soil ``terrain``); else ``stability``: a steady motion that the motors can
+    drive exists and is statically stable, and the run did not hold it (a disturbance grew)."""
+    if res.left_domain and "slip reached" not in res.left_domain:
+        return "domain"
+    return steady_cause(terrain, p, slope) or "stability"
+
+
+def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
+                tolerance: float = 1e-4) -> dict:
+    """The steepest slope [rad] (uphill for ``direction`` 1, downhill for -1) on which the rover
+    has a steady motion that it also holds: a steady slip exists in [-0.999, STALL_SLIP] (else
+    ``traction``: the wheels cannot hold the rover, downhill their braking), more slip gives
+    more net force there (else ``slip_sinkage``, :func:`statically_stable`), and a disturbance
+    dies out (else ``stability``): on a soil without memory the linearisation about the steady
+    motion has no eigenvalue with a positive real part; on a soil with memory, which has none,
+    the perturbed motion is run (:func:`holds`). Bisection on the slope from level ground, every
+    condition checked at every trial; ``limit`` says which one ended it (a tolerance of
+    1e-3 rad where the motion is run)."""
+    top = direction * math.radians(60)
+    memory = has_memory(terrain)
+    if memory:
+        tolerance = max(tolerance, 1e-3)
+
+    def verdict(slope: float) -> str | None:
+        i = steady_slip(terrain, p, slope)
+        if i is None:
+            return "traction"
+        cause = steady_cause(terrain, p, slope, i)
+        if cause is not None:
+            return cause
+        if memory:
+            return None if holds(terrain, p, slope, i) else "stability"
+        return "stability" if growth_rate(terrain, p, slope, i)["rate"] > 0 else None
+
+    level = verdict(0.0)  # each verdict once: on a soil with memory it runs the rover
+    if level is not None:
+        return {"slope": 0.0, "limit": level, "slip": None}
+    why = verdict(top)
+    if why is None:
+        return {"slope": top, "limit": None, "slip": steady_slip(terrain, p, top)}
+    lo, hi = 0.0, top
+    while abs(hi - lo) > tolerance:
+        mid = (lo + hi) / 2
+        v = verdict(mid)
+        if v is None:
+            lo = mid
+        else:
+            hi, why = mid, v
+    return {"slope": lo, "limit": why, "slip": steady_slip(terrain, p, lo)}
+
+
+STALL_SLIP = 0.95
+"""Slip at which the rover counts as stalled: it moves at 5 % of its wheels' rim speed."""
