@@ -321,3 +321,27 @@ def test_a_rover_longer_than_the_rut_record_is_a_parameter_error_exit_2():
                                        "rover.wheelbase=1.4", "--json"])
     _one_line_exit_2(result, "the rut record holds 256 cells")
     assert "rover.wheelbase shorter" in result.output
+
+
+@pytest.mark.parametrize(("arguments", "needle"), [
+    (["--scenario", "pull-test", "--engine", "fmpy-ssp"], "fmpy's SSP runner cannot run"),
+    (["--scenario", "slope", "--engine", "fmpy-ssp"], "fmpy's SSP runner cannot run"),
+    (["--scenario", "soft-patch", "--engine", "fmpy-ssp"], "cannot run a soil map"),
+    (["--scenario", "slope", "--controller", "mpc"], "--controller mpc runs level and"),
+    (["--scenario", "level", "--controller", "mpc", "--engine", "ecos"],
+     "--controller mpc runs with --engine in-process"),
+    (["--scenario", "level", "--controller", "mpc", "--step", "0.0005"],
+     "at the rover's step of 0.001 s"),
+    (["--scenario", "level", "--set", "rover.gravity=3"], "the gravity is --gravity's"),
+], ids=["fmpy-ssp-pull-test", "fmpy-ssp-slope", "fmpy-ssp-soft-patch", "mpc-slope",
+        "mpc-ecos", "mpc-step", "gravity"])
+def test_a_rover_run_the_registry_refuses_exits_2_before_any_work(tmp_path, arguments, needle):
+    """An engine and scenario (or controller) that cannot go together: one line, exit 2, before
+    the prediction or the run starts (`--engine fmpy-ssp --scenario pull-test` exited 4, as a
+    numerical failure, after the prediction: the except for the engine's error could never
+    run), and no output folder left behind."""
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["rover", *arguments, "--out", str(out),
+                                       "--fmu-dir", str(tmp_path)])
+    _one_line_exit_2(result, needle)
+    assert not out.exists()

@@ -23,7 +23,8 @@ RANK = {
     "fmu": 4, "modelica": 4,                 # the FMUs; the Modelica library
     "cosim": 5,
     "control": 6, "fit": 6, "plots": 6,
-    "cli": 7,
+    "run": 7,                                # one function per command: engine choice, files
+    "cli": 8,
 }
 
 

@@ -14,7 +14,7 @@ from wheelterrain import compiled as native
 from wheelterrain import presets
 from wheelterrain.cosim import rover as rover_system
 from wheelterrain.cosim import rover_fmus, rover_scenarios, ssp
-from wheelterrain.errors import CosimulationError
+from wheelterrain.errors import UsageError
 from wheelterrain.model import rover
 
 pytestmark = pytest.mark.skipif(native.compiler() is None, reason="needs a C compiler")
@@ -262,7 +262,7 @@ def test_earth_s_stall_in_a_one_step_late_engine_closes_on_ours_as_the_step_halv
 def test_fmpy_ssp_runner_refuses_a_soil_map_with_the_reason(built, terrain, in_process):
     """fmpy.ssp starts every connection at 0, outside the ground.* inputs' ranges: refused
     before anything runs, with that reason."""
-    with pytest.raises(CosimulationError, match="sets every connected input to 0"):
+    with pytest.raises(UsageError, match="sets every connected input to 0"):
         rover_fmus.simulate_ssp("fmpy-ssp", built / "native", "soft-patch",
                                 _patched(terrain, in_process), {}, STOP)
 
@@ -273,7 +273,7 @@ def test_fmpy_ssp_runner_refuses_a_scenario_that_ends_at_a_limit_before_running(
     """slope, descent and pull-test end at a step a wheel refuses, where fmpy.ssp raises and
     returns nothing: it ran the whole simulation (219 s quiet, > 900 s loaded) before
     failing, with another message. Refused before anything runs now."""
-    with pytest.raises(CosimulationError, match="fmpy's SSP runner cannot run"):
+    with pytest.raises(UsageError, match=r"fmpy's SSP runner cannot run"):
         rover_fmus.simulate_ssp("fmpy-ssp", built / "native", scenario,
                                 rover_system.Soil(terrain), {}, 0.05)
 

@@ -104,7 +104,7 @@ def test_speed_weight_is_a_checked_setting():
 
 @pytest.mark.parametrize(("args", "message"), [
     (["--scenario", "slope"], "runs level and soft-patch"),
-    (["--scenario", "level", "--engine", "fmus"], "in-process rover"),
+    (["--scenario", "level", "--engine", "fmus"], "runs with --engine in-process"),
     (["--scenario", "level", "--step", "5e-4"], "rover's step"),
 ])
 def test_cli_refuses_what_the_controllers_do_not_run(tmp_path, args, message):

@@ -11,13 +11,12 @@ import errno
 import json
 import math
 import sys
-import time
 
 import click
 import numpy as np
 
 from wheelterrain import __version__, files, model, presets
-from wheelterrain.cosim import SSP_ENGINES
+from wheelterrain.cosim import ROVER_CONTROLLERS, ROVER_ENGINES
 from wheelterrain.errors import (
     CalibrationError,
     CosimulationError,
@@ -26,6 +25,7 @@ from wheelterrain.errors import (
     InputError,
     LoadTooLargeError,
     ParameterError,
+    UsageError,
     WheelTerrainError,
 )
 from wheelterrain.model import slip as slips
@@ -42,11 +42,16 @@ Parameter names are those of `wheelterrain params`; they are also the FMU parame
 
 
 def _fail(err: WheelTerrainError) -> None:
-    code = EXIT_USAGE
-    if isinstance(err, LoadTooLargeError):
+    """One line and the exit code of the error's kind: 2 what was asked (a parameter, an
+    input, a file, an FMU of another version, a request that cannot be carried out), 3 an
+    operating point the model cannot represent (a load it cannot carry, an FMU that refused a
+    step of a run), 4 a numerical failure."""
+    code = EXIT_NUMERICAL
+    if isinstance(err, LoadTooLargeError | CosimulationError):
         code = EXIT_INFEASIBLE
-    elif not isinstance(err, ParameterError | InputError | CalibrationError | DataError):
-        code = EXIT_NUMERICAL
+    elif isinstance(err, ParameterError | InputError | CalibrationError | DataError
+                    | UsageError | FMUError):
+        code = EXIT_USAGE
     click.echo(f"error: {err}", err=True)
     sys.exit(code)
 
@@ -65,6 +70,35 @@ def json_option(what: str):
         "--json", "json_target", is_flag=False, flag_value="-", default=None, metavar="[FILE]",
         help=f"{what} as JSON: to FILE (the text is still printed), or alone to standard "
              "output instead of the text. FILE's folder must exist.")
+
+
+@contextlib.contextmanager
+def _progress_bars():
+    """``progress(stage, done, total)`` for the run layer: one progress bar per stage on
+    standard error (a new stage ends the one before), each drawn to ``done`` of ``total``."""
+    current: dict = {}  # the stage, its bar and how far it is drawn
+
+    def close() -> None:
+        if current:
+            current["bar"].__exit__(None, None, None)
+            current.clear()
+
+    def progress(stage: str, done: float, total: float) -> None:
+        if current.get("stage") != stage:
+            close()
+            bar = click.progressbar(length=max(round(total), 1), label=stage, file=sys.stderr,
+                                    show_pos=False)
+            bar.__enter__()
+            current.update(stage=stage, bar=bar, drawn=0)
+        now = min(round(done), current["bar"].length)
+        if now > current["drawn"]:
+            current["bar"].update(now - current["drawn"])
+            current["drawn"] = now
+
+    try:
+        yield progress
+    finally:
+        close()
 
 
 def _usage_error(message: str) -> None:
@@ -620,62 +654,42 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str | None,
     """
     from pathlib import Path
 
-    from wheelterrain import plots
     from wheelterrain.cosim import master as cosim
-    from wheelterrain.cosim import ssp
+    from wheelterrain.run import rig
 
     _check_file_target(json_target)
     _check_out_dir(out)
     ps = _load(preset, assignments)
-    out_dir = Path(out)
-    paper = cosim.table3()
     try:
-        folder, flavour = cosim.choose_fmus(None if fmu_dir is None else Path(fmu_dir),
-                                            interface)
-        workers = workers or cosim.default_workers()
-        label = "co-simulating C1-C4" if interface == "cs" else "integrating C1-C4 (ME)"
-        processes = f"{workers} worker process{'es' if workers > 1 else ''}"
-        click.echo(f"FMUs: {folder}, {flavour}; {processes}", err=True)
-        started = time.perf_counter()
-        with click.progressbar(length=len(paper["cases"]), label=label,
-                               file=sys.stderr) as bar:
-            results = cosim.reproduce(folder, ps, step=step, stop=stop,
-                                      progress=lambda case: bar.update(1),
-                                      interface=interface, workers=workers)
-        elapsed = time.perf_counter() - started
-    except (FileNotFoundError, FMUError) as err:
+        with _progress_bars() as progress:
+            run = rig.reproduce(ps, preset, Path(out), None if fmu_dir is None else Path(fmu_dir),
+                                interface, workers, step, stop, fitted=not assignments,
+                                progress=progress)
+    except FileNotFoundError as err:
         click.echo(f"error: {err}", err=True)
         sys.exit(EXIT_USAGE)
-    except CosimulationError as err:
-        click.echo(f"error: {err}", err=True)
-        sys.exit(EXIT_INFEASIBLE)
-    rows = cosim.comparison(results)
-    mae = cosim.mean_absolute_errors(rows)
+    except WheelTerrainError as err:
+        _fail(err)
+    processes = f"{run.workers} worker process{'es' if run.workers > 1 else ''}"
+    click.echo(f"FMUs: {run.folder}, {run.flavour}; {processes}", err=True)
+    if run.note:
+        click.echo(f"note: {run.note}", err=True)
     name = preset if not assignments else f"{preset} with {' '.join(assignments)}"
-    fitted_on = presets.read(preset)["provenance"].get("fitted_on") if not assignments else None
     text = json_target != "-"  # --json alone: the JSON document replaces the text
     say = click.echo if text else (lambda *a, **k: None)
     how = "co-simulation" if interface == "cs" else "model exchange (RK4)"
     say(f"C1-C4 {how}, preset {name}, step {step:g} s, {stop:g} s per case "
-        f"(wall time {elapsed:.1f} s, {folder}, {processes})")
-    say(cosim.format_table(rows, mae))
-    if fitted_on:
-        say(f"in-sample: {preset} was fitted on {', '.join(fitted_on)}; its held-out "
+        f"(wall time {run.elapsed:.1f} s, {run.folder}, {processes})")
+    say(cosim.format_table(run.rows, run.mae))
+    if run.in_sample_on:
+        say(f"in-sample: {preset} was fitted on {', '.join(run.in_sample_on)}; its held-out "
             "errors are printed by `wheelterrain validate`")
-    experiment = {row["case"]: row["experiment"] for row in paper["cases"]}
-    with files.one_set(out_dir) as staging:  # all files, or none if interrupted
-        for r in results:
-            cosim.write_csv(staging / f"{r.case}.csv", r)
-            plots.time_series(r, experiment[r.case], staging / f"{r.case}.png")
-            ssp.write(staging / f"{r.case}.ssp", folder, r.case, ps, r.slip_paper,
-                      paper["load_N"], paper["wheel_speed_m_per_s"], stop, step)
-        plots.means_bar_chart(rows, staging / "means.png", preset, fitted_on)
-    say(f"wrote {out_dir}/C1..C4.csv, C1..C4.png, means.png, C1..C4.ssp")
+    say(f"wrote {Path(out)}/C1..C4.csv, C1..C4.png, means.png, C1..C4.ssp")
     if json_target:  # the JSON document: replacing the text, or beside it in a file
         payload = {"preset": preset, "set": list(assignments), "interface": interface,
                    "step": step, "stop": stop,
-                   "in_sample": bool(fitted_on),
-                   "averaging_windows": {r.case: list(r.window) for r in results},
+                   "in_sample": bool(run.in_sample_on),
+                   "averaging_windows": {r.case: list(r.window) for r in run.results},
                    "cases": [{"case": row["case"], "slip_paper": row["slip_paper"],
                               "drawbar_pull": row["drawbar_pull"],
                               "normal_force": row["normal_force"], "sinkage": row["sinkage"],
@@ -683,10 +697,10 @@ def reproduce(preset: str, assignments: tuple[str, ...], fmu_dir: str | None,
                                              ("drawbar_pull", "normal_force", "sinkage")},
                               "paper_simulation": {k: row[f"{k}_paper_simulation"] for k in
                                                    ("drawbar_pull", "normal_force", "sinkage")}}
-                             for row in rows],
-                   "mean_absolute_error": mae,
-                   "fmu_dir": str(folder), "workers": workers,
-                   "wall_time_s": elapsed}
+                             for row in run.rows],
+                   "mean_absolute_error": run.mae,
+                   "fmu_dir": str(run.folder), "workers": run.workers,
+                   "wall_time_s": run.elapsed}
         _emit_json(json_target, payload)
 
 
@@ -731,8 +745,8 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
     """
     from pathlib import Path
 
-    from wheelterrain.files import write_atomic
     from wheelterrain.fit import calibration
+    from wheelterrain.run import calibrate as calibrate_run
 
     _check_file_target(json_target)
     out_file = None
@@ -746,30 +760,12 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
     case_names = [c.strip() for c in cases.split(",") if c.strip()]
     matched = tuple(o.strip() for o in outputs.split(",") if o.strip())
     try:
-        result = calibration.fit(base, names, case_names, starts=starts, seed=seed,
-                                 outputs=matched)
-        fitted = base.with_values(result.values)
-        held_out = [c for c in ("C1", "C2", "C3", "C4") if c not in case_names]
-        held = calibration.errors_on(fitted, held_out) if held_out else {}
-        profiles = {}
-        for n in names if profile_points >= 2 else []:
-            points = calibration.profile(base, names, case_names, result.values, n,
-                                         profile_points, outputs=result.outputs)
-            profiles[n] = {"points": points, "interval": calibration.profile_interval(
-                points, 2 * result.cost)}
+        fit = calibrate_run.calibrate(base, preset, names, case_names, starts, seed, matched,
+                                      profile_points, out_file, name, protocol)
     except WheelTerrainError as err:
         _fail(err)
-    payload = {
-        "preset": preset, "fitted_on": case_names, "outputs": list(result.outputs),
-        "values": result.values,
-        "plausible_ranges": result.bounds, "at_bound": result.at_bound,
-        "standard_errors": result.standard_errors,
-        "correlation": None if result.correlation is None else result.correlation.tolist(),
-        "residuals": result.residuals, "held_out_errors": held,
-        "starts": result.starts, "spread_of_best_starts": result.spread,
-        "profiles": profiles,
-    }
-    if not _emit_json(json_target, payload):
+    result, held, profiles = fit.result, fit.held_out, fit.profiles
+    if not _emit_json(json_target, fit.document):
         click.echo(f"fit of {', '.join(names)} to the {' and '.join(result.outputs)} of "
                    f"{', '.join(case_names)} ({result.starts} starts, base preset {preset})")
         for n in names:
@@ -795,14 +791,8 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
             for case, r in rows.items():
                 click.echo(f"  {title:8} {case}: drawbar pull error {r['drawbar_pull']:+.2f} N, "
                            f"sinkage error {1e3 * r['sinkage']:+.2f} mm")
-    if out_file:
-        doc = calibration.preset_document(
-            name, preset, base, result,
-            protocol or f"least squares on {', '.join(case_names)}")
-        for n, prof in profiles.items():
-            doc["provenance"]["fitted"][n]["profile_interval"] = list(prof["interval"])
-        write_atomic(out_file, json.dumps(doc, indent=2) + "\n")
-        click.echo(f"wrote {out_file}", err=True)
+    if fit.written:
+        click.echo(f"wrote {fit.written}", err=True)
 
 
 @main.command(epilog=EPILOG)
@@ -1008,7 +998,7 @@ def mpc(scenario: str, plant: str, preset: str, assignments: tuple[str, ...], so
               "Default: the scenario's, 1 ms; 0.25 ms for the Moon's slope, descent and "
               "pull-test, which end in an instability that a force handed over one step late "
               "(libcosim, ecos) hastens.")
-@click.option("--engine", type=click.Choice(["in-process", "fmus", *SSP_ENGINES]),
+@click.option("--engine", type=click.Choice(ROVER_ENGINES),
               default="in-process", show_default=True,
               help="in-process: the chassis and contact Functions stepped together, compiled; "
               "fmus: RoverChassis.fmu + four WheelTerrain.fmu through fmpy, our master; "
@@ -1016,7 +1006,7 @@ def mpc(scenario: str, plant: str, preset: str, assignments: tuple[str, ...], so
               "OpenModelica's OMSimulator, its command-line tool on the PATH or in "
               "$OMSIMULATOR; fmpy-ssp: fmpy's own SSP runner; soft-patch adds four "
               "Terrain.fmu, the soil map's query points, which fmpy-ssp cannot start).")
-@click.option("--controller", type=click.Choice(["speed", "mpc"]), default="speed",
+@click.option("--controller", type=click.Choice(ROVER_CONTROLLERS), default="speed",
               show_default=True,
               help="speed: the four speed loops to the common rim speed; mpc: from 2 s on, the "
               "slip NMPC (real-time iteration) per wheel commands its speed, holding the "
@@ -1057,96 +1047,29 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     """
     from pathlib import Path
 
-    from wheelterrain import plots
-    from wheelterrain.cosim import master as cosim
-    from wheelterrain.cosim import rover as rover_system
-    from wheelterrain.cosim import rover_scenarios
-    from wheelterrain.parameters import GRAVITY
+    from wheelterrain.run import rover as rover_run
 
     _check_file_target(json_target)
     _check_out_dir(out)
-    if controller == "mpc":
-        if scenario not in rover_scenarios.TRACKED_SCENARIOS:
-            _usage_error(f"--controller mpc runs {' and '.join(rover_scenarios.TRACKED_SCENARIOS)}"
-                         f" (each wheel's prediction is a quarter rover on level ground), not "
-                         f"{scenario}")
-        if engine != "in-process":
-            _usage_error("--controller mpc runs against the in-process rover (--engine "
-                         "in-process)")
-        if step is not None and not math.isclose(step, rover_system.STEP):
-            _usage_error(f"--controller mpc runs at the rover's step of {rover_system.STEP:g} s")
     rover_items = [a for a in assignments if a.strip().startswith("rover.")]
     try:
         chassis_values = parse_assignments(rover_items, find=rover_lookup)
     except WheelTerrainError as err:
         _fail(err)
-    if "rover.gravity" in chassis_values:  # it was silently replaced by --gravity's value
-        known = ", ".join(f"{k} {v:g}" for k, v in GRAVITY.items())
-        _usage_error(f"--set rover.gravity={chassis_values['rover.gravity']:g}: the gravity is "
-                     f"--gravity's ({known} m/s2): each scenario's ramps, forces and "
-                     "predictions are set for it")
     ps = _load(preset, tuple(a for a in assignments if a not in rover_items))
-    from wheelterrain.cosim import rover_fmus, ssp
-
-    soil = rover_scenarios.scenario_soil(scenario, ps)
-    needed = rover_fmus.fmu_names()
-    folder = Path(fmu_dir) if fmu_dir else next(
-        (d for d in (Path("build/native"), Path("build"))
-         if all((d / f"{n}.fmu").is_file() for n in needed)), Path("build/native"))
-    from wheelterrain.cosim.master import fmu_paths
-
+    request = rover_run.Request(scenario, ps, gravity, chassis_values, step, engine, controller)
     try:
-        fmu_paths(folder, needed)  # each an FMU of its model, before an engine loads it
-        built = True
-    except (FileNotFoundError, FMUError) as err:
-        built = False
-        if engine != "in-process":
-            _usage_error(f"--engine {engine} needs {', '.join(f'{n}.fmu' for n in needed)} "
-                         f"in {folder} ({err}): build them (`wheelterrain build --flavor "
-                         "all`) or give --fmu-dir")
-    if engine in SSP_ENGINES and (missing := ssp.engine_missing(engine)):
-        _usage_error(f"--engine {engine}: {missing}")
-
-    control_figures = {}
-    if controller == "mpc":
-        from wheelterrain.control import rover_mpc
-
-        def runner(soil, values, stop, step, stop_when):
-            run = rover_mpc.run(soil, values, stop)
-            control_figures.update(
-                controller_solver=run.settings.solver, speed_weight=run.settings.speed_weight,
-                solve_time_median_s=float(np.median(run.solve_times)),
-                solve_time_p90_s=float(np.percentile(run.solve_times, 90)),
-                failed_solves=run.failures, solves=int(run.solve_times.size))
-            return run.result
-    else:
-        runner = rover_fmus.runner(engine, folder, scenario)
-    try:
-        run = rover_scenarios.run_scenario(scenario, ps, gravity, chassis_values, step=step,
-                                        engine=runner)
+        with _progress_bars() as progress:
+            outcome = rover_run.run(request, Path(out), None if fmu_dir is None else Path(fmu_dir),
+                                    preset, progress)
     except WheelTerrainError as err:
         _fail(err)
-    except (CosimulationError, FMUError, ValueError) as err:  # ValueError: an MPC setting
+    except ValueError as err:  # an MPC setting
         click.echo(f"error: {err}", err=True)
         sys.exit(EXIT_USAGE)
-    figures = {**run["figures"], "preset": preset, "controller": controller,
-               **control_figures}
-    result = run["result"]
-    out_dir = Path(out)
-    stem = f"{scenario}-{gravity}" + ("-mpc" if controller == "mpc" else "")
-    series = {"time": result.time, **{f"{w}.{k}": v for w, d in result.wheels.items()
-                                      for k, v in d.items()},
-              **result.chassis, **result.inputs}
-    with files.one_set(out_dir) as staging:  # all files, or none if interrupted
-        plots.rover(result, figures, staging / f"{stem}.png")
-        cosim.write_series(staging / f"{stem}.csv", series,
-                           every=max(len(result.time) // 5000, 1),
-                           units=rover_system.record_units())
-        if built:
-            rover_fmus.write_ssp(staging / f"Rover-{scenario}.ssp", folder, scenario, soil,
-                                 run["values"], run["stop"], run["step"])
-    ssp_path = out_dir / f"Rover-{scenario}.ssp" if built else None
-    figures["ssp"] = str(ssp_path) if ssp_path else None
+    figures, out_dir = outcome.figures, Path(out)
+    stem = outcome.written[0].stem
+    ssp_path, folder = outcome.ssp, outcome.fmu_folder
     if _emit_json(json_target, figures):
         return
     click.echo(f"rover '{scenario}' ({gravity}), preset {preset}, {figures['engine']}: "

@@ -53,6 +53,12 @@ class SolveError(WheelTerrainError):
     """The quasi-static sinkage solve did not converge (never returned as a number)."""
 
 
+class UsageError(WheelTerrainError):
+    """A request that cannot be carried out as asked, found before any work: an engine that
+    cannot run the scenario, an option that does not apply, FMUs that are not built. The message
+    says why and what would work (the command line's exit code 2)."""
+
+
 class CosimulationError(WheelTerrainError):
     """An FMU refused a call during a co-simulation run (the model left its domain: a load the
     soil cannot carry, a wheel buried past its axle, ...). The FMU logs the reason; the message

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -89,8 +89,10 @@ def default_settings(p: Mapping[str, float]) -> mpc.Settings:
 
 
 def run(soil: rover_system.Soil, rover_values: Mapping[str, float], stop: float,
-        settings: mpc.Settings | None = None) -> RoverControl:
-    """The rover for ``stop`` s with an NMPC per wheel commanding its speed (module doc)."""
+        settings: mpc.Settings | None = None,
+        progress: Callable[[float], None] | None = None) -> RoverControl:
+    """The rover for ``stop`` s with an NMPC per wheel commanding its speed (module doc);
+    ``progress(t)``: the simulated time after every block of steps."""
     p = {**rover.defaults(), **rover_values, "rover.drive": rover.DRIVE_SPEED}
     settings = (settings or default_settings(p)).check()
     block = round(settings.interval / rover_system.STEP)
@@ -128,7 +130,7 @@ def run(soil: rover_system.Soil, rover_values: Mapping[str, float], stop: float,
         return [v for w in rover.WHEELS for v in (commands[w], 0.0)]
 
     started = time.perf_counter()
-    res = rover_system.simulate(soil, p, stop, block=block, control=control)
+    res = rover_system.simulate(soil, p, stop, block=block, control=control, progress=progress)
     res.wall_time = time.perf_counter() - started
     res.engine = f"{res.engine}, NMPC per wheel ({settings.solver})"
     return RoverControl(res, slip_ref, speed_ref, np.array(solve_times), failures, settings)

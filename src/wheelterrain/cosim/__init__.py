@@ -6,3 +6,8 @@ SSP files (:mod:`.ssp`) and parallel parameter sweeps (:mod:`.sweep`)."""
 # list them without importing fmpy.
 SSP_ENGINES = {"libcosim": "libcosimpy", "ecos": "ecospy", "omsimulator": None,
                "fmpy-ssp": "fmpy"}
+ROVER_ENGINES = ("in-process", "fmus", *SSP_ENGINES)
+"""What runs the rover: in process, our master on the FMUs, or the Rover SSP in an SSP engine
+(the run layer's registry, :mod:`wheelterrain.run.rover`, has an entry for each)."""
+ROVER_CONTROLLERS = ("speed", "mpc")
+"""What drives the rover's wheels: the four speed loops, or the slip NMPC per wheel."""

@@ -220,7 +220,8 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
              block: int = BLOCK, stop_when: Callable[[dict], bool] | None = None,
              slope: float = 0.0, towing: float = 0.0,
              control: Callable[[float, list], list] | None = None,
-             x0: list[float] | None = None, ruts0: dict | None = None) -> RoverResult:
+             x0: list[float] | None = None, ruts0: dict | None = None,
+             progress: Callable[[float], None] | None = None) -> RoverResult:
     """Run the rover in process from rest on the surface for ``stop`` s, its inputs ``slope``
     [rad] and ``towing`` [N] constant (a scenario's ramps are the chassis' input profile, rows
     ``rover.ramp_time`` ... ``rover.towing_rate`` of ``rover_values``); ``stop_when(last)``
@@ -228,7 +229,8 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
     then the wheel angles) gives the wheels' commands (N_CMD) held over the next ``block``
     steps (default: none, 0). ``x0``: the state to start from (N_X: rover.STATES, the wheel
     angles, the wheels' plastic sinkages) instead of rest on the surface; ``ruts0``: the
-    tracks' rut records to start from (by track; default: no rut)."""
+    tracks' rut records to start from (by track; default: no rut). ``progress(t)`` is told the
+    simulated time reached after every block of steps."""
     p = {**rover.defaults(), **rover_values}
     evaluate, engine = _evaluator(block)
     pr = [p[n] for n in rover.ROVER_NAMES]
@@ -264,6 +266,8 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
         wheels, chassis = named_record(rec)
         ruts.remember(memory, chassis["position"],
                       {w: wheels[w]["rut_left"] for w in rover.WHEELS}, met, p, g)
+        if progress is not None:
+            progress((b + 1) * block * step)
     wall = time.perf_counter() - t0
     return from_records(np.concatenate(records, axis=1), step, wall, f"in-process ({engine})",
                         left)

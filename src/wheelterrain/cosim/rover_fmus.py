@@ -50,7 +50,7 @@ from wheelterrain.cosim.rover import (
     Soil,
     from_records,
 )
-from wheelterrain.errors import CosimulationError
+from wheelterrain.errors import CosimulationError, UsageError
 from wheelterrain.files import replacing
 from wheelterrain.fmu import functions
 from wheelterrain.fmu.instance import Instance
@@ -216,13 +216,14 @@ class RoverFMUs:
 
 
 def simulate(fmu_dir: Path, soil: Soil, values: Mapping[str, float], stop: float,
-             step: float = STEP, stop_when: Callable[[dict], bool] | None = None
-             ) -> RoverResult:
+             step: float = STEP, stop_when: Callable[[dict], bool] | None = None,
+             progress: Callable[[float], None] | None = None) -> RoverResult:
     """The rover's FMUs through fmpy, coupled by our master (module doc); the interface of
-    :func:`wheelterrain.cosim.rover.simulate`."""
+    :func:`wheelterrain.cosim.rover.simulate` (``progress(t)``: every simulated second)."""
     n = round(stop / step)
     rows = []
     system = RoverFMUs(fmu_dir, soil, values, stop)
+    every = max(1, round(1.0 / step))
     left = None
     t0 = time.perf_counter()
     try:
@@ -232,6 +233,8 @@ def simulate(fmu_dir: Path, soil: Soil, values: Mapping[str, float], stop: float
             rows.append(row)
             if stop_when is not None and stop_when(rover_system.last_values(row)):
                 break
+            if progress is not None and (k + 1) % every == 0:
+                progress((k + 1) * step)
             try:
                 system.step(t, step)
             except Exception as err:  # an FMU refused the step: the run ends, with the reason
@@ -263,22 +266,16 @@ def _ssp_variables() -> list[tuple[str, str]]:
 
 def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
                  values: Mapping[str, float], stop: float, step: float = STEP,
-                 stop_when=None) -> RoverResult:
+                 stop_when=None, progress: Callable[[float], None] | None = None
+                 ) -> RoverResult:
     """The scenario's Rover.ssp in ``engine`` (one of SSP_ENGINES; fmpy-ssp: fmpy's own SSP
     runner), to ``stop`` or to where a wheel leaves the model's domain (``stop_when`` is not an
-    SSP's and is not applied)."""
-    if engine == "fmpy-ssp" and soil.patch:
-        raise CosimulationError(
-            "fmpy's SSP runner sets every connected input to 0 before the first step, and 0 is "
-            "outside the declared ranges of the wheels' ground.* inputs (soil.k_phi >= 10, "
-            "...): a soil map cannot run there (ecos, libcosim and our master run it)")
-    if engine == "fmpy-ssp" and scenario in rover_scenarios.LIMIT_SCENARIOS:
-        # refused before the run: fmpy's runner would simulate it whole (minutes) first
-        raise CosimulationError(
-            f"fmpy's SSP runner cannot run {scenario}: the scenario ends where a wheel leaves "
-            "the contact model's domain (the rover's stall or slide), and fmpy.ssp stops with "
-            "an exception at the first step an FMU refuses, returning nothing of the run; "
-            "ecos, libcosim, OMSimulator and our master (--engine fmus) keep the record")
+    SSP's and is not applied). ``progress(t)``: every simulated second where the engine steps
+    in chunks (libcosim, ecos), else at the end. Refused before the run where the engine
+    cannot run the scenario (:func:`refusal`)."""
+    reason = refusal(engine, scenario, soil)
+    if reason is not None:
+        raise UsageError(reason)
     names = _ssp_variables()
     dotted = tuple(f"{c}.{v}" for c, v in names)  # "component.variable", as engines name them
     with tempfile.TemporaryDirectory(prefix="wheelterrain_rover_") as tmp:
@@ -286,7 +283,7 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
         t0 = time.perf_counter()
         with _stdout_to_stderr():  # the engines' own log lines: not on standard output
             if engine == "libcosim":
-                out = ssp.simulate_with_libcosim(path, stop, step, dotted)
+                out = ssp.simulate_with_libcosim(path, stop, step, dotted, progress)
                 wall = time.perf_counter() - t0
                 data = np.array([out[n] for n in dotted])
             elif engine == "fmpy-ssp":
@@ -322,7 +319,8 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
                     now = np.array([[get(i)] for i in ids])
                     return rover_system.outside(_chassis_slips(now, values)) is None
 
-                ssp.simulate_with_ecos(path, scenario, stop, step, csv_path, ids, inside)
+                ssp.simulate_with_ecos(path, scenario, stop, step, csv_path, ids, inside,
+                                       progress=progress)
                 wall = time.perf_counter() - t0
                 data = ssp.read_csv_columns(csv_path, ids)
             else:
@@ -341,6 +339,25 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
     return from_records(data, step, wall, engine, left)
 
 
+def refusal(engine: str, scenario: str, soil: Soil) -> str | None:
+    """Why ``engine`` cannot run ``scenario`` on ``soil`` (said before the run), or None."""
+    if engine != "fmpy-ssp":
+        return None
+    if soil.patch:
+        return ("fmpy's SSP runner cannot run a soil map (soft-patch): it sets every connected "
+                "input to 0 before the first step, and 0 is outside the declared ranges of the "
+                "wheels' ground.* inputs (soil.k_phi >= 10, ...); ecos, libcosim, OMSimulator "
+                "and our master (--engine fmus) run it")
+    if scenario in rover_scenarios.LIMIT_SCENARIOS:
+        # refused before the run: fmpy's runner would simulate it whole (minutes) first
+        return (f"fmpy's SSP runner cannot run {scenario}: the scenario ends where a wheel "
+                "leaves the contact model's domain (the rover's stall or slide), and fmpy.ssp "
+                "stops with an exception at the first step an FMU refuses, returning nothing "
+                "of the run; ecos, libcosim, OMSimulator and our master (--engine fmus) keep "
+                "the record")
+    return None
+
+
 def runner(engine: str, fmu_dir: Path, scenario: str) -> Callable | None:
     """What :func:`rover_scenarios.run_scenario` takes as its ``engine`` for ``engine``:
     "in-process" None (its own), "fmus" our master on the FMUs in ``fmu_dir``, an SSP engine
@@ -348,10 +365,10 @@ def runner(engine: str, fmu_dir: Path, scenario: str) -> Callable | None:
     if engine == "in-process":
         return None
     if engine == "fmus":
-        return lambda soil, values, stop, step, stop_when: simulate(
-            fmu_dir, soil, values, stop, step, stop_when)
-    return lambda soil, values, stop, step, stop_when: simulate_ssp(
-        engine, fmu_dir, scenario, soil, values, stop, step)
+        return lambda soil, values, stop, step, stop_when, progress=None: simulate(
+            fmu_dir, soil, values, stop, step, stop_when, progress)
+    return lambda soil, values, stop, step, stop_when, progress=None: simulate_ssp(
+        engine, fmu_dir, scenario, soil, values, stop, step, progress=progress)
 
 
 def _chassis_slips(data: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
@@ -396,7 +413,7 @@ def fmu_names() -> tuple[str, ...]:
 
 def system_description(scenario: str, soil: Soil, values: Mapping[str, float],
                        stop: float, step: float = STEP) -> bytes:
-    q = ssp._q
+    q = ssp.qname
     for prefix, uri in ssp.NS.items():
         ET.register_namespace(prefix, uri)
     root = ET.Element(q("ssd", "SystemStructureDescription"), version="1.0",
@@ -405,23 +422,23 @@ def system_description(scenario: str, soil: Soil, values: Mapping[str, float],
                            description=f"The Rashid rover on four wheels, scenario {scenario} "
                            "(its slope and towing ramps: the chassis' input profile)")
     elements = ET.SubElement(system, q("ssd", "Elements"))
-    chassis = {p.name: ssp._binding(p, chassis_values(values)[p.name]) for p in ROVER_TABLE}
+    chassis = {p.name: ssp.binding(p, chassis_values(values)[p.name]) for p in ROVER_TABLE}
     ins = [f"{w}.{n}" for w in rover.WHEELS for n in TO_CHASSIS]
     with_map = bool(soil.patch)
     outs = [f"{w}.{n}" for w in rover.WHEELS for n in (*TO_TERRAIN, "position")]
     # what the record reads (unconnected outputs; an engine records its connectors)
     recorded = {c: [v for comp, v in _ssp_variables() if comp == c] for c in COMPONENTS}
     outs += [v for v in recorded[CHASSIS] if v not in outs]
-    ssp._component(elements, CHASSIS, "resources/RoverChassis.fmu", ins, outs, chassis,
+    ssp.component(elements, CHASSIS, "resources/RoverChassis.fmu", ins, outs, chassis,
                    scenario)
-    wheel = {p.name: ssp._binding(p, soil.base[p.name]) for p in TABLE}
+    wheel = {p.name: ssp.binding(p, soil.base[p.name]) for p in TABLE}
     if with_map:
         wheel["soil_from_inputs"] = ("Boolean", "true")
     ground_rows = {p.name: p for p in (*TABLE, *GROUND_TABLE)}
-    terrain_map = {name: ssp._binding(ground_rows[name], value)
+    terrain_map = {name: ssp.binding(ground_rows[name], value)
                    for name, value in soil.map_values().items()}
     for w in rover.WHEELS:
-        ssp._component(elements, w, "resources/WheelTerrain.fmu",
+        ssp.component(elements, w, "resources/WheelTerrain.fmu",
                        (*TO_TERRAIN, "rut_met", *(GROUND if with_map else ())),
                        (*TO_CHASSIS, *(v for v in recorded[w] if v not in TO_CHASSIS)), wheel,
                        scenario)
@@ -429,7 +446,7 @@ def system_description(scenario: str, soil: Soil, values: Mapping[str, float],
         ins = [f"{q}.{n}" for q in QUERY_POINTS for n in ("position", "rut_left")]
         outs = [f"{q}.{n}" for q in QUERY_POINTS
                 for n in ("rut_met", *(GROUND if with_map else ()))]
-        ssp._component(elements, track_component(track), "resources/Terrain.fmu", ins, outs,
+        ssp.component(elements, track_component(track), "resources/Terrain.fmu", ins, outs,
                        terrain_map, scenario)
     conns = ET.SubElement(system, q("ssd", "Connections"))
     for a, av, b, bv in connections(with_map):

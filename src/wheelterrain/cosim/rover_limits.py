@@ -12,7 +12,7 @@ the cause a run met (:func:`run_cause`).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from functools import lru_cache
 
 import casadi as ca
@@ -200,7 +200,8 @@ def run_cause(res: RoverResult, terrain: Mapping, p: Mapping[str, float],
 
 
 def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
-                tolerance: float = 1e-4) -> dict:
+                tolerance: float = 1e-4,
+                trials: Callable[[int, int], None] | None = None) -> dict:
     """The steepest slope [rad] (uphill for ``direction`` 1, downhill for -1) on which the rover
     has a steady motion that it also holds: a steady slip exists in [-0.999, STALL_SLIP] (else
     ``traction``: the wheels cannot hold the rover, downhill their braking), more slip gives
@@ -209,13 +210,25 @@ def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
     motion has no eigenvalue with a positive real part; on a soil with memory, which has none,
     the perturbed motion is run (:func:`holds`). Bisection on the slope from level ground, every
     condition checked at every trial; ``limit`` says which one ended it (a tolerance of
-    1e-3 rad where the motion is run)."""
+    1e-3 rad where the motion is run). ``trials(k, n)`` is told each trial done, of the n the
+    bisection takes at most."""
     top = direction * math.radians(60)
     memory = has_memory(terrain)
     if memory:
         tolerance = max(tolerance, 1e-3)
+    most = 2 + math.ceil(math.log2(abs(top) / tolerance))
+    done = 0
 
     def verdict(slope: float) -> str | None:
+        nonlocal done
+        try:
+            return _verdict(slope)
+        finally:
+            done += 1
+            if trials is not None:
+                trials(done, most)
+
+    def _verdict(slope: float) -> str | None:
         i = steady_slip(terrain, p, slope)
         if i is None:
             return "traction"

@@ -123,13 +123,15 @@ def scenario_soil(name: str, terrain: ParameterSet) -> Soil:
 
 def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
                  rover_values: Mapping[str, float] | None = None,
-                 step: float | None = None, engine: Callable | None = None) -> dict:
+                 step: float | None = None, engine: Callable | None = None,
+                 progress: Callable[[str, float, float], None] | None = None) -> dict:
     """One scenario: the contract's figures (``wheelterrain rover --json``) and the series.
     ``terrain``: the wheels' terrain parameters (the soft patch scales its soil). ``step``:
     the communication step (default: the scenario's own, ``Scenario.step``: 1 ms, or
     :data:`FINE_STEP` for the Moon's stall runs). ``engine``:
-    ``engine(soil, values, stop, step, stop_when) -> RoverResult`` runs it
-    (default: :func:`simulate`, in process)."""
+    ``engine(soil, values, stop, step=, stop_when=, progress=) -> RoverResult`` runs it
+    (default: :func:`simulate`, in process). ``progress(stage, done, total)``: the limit's
+    prediction (trials of its bisection) and the run (simulated seconds of its stop)."""
     if name not in scenarios():
         raise ValueError(f"unknown scenario {name!r}; valid: {', '.join(scenarios())}")
     if gravity not in GRAVITY:
@@ -141,14 +143,19 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
     quiet = terrain_of(terrain.with_values(NO_RIPPLE))
     pred = None
     if name in ("slope", "descent"):
-        pred = limit_slope(quiet, p, 1 if name == "slope" else -1)
+        trials = ((lambda k, n: progress("predicting the limit", k, n))
+                  if progress is not None else None)
+        pred = limit_slope(quiet, p, 1 if name == "slope" else -1, trials=trials)
     knee = max(math.degrees(pred["slope"]) - KNEE_MARGIN, 0.0) if name == "slope" else 15.0
     sc = scenarios(gravity, knee, p["rover.mass"] * p["rover.gravity"])[name]
     step = sc.step if step is None else step
     stalled = (lambda last: last["front_left.slip"] >= STALL_SLIP) \
         if name in STALL_SCENARIOS else None
     run = engine or (lambda *a, **k: simulate(*a, **k))
-    res = run(soil, {**values, **sc.profile}, sc.stop, step=step, stop_when=stalled)
+    simulated = ((lambda t: progress(f"simulating {name}", t, sc.stop))
+                 if progress is not None else None)
+    res = run(soil, {**values, **sc.profile}, sc.stop, step=step, stop_when=stalled,
+              progress=simulated)
     keep = res.time >= sc.settle
     out = {"scenario": name, "gravity": gravity, "engine": res.engine,
            "left_domain": res.left_domain,

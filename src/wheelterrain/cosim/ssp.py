@@ -43,27 +43,29 @@ RIG_OUTPUTS = variables.RIG_OUTPUTS  # every output of each FMU is a connector
 TERRAIN_OUTPUTS = tuple(v.name for v in variables.TERRAIN_IO if v.causality == "output")
 
 
-def _q(prefix: str, tag: str) -> str:
+def qname(prefix: str, tag: str) -> str:
     return f"{{{NS[prefix]}}}{tag}"
 
 
-def _component(elements, name: str, source: str, inputs, outputs, params: dict,
+def component(elements, name: str, source: str, inputs, outputs, params: dict,
                set_name: str) -> None:
-    comp = ET.SubElement(elements, _q("ssd", "Component"), name=name,
+    """An ssd:Component of ``elements``: the FMU at ``source`` with its connectors and one
+    parameter set ``set_name`` binding ``params`` (name -> (SSV type, value), :func:`binding`)."""
+    comp = ET.SubElement(elements, qname("ssd", "Component"), name=name,
                          type="application/x-fmu-sharedlibrary", source=source)
-    connectors = ET.SubElement(comp, _q("ssd", "Connectors"))
+    connectors = ET.SubElement(comp, qname("ssd", "Connectors"))
     for kind, names in (("input", inputs), ("output", outputs)):
         for n in names:
-            c = ET.SubElement(connectors, _q("ssd", "Connector"), name=n, kind=kind)
-            ET.SubElement(c, _q("ssc", "Real"))
-    bindings = ET.SubElement(comp, _q("ssd", "ParameterBindings"))
-    binding = ET.SubElement(bindings, _q("ssd", "ParameterBinding"))
-    values = ET.SubElement(binding, _q("ssd", "ParameterValues"))
-    pset = ET.SubElement(values, _q("ssv", "ParameterSet"), version="1.0", name=set_name)
-    plist = ET.SubElement(pset, _q("ssv", "Parameters"))
+            c = ET.SubElement(connectors, qname("ssd", "Connector"), name=n, kind=kind)
+            ET.SubElement(c, qname("ssc", "Real"))
+    bindings = ET.SubElement(comp, qname("ssd", "ParameterBindings"))
+    bound = ET.SubElement(bindings, qname("ssd", "ParameterBinding"))
+    values = ET.SubElement(bound, qname("ssd", "ParameterValues"))
+    pset = ET.SubElement(values, qname("ssv", "ParameterSet"), version="1.0", name=set_name)
+    plist = ET.SubElement(pset, qname("ssv", "Parameters"))
     for key, (kind, value) in params.items():
-        p = ET.SubElement(plist, _q("ssv", "Parameter"), name=key)
-        ET.SubElement(p, _q("ssv", kind), value=repr(value) if kind == "Real" else str(value))
+        p = ET.SubElement(plist, qname("ssv", "Parameter"), name=key)
+        ET.SubElement(p, qname("ssv", kind), value=repr(value) if kind == "Real" else str(value))
 
 
 # The components' names in the SSP: identifiers valid in every engine (letters, digits and
@@ -83,25 +85,25 @@ def system_description(case: str, ps: ParameterSet, slip_paper: float, load: flo
                        rim_speed: float, stop: float, step: float) -> bytes:
     for prefix, uri in NS.items():
         ET.register_namespace(prefix, uri)
-    root = ET.Element(_q("ssd", "SystemStructureDescription"), version="1.0",
+    root = ET.Element(qname("ssd", "SystemStructureDescription"), version="1.0",
                       name=system_name(case))
-    system = ET.SubElement(root, _q("ssd", "System"), name=case,
+    system = ET.SubElement(root, qname("ssd", "System"), name=case,
                            description=f"Rashid wheel on the single-wheel rig, case {case}: "
                            f"slip s = {slip_paper:g} (paper's definition), load {load:g} N")
-    elements = ET.SubElement(system, _q("ssd", "Elements"))
-    terrain_params = {p.name: _binding(p, ps[p.name]) for p in TABLE}
+    elements = ET.SubElement(system, qname("ssd", "Elements"))
+    terrain_params = {p.name: binding(p, ps[p.name]) for p in TABLE}
     rig_values = rig_parameters(ps, slip_paper, load, rim_speed)
-    rig_params = {p.name: _binding(p, rig_values[p.name]) for p in rig.RIG_TABLE}
-    _component(elements, RIG_COMPONENT, "resources/SingleWheelRig.fmu", FORCES, RIG_OUTPUTS,
+    rig_params = {p.name: binding(p, rig_values[p.name]) for p in rig.RIG_TABLE}
+    component(elements, RIG_COMPONENT, "resources/SingleWheelRig.fmu", FORCES, RIG_OUTPUTS,
                rig_params, case)
-    _component(elements, TERRAIN_COMPONENT, "resources/WheelTerrain.fmu", COUPLED_STATES,
+    component(elements, TERRAIN_COMPONENT, "resources/WheelTerrain.fmu", COUPLED_STATES,
                TERRAIN_OUTPUTS, terrain_params, case)
-    connections = ET.SubElement(system, _q("ssd", "Connections"))
+    connections = ET.SubElement(system, qname("ssd", "Connections"))
     for n in COUPLED_STATES:
-        ET.SubElement(connections, _q("ssd", "Connection"), startElement=RIG_COMPONENT,
+        ET.SubElement(connections, qname("ssd", "Connection"), startElement=RIG_COMPONENT,
                       startConnector=n, endElement=TERRAIN_COMPONENT, endConnector=n)
     for n in FORCES:
-        ET.SubElement(connections, _q("ssd", "Connection"), startElement=TERRAIN_COMPONENT,
+        ET.SubElement(connections, qname("ssd", "Connection"), startElement=TERRAIN_COMPONENT,
                       startConnector=n, endElement=RIG_COMPONENT, endConnector=n)
     master_annotation(system, step)
     default_experiment(root, stop, step)
@@ -114,11 +116,11 @@ def master_annotation(system: ET.Element, step: float) -> None:
     master at ``step``. OMSimulator takes a system's type only from this annotation and refuses
     to import a system without one ("internal error" at NewSystem); other engines skip an
     annotation of a type they do not know, as SSP asks of them."""
-    annotations = ET.SubElement(system, _q("ssd", "Annotations"))
-    annotation = ET.SubElement(annotations, _q("ssc", "Annotation"), type="org.openmodelica")
-    oms = ET.SubElement(annotation, _q("oms", "Annotations"))
-    info = ET.SubElement(oms, _q("oms", "SimulationInformation"))
-    ET.SubElement(info, _q("oms", "FixedStepMaster"), description="oms-ma", stepSize=repr(step),
+    annotations = ET.SubElement(system, qname("ssd", "Annotations"))
+    annotation = ET.SubElement(annotations, qname("ssc", "Annotation"), type="org.openmodelica")
+    oms = ET.SubElement(annotation, qname("oms", "Annotations"))
+    info = ET.SubElement(oms, qname("oms", "SimulationInformation"))
+    ET.SubElement(info, qname("oms", "FixedStepMaster"), description="oms-ma", stepSize=repr(step),
                   relativeTolerance="0.0001")
 
 
@@ -129,13 +131,13 @@ def default_experiment(root: ET.Element, stop: float, step: float) -> None:
     OMSimulator reads the stop time from DefaultExperiment and the step from the system's
     annotation (:func:`master_annotation`). ecos reads neither: its runner and command line
     are given both (:func:`simulate_with_ecos`; ``ecos simulate --stopTime --stepSize``)."""
-    experiment = ET.SubElement(root, _q("ssd", "DefaultExperiment"), startTime="0.0",
+    experiment = ET.SubElement(root, qname("ssd", "DefaultExperiment"), startTime="0.0",
                                stopTime=repr(stop))
-    annotations = ET.SubElement(experiment, _q("ssd", "Annotations"))
-    annotation = ET.SubElement(annotations, _q("ssc", "Annotation"),
+    annotations = ET.SubElement(experiment, qname("ssd", "Annotations"))
+    annotation = ET.SubElement(annotations, qname("ssc", "Annotation"),
                                type="com.opensimulationplatform")
-    algorithm = ET.SubElement(annotation, _q("osp", "Algorithm"))
-    ET.SubElement(algorithm, _q("osp", "FixedStepAlgorithm"), baseStepSize=repr(step))
+    algorithm = ET.SubElement(annotation, qname("osp", "Algorithm"))
+    ET.SubElement(algorithm, qname("osp", "FixedStepAlgorithm"), baseStepSize=repr(step))
 
 
 def parameter_set_names(path: Path) -> list[str]:
@@ -143,11 +145,11 @@ def parameter_set_names(path: Path) -> list[str]:
     order met (one per C1-C4 or rover file: the case's or the scenario's)."""
     with zipfile.ZipFile(path) as z:
         root = ET.fromstring(z.read("SystemStructure.ssd"))
-    names = [pset.get("name") for pset in root.iter(_q("ssv", "ParameterSet"))]
+    names = [pset.get("name") for pset in root.iter(qname("ssv", "ParameterSet"))]
     return list(dict.fromkeys(n for n in names if n))
 
 
-def _binding(p, value) -> tuple[str, int | float]:
+def binding(p, value) -> tuple[str, int | float]:
     """(SSV type, value) of a parameter binding: switches and counts are Integer."""
     if p.kind in ("integer", "enum"):
         return "Integer", round(value)
@@ -185,7 +187,8 @@ def simulate_with_fmpy(path: Path, stop: float, step: float):
 def simulate_with_ecos(path: Path, case: str | None, stop: float, step: float, csv: Path,
                        variables: tuple[str, ...],
                        go_on: Callable[[Callable[[str], float]], bool] | None = None,
-                       every: float = 1.0) -> None:
+                       every: float = 1.0,
+                       progress: Callable[[float], None] | None = None) -> None:
     """Run an SSP written by :func:`write` in ecos (ecospy), applying the case's parameter set,
     and write ``variables`` ("component::name") at every step to ``csv``. ``go_on``, where
     given, is asked every ``every`` s of simulated time, with a getter of any variable's present
@@ -214,6 +217,8 @@ def simulate_with_ecos(path: Path, case: str | None, stop: float, step: float, c
             n = min(chunk, steps - done)
             sim.step(n)
             done += n
+            if progress is not None:
+                progress(done * step)
             if go_on is not None and not go_on(sim.get_real):
                 break
         sim.terminate()
@@ -255,11 +260,13 @@ def read_csv_columns(path: Path, names: tuple[str, ...]) -> np.ndarray:
     return table.T
 
 
-def simulate_with_libcosim(path: Path, stop: float, step: float,
-                           variables: tuple[str, ...]) -> dict[str, np.ndarray]:
+def simulate_with_libcosim(path: Path, stop: float, step: float, variables: tuple[str, ...],
+                           progress: Callable[[float], None] | None = None
+                           ) -> dict[str, np.ndarray]:
     """Run an SSP written by :func:`write` in libcosim (PyPI libcosimpy, the Open Simulation
     Platform's engine; fixed step, its SSP reader applies the file's parameter set) and return
-    ``time`` and ``variables`` ("component.name", Real) at every step."""
+    ``time`` and ``variables`` ("component.name", Real) at every step; ``progress(t)`` every
+    simulated second."""
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
     from libcosimpy.CosimObserver import CosimObserver
@@ -282,6 +289,7 @@ def simulate_with_libcosim(path: Path, stop: float, step: float,
         wanted[index][0].append(j)
         wanted[index][1].append(references[index][variable])
     steps = round(stop / step)
+    every = max(1, round(1.0 / step))
     out = np.empty((steps, len(variables)))
     done = steps
     for k in range(steps):
@@ -293,6 +301,8 @@ def simulate_with_libcosim(path: Path, stop: float, step: float,
             break
         for index, (columns, refs) in wanted.items():
             out[k, columns] = observer.last_real_values(index, refs)
+        if progress is not None and (k + 1) % every == 0:
+            progress((k + 1) * step)
     return {"time": step * np.arange(1, done + 1),
             **{name: out[:done, j] for j, name in enumerate(variables)}}
 

@@ -48,7 +48,7 @@ def run(params: Mapping[str, float] | ParameterSet, load: float, slip: float,
     cannot carry, a parameter out of range)."""
     if not isinstance(passes, int) or passes < 1:
         raise ValueError(f"passes must be a whole number >= 1, not {passes!r}")
-    ps = api._params(params)
+    ps = params if isinstance(params, ParameterSet) else ParameterSet(params)
     rut = ps["soil.rut_depth"]
     rows, previous = [], 0.0
     for k in range(1, passes + 1):
