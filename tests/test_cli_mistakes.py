@@ -315,11 +315,11 @@ def test_validate_data_that_no_form_can_predict_exits_3_with_no_coverage(tmp_pat
 
 
 def test_a_rover_longer_than_the_rut_record_is_a_parameter_error_exit_2():
-    """A wheelbase the rut record cannot hold was refused with exit 4 (a numerical failure);
+    """A wheelbase the rut profile cannot hold was refused with exit 4 (a numerical failure);
     it is the user's parameter: exit 2, naming what to change."""
     result = CliRunner().invoke(main, ["rover", "--scenario", "level", "--set",
                                        "rover.wheelbase=1.4", "--json"])
-    _one_line_exit_2(result, "the rut record holds 256 cells")
+    _one_line_exit_2(result, "the rut profile holds 256 cells")
     assert "rover.wheelbase shorter" in result.output
 
 

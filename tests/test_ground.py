@@ -40,7 +40,7 @@ def test_the_map_is_the_patch_on_its_half_open_interval_and_the_soil_elsewhere()
 
 def test_the_fmu_function_is_the_model_on_floats():
     """Terrain.fmu's generated Functions and the slave's float path are one expression: the
-    map at both query points, and the rut record step by step."""
+    map at both query points, and the rut profile step by step."""
     model = fmu_model.STATE_MODELS["Terrain"]
     step, outputs, initial, _ = model.functions()
     p = _map()
@@ -64,16 +64,16 @@ def test_the_record_keeps_the_deepest_rut_per_cell_and_serves_it_ahead():
     that cell's middle, and linear between two cells' middles; a cell nobody has passed, or
     one the ring has come round since, has none."""
     p = ground.defaults()
-    x = ground.initial_record()
+    x = ground.no_ruts()
     cell, ahead = p["terrain.cell"], p["terrain.lookahead"]
     for rut in (0.004, 0.006, 0.005):  # three ruts left in one cell: the deepest stays
-        x = ground.record_one(x, 1.0 + cell / 2, rut, p)
+        x = ground.lay_rut(x, 1.0 + cell / 2, rut, p)
     assert ground.met(x, 1.0 + cell / 2 - ahead, p) == pytest.approx(0.006, abs=1e-15)
     # halfway to the next cell's middle (untouched): half the rut; at its middle none
     assert ground.met(x, 1.0 + cell - ahead, p) == pytest.approx(0.003, abs=1e-15)
     assert ground.met(x, 1.0 + 1.5 * cell - ahead, p) == pytest.approx(0.0, abs=1e-15)
     # the ring comes round: a cell RUT_CELLS further on takes the slot, and the old is gone
-    x = ground.record_one(x, 1.0 + cell / 2 + ground.RUT_CELLS * cell, 0.001, p)
+    x = ground.lay_rut(x, 1.0 + cell / 2 + ground.RUT_CELLS * cell, 0.001, p)
     assert ground.met(x, 1.0 + cell / 2 - ahead, p) == pytest.approx(0.0, abs=1e-15)
 
 
@@ -83,9 +83,9 @@ def test_the_rut_a_wheel_meets_has_no_step_at_a_cell_s_edge():
     rut under a wheel at every edge, a disturbance that grew with the cell's length)."""
     p = ground.defaults()
     cell, ahead = p["terrain.cell"], p["terrain.lookahead"]
-    x = ground.initial_record()
+    x = ground.no_ruts()
     for k in range(10):
-        x = ground.record_one(x, (100 + k + 0.5) * cell, 1e-3 * (k + 1), p)
+        x = ground.lay_rut(x, (100 + k + 0.5) * cell, 1e-3 * (k + 1), p)
     for k in range(101, 109):  # the edges between recorded cells
         edge = k * cell - ahead
         jump = ground.met(x, edge + 1e-9, p) - ground.met(x, edge - 1e-9, p)

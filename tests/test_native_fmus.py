@@ -1333,7 +1333,7 @@ def _state_calls(inst: Instance, fmi: int) -> tuple:
 
 
 DAMAGES = ("a flipped bit", "a random body", "another model's body", "truncated",
-           "the rut record rewritten")
+           "the rut profile rewritten")
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
@@ -1342,7 +1342,7 @@ DAMAGES = ("a flipped bit", "a random body", "another model's body", "truncated"
 def test_the_native_fmus_refuse_an_altered_serialized_state(flavours, name, fmi, damage):
     """The native flavour took any bytes with the right header and size as a state with fmi2OK
     (a flipped byte, random bodies, another model's body under this model's header, and a
-    rewritten rut record, which silently changed 705 of 2000 rut_met reads). A serialized
+    rewritten rut profile, which silently changed 705 of 2000 rut_met reads). A serialized
     state now carries its model's GUID, its length and a checksum of its body: each is
     fmi2Error with the reason, and the instance goes on from its own state."""
     import random
@@ -1370,7 +1370,7 @@ def test_the_native_fmus_refuse_an_altered_serialized_state(flavours, name, fmi,
             bad = blob[:header] + bytearray(foreign[header:])
         elif damage == "truncated":
             bad = blob[:-7]
-        else:  # the last values of the body: a Terrain's rut record, the others' last states
+        else:  # the last values of the body: a Terrain's rut profile, the others' last states
             bad = blob[:]
             bad[len(blob) - 600: len(blob) - 520] = bytes(rng.randbytes(80))
         assert bytes(bad) != bytes(blob)

@@ -178,7 +178,7 @@ def test_rear_wheels_pull_more_per_newton_with_the_shear_the_rut_remembers(level
 
 def test_a_stall_inside_a_block_of_steps_ends_the_run(quiet):
     """With the rut's shear remembered the rover stalls on the slope by sliding back within a
-    block of the in-process run's steps, further than the rut record's two cells: the run ends
+    block of the in-process run's steps, further than the rut profile's two cells: the run ends
     at the stall with its cause, it does not fail on the record."""
     run = rover_scenarios.run_scenario("slope", quiet.with_values({"model.rut_shear": 1}), "earth")
     r = run["figures"]

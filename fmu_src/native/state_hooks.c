@@ -4,7 +4,7 @@
  * Values in and out of the CasADi Functions <prefix>_step / _outputs / _initial / _rates
  * (wheelterrain.fmu.functions.StateModel; MODEL_FN(name) names them). States 0..N_X-1 are the
  * model's states (the first N_CONTINUOUS of them the continuous states of model exchange: all
- * of a rig's or a rover's, none of the Terrain's rut record); states N_X..N_X+N_MEM-1 hold the
+ * of a rig's or a rover's, none of the Terrain's rut profile); states N_X..N_X+N_MEM-1 hold the
  * memory of the last step (the motors' torques). Sizes, value references, the domain check and
  * its messages come from the generated model_vars.h: IN_VRS, OUT_VRS, P_VRS, N_X, N_U, N_P,
  * N_OUT, N_MEM, X_DEPTH, DEPTH_LIMIT, X_NONFINITE_0..2, MESSAGE_DEPTH, MESSAGE_NONFINITE (the
@@ -91,7 +91,7 @@ static int model_refresh(Instance *c, double *dx, char *message) {
     c->res[1] = memory;
     MODEL_FN(rates)(c->arg, c->res, c->iw, c->w, 0);
     /* the continuous states are the first N_CONTINUOUS (all of a rig's or a rover's; none of
-       the Terrain's rut record, which only a co-simulation step changes) */
+       the Terrain's rut profile, which only a co-simulation step changes) */
     for (k = 0; k < N_CONTINUOUS; k++) dx[k] = xdot[k];
     if (c->model_exchange)
         for (k = 0; k < N_MEM; k++) c->b.s[N_X + k] = memory[k];

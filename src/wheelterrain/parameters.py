@@ -497,7 +497,7 @@ GROUND_TABLE: tuple[Parameter, ...] = (
               "Where along the path the patch ends (exclusive; patch.end <= patch.start: no "
               "patch).", "Scenario value", quantity="Length", fmu=GROUND_FMU),
     Parameter("terrain.cell", "m", 0.005, 0.001, 0.1,
-              "Length of a cell of the rut record along the track: each cell keeps the "
+              "Length of a cell of the rut profile along the track: each cell keeps the "
               "deepest rut a wheel left in it, and a wheel meets the rut linear between two "
               "cells' middles. The track's last 256 cells are remembered "
               "(1.28 m at the default), so the wheels of one track must be closer than that.",

@@ -127,7 +127,7 @@ def rover_ledger(params: ParameterSet, rover_values: Mapping[str, float] | None 
                  stop: float = 10.0, heave_start: float = 1e-3) -> dict:
     """The energy ledger of the rover over ``stop`` s from its start (the table's defaults and
     ``rover_values``; the chassis ``heave_start`` in the soil, every wheel on ``params``' soil,
-    no rut record: model exchange): each of ROVER_TERMS [J], ``wheels`` (per wheel its
+    no rut profile: model exchange): each of ROVER_TERMS [J], ``wheels`` (per wheel its
     SOIL_TERMS), ``residual`` and ``relative_residual``."""
     r = {**rover.defaults(), **(rover_values or {})}
     loop = rover_on_contact(ca.DM(params.vector()), r, heave_start=heave_start)

@@ -196,7 +196,7 @@ class Soil:
         self.patched = self.base.with_values(dict(self.patch or {}))  # checks the values
 
     def map_values(self) -> dict[str, float]:
-        """Terrain.fmu's parameters (ground.NAMES) for this map (the rut record's
+        """Terrain.fmu's parameters (ground.NAMES) for this map (the rut profile's
         terrain.cell and terrain.lookahead at their defaults)."""
         start, end = (self.start, self.end) if self.patch else (0.0, 0.0)
         return ground.map_values(self.base, self.patched, start, end)
@@ -229,7 +229,7 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
     then the wheel angles) gives the wheels' commands (N_CMD) held over the next ``block``
     steps (default: none, 0). ``x0``: the state to start from (N_X: rover.STATES, the wheel
     angles, the wheels' plastic sinkages) instead of rest on the surface; ``ruts0``: the
-    tracks' rut records to start from (by track; default: no rut). ``progress(t)`` is told the
+    tracks' rut profiles to start from (by track; default: no rut). ``progress(t)`` is told the
     simulated time reached after every block of steps."""
     p = {**rover.defaults(), **rover_values}
     evaluate, engine = _evaluator(block)
@@ -237,8 +237,8 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
     pw = soil.base.vector()
     g = soil.map_values()
     pg = [g[n] for n in ground.NAMES]
-    ruts.check_record(p, g)
-    memory = {track: list(ruts0[track]) if ruts0 else ground.initial_record()
+    ruts.check_profile(p, g)
+    profiles = {track: list(ruts0[track]) if ruts0 else ground.no_ruts()
               for track in rover.TRACKS}  # Terrain.fmu's record, per track
     x = list(rover.initial_state(p)) + [0.0] * (2 * len(rover.WHEELS))  # angles, plastics
     if x0 is not None:
@@ -251,7 +251,7 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
         t = b * block * step
         cmd = [0.0] * N_CMD if control is None else control(t, x)
         at = {w: rover.wheel_position(p, x[0], w) for w in rover.WHEELS}
-        met = ruts.met_table(memory, at, g)
+        met = ruts.met_table(profiles, at, g)
         x, rec = evaluate(x, pw, pg, pr, slope, towing, cmd, step, met)
         rec = np.asarray(rec, dtype=float).reshape(N_REC, block, order="F")
         problem = outside(rec)
@@ -264,7 +264,7 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
         if stop_when is not None and stop_when(last_values(rec[:, -1])):
             break  # the run ends here: no later step meets the ruts of this block
         wheels, chassis = named_record(rec)
-        ruts.remember(memory, chassis["position"],
+        ruts.remember(profiles, chassis["position"],
                       {w: wheels[w]["rut_left"] for w in rover.WHEELS}, met, p, g)
         if progress is not None:
             progress((b + 1) * block * step)

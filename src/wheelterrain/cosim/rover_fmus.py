@@ -1,5 +1,5 @@
 """The rover as FMUs: RoverChassis.fmu, four WheelTerrain.fmu and two Terrain.fmu (one per
-track: the soil map and the rut record each wheel's soil and rut come from), our master and
+track: the soil map and the rut profile each wheel's soil and rut come from), our master and
 Rover.ssp.
 
 Coupling per communication step h (fixed), Gauss-Seidel on the algebraic terrains, as the
@@ -21,7 +21,7 @@ way, so the two agree to rounding (tests/test_rover_fmus.py).
 Rover.ssp (``Rover_<scenario>`` system; components ``chassis``, one per wheel, named as the
 wheels, and one per track, ``<track>_track``) holds the FMUs, their connections and one
 parameter set named after the scenario: the terrain parameters on each wheel, the map's soils,
-patch and rut record on each track, and the chassis' parameters, its input profile (the slope
+patch and rut profile on each track, and the chassis' parameters, its input profile (the slope
 and towing ramps of the scenario) included, so any engine runs the scenario whole. Engines
 that pass every output one step late (libcosim, ecos) see the soil under a wheel two steps
 late (chassis -> track -> wheel): at the rover's speed, 0.1 mm of travel.

@@ -139,7 +139,7 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
     values = {**(rover_values or {}), "rover.gravity": GRAVITY[gravity]}
     p = {**rover.defaults(), **values}
     soil = scenario_soil(name, terrain)
-    ruts.check_record(p, soil.map_values())  # every engine's Terrain, not only in process
+    ruts.check_profile(p, soil.map_values())  # every engine's Terrain, not only in process
     quiet = terrain_of(terrain.with_values(NO_RIPPLE))
     pred = None
     if name in ("slope", "descent"):

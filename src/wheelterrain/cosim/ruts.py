@@ -1,10 +1,11 @@
-"""The ruts along the rover's tracks, as Terrain.fmu keeps them: a record per track of the rut
-each wheel leaves, the rut each wheel meets (:mod:`wheelterrain.model.ground`'s cells, read
-linear between cells' middles), and the bookkeeping the in-process engine does between blocks
-of steps (:mod:`wheelterrain.cosim.rover`): the table of cells a wheel may meet within a block
-(:func:`met_table`), the ruts the block's steps left replayed into the records
-(:func:`remember`), the checks that the record can serve the rover (:func:`check_record`), and
-the records of a rover already in steady motion (:func:`steady_ruts`).
+"""The ruts along the rover's tracks, as Terrain.fmu keeps them: a rut profile per track (the
+deepest rut left in each cell), the rut each wheel meets (:mod:`wheelterrain.model.ground`'s
+cells, read linear between cells' middles), and the bookkeeping the in-process engine
+(:mod:`wheelterrain.cosim.rover`) does between blocks of steps: the table of cells a wheel may
+meet within a block (:func:`met_table`), the ruts the block's steps left replayed into the
+profiles (:func:`remember`), the checks that the profile can serve the rover
+(:func:`check_profile`), and the profiles of a rover already in steady motion
+(:func:`steady_ruts`).
 """
 
 from __future__ import annotations
@@ -17,44 +18,44 @@ from wheelterrain.errors import ParameterError, WheelTerrainError
 from wheelterrain.model import ground, rover
 
 NEAR = 5
-"""Cells of the rut record a wheel may meet within one block of steps, from the one before the
-first of the two it meets between at the block's start (:func:`met_table`): the record is
+"""Cells of the rut profile a wheel may meet within one block of steps, from the one before the
+first of the two it meets between at the block's start (:func:`met_table`): the profile is
 replayed between blocks (:func:`replay`), exactly as Terrain.fmu keeps it step by step,
 where a wheel moves less than two cells a block."""
 N_MET = len(rover.WHEELS) * (NEAR + 1)
 
 
-def met_table(records: dict, positions: dict[str, float], g: Mapping[str, float]) -> list:
+def met_table(profiles: dict, positions: dict[str, float], g: Mapping[str, float]) -> list:
     """The ``met`` input of a block (N_MET): per wheel, the number of the cell before the
     first of the two it meets between at the block's start (ground.met_cells), then the
-    record's ruts of NEAR cells from there."""
+    profile's ruts of NEAR cells from there."""
     out = []
     for w in rover.WHEELS:
         first = ground.met_cells(positions[w], g)[0] - 1
-        out += [float(first), *(ground.recorded(records[rover.TRACK_OF[w]], first + k)
+        out += [float(first), *(ground.rut_in_cell(profiles[rover.TRACK_OF[w]], first + k)
                                 for k in range(NEAR))]
     return out
 
 
-def replay(records: dict, wheel_positions: dict, ruts: dict, g: Mapping[str, float]) -> None:
-    """Terrain.fmu's record of each track after a block: every step, each wheel of the track
+def replay(profiles: dict, wheel_positions: dict, ruts: dict, g: Mapping[str, float]) -> None:
+    """Terrain.fmu's rut profile of each track after a block: every step, each wheel of the track
     (the leading one first) left its rut at its position. Steps in one cell leave their
-    deepest rut once (ground.record_one); within a block the leading and the following
-    wheel never write the same slot (the record is longer than the wheelbase)."""
+    deepest rut once (ground.lay_rut); within a block the leading and the following
+    wheel never write the same slot (the profile is longer than the wheelbase)."""
     for track, pair in rover.TRACKS.items():
-        x = records[track]
+        x = profiles[track]
         for w in pair:
             numbers = ground.cell_number(wheel_positions[w], g)
             starts = np.concatenate(([0], np.flatnonzero(np.diff(numbers)) + 1))
             deepest = np.maximum.reduceat(ruts[w], starts)  # per run of steps in one cell
             for a, rut in zip(starts, deepest, strict=True):
-                x = ground.record_one(x, float(wheel_positions[w][a]), float(rut), g)
-        records[track] = x
+                x = ground.lay_rut(x, float(wheel_positions[w][a]), float(rut), g)
+        profiles[track] = x
 
 
-def check_record(p: Mapping[str, float], g: Mapping[str, float]) -> None:
-    """Refuse, with the parameters to change, a rover the rut record cannot serve: a wheel
-    must meet the rut at least three cells ahead of where it leaves its own, and the record
+def check_profile(p: Mapping[str, float], g: Mapping[str, float]) -> None:
+    """Refuse, with the parameters to change, a rover the rut profile cannot serve: a wheel
+    must meet the rut at least three cells ahead of where it leaves its own, and the profile
     must be longer than a track (the wheelbase and the lookahead, two cells to spare)."""
     cell, ahead = g["terrain.cell"], g["terrain.lookahead"]
     if ahead < 3 * cell:
@@ -65,16 +66,16 @@ def check_record(p: Mapping[str, float], g: Mapping[str, float]) -> None:
     span = p["rover.wheelbase"] + ahead + 2 * cell
     if span >= ground.RUT_CELLS * cell:
         raise ParameterError(
-            "terrain.cell", cell, f"m is too short: the rut record holds {ground.RUT_CELLS} "
+            "terrain.cell", cell, f"m is too short: the rut profile holds {ground.RUT_CELLS} "
             f"cells ({ground.RUT_CELLS * cell:g} m), less than the wheelbase and lookahead "
             f"({span:g} m); make terrain.cell (a Terrain FMU parameter) at least "
             f"{span / ground.RUT_CELLS:.3g} m, or rover.wheelbase shorter")
 
 
-def remember(records: dict, position: np.ndarray, left: Mapping[str, np.ndarray], met: list,
+def remember(profiles: dict, position: np.ndarray, left: Mapping[str, np.ndarray], met: list,
              p: Mapping[str, float], g: Mapping[str, float]) -> None:
     """After a block of steps: the ruts its steps left (``left``: per wheel, the rut left at
-    each step; ``position``: the chassis' at each step), into the tracks' records
+    each step; ``position``: the chassis' at each step), into the tracks' profiles
     (:func:`replay`); refused where a wheel met a cell outside the block's NEAR (it moved two
     cells or more)."""
     positions = {w: rover.wheel_position(p, position, w) for w in rover.WHEELS}
@@ -83,23 +84,23 @@ def remember(records: dict, position: np.ndarray, left: Mapping[str, np.ndarray]
         first = met[j * (NEAR + 1)]
         if np.any(numbers < first) or np.any(numbers + 1 > first + NEAR - 1):
             raise WheelTerrainError(
-                f"{w} moved more than two cells of the rut record (terrain.cell = "
+                f"{w} moved more than two cells of the rut profile (terrain.cell = "
                 f"{g['terrain.cell']:g} m) in one block of {len(position)} steps: make "
                 "terrain.cell larger or the block shorter")
-    replay(records, positions, left, g)
+    replay(profiles, positions, left, g)
 
 
 def steady_ruts(balance: dict, p: Mapping[str, float], x, g: Mapping[str, float]) -> dict:
-    """The tracks' rut records of a rover in steady motion (``balance``) at the state ``x``:
+    """The tracks' rut profiles of a rover in steady motion (``balance``) at the state ``x``:
     the track behind each leading wheel holds its steady rut, back past the wheel behind."""
-    records = {}
+    profiles = {}
     position = x[rover.STATES.index("position")]
     for track, (front, rear) in rover.TRACKS.items():
         rut = balance["wheels"][front]["rut_left"]
-        record = ground.initial_record()
+        profile = ground.no_ruts()
         first = ground.cell_number(rover.wheel_position(p, position, rear), g) - 2
         last = ground.cell_number(rover.wheel_position(p, position, front), g)
         for number in range(first, last + 1):  # at each cell's middle: its own number
-            record = ground.record_one(record, (number + 0.5) * g["terrain.cell"], rut, g)
-        records[track] = record
-    return records
+            profile = ground.lay_rut(profile, (number + 0.5) * g["terrain.cell"], rut, g)
+        profiles[track] = profile
+    return profiles

@@ -100,7 +100,7 @@ def _model_vars(model: str, root: ET.Element) -> str:
     states = continuous_states(model)
     held = states  # WheelTerrain's states are its continuous ones (wheel angle, plastic sinkage)
     memory = 0
-    if model in fmu_model.STATE_MODELS:  # the model's states (the Terrain's rut record: none
+    if model in fmu_model.STATE_MODELS:  # the model's states (the Terrain's rut profile: none
         held = fmu_model.STATE_MODELS[model].states  # continuous), then its step's memory
         memory = fmu_model.STATE_MODELS[model].memory
     n_states = len(held) + memory

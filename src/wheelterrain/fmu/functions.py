@@ -431,7 +431,7 @@ def rover_functions() -> tuple[ca.Function, ca.Function, ca.Function, ca.Functio
     return step, outputs, initial, rates
 
 
-# --- Terrain (a terrain map and the rut record of one track: model.ground) --------------------
+# --- Terrain (a terrain map and the rut profile of one track: model.ground) --------------------
 
 
 def ground_outputs(x, u, p, memory):
@@ -442,12 +442,12 @@ def ground_outputs(x, u, p, memory):
 
 def _ground_step(x, u, p, h):
     del h  # the record keeps the rut left at each step, whatever its length
-    return ground.record(x, u, p), ()
+    return ground.lay_ruts(x, u, p), ()
 
 
 @lru_cache(maxsize=1)
 def ground_functions() -> tuple[ca.Function, ca.Function, ca.Function, ca.Function]:
-    """(ground_step, ground_outputs, ground_initial, ground_rates): the rut record is the
+    """(ground_step, ground_outputs, ground_initial, ground_rates): the rut profile is the
     state; the step records each query point's rut; it has no rates (model exchange has no
     step: the record stays as it is)."""
     # MX: the record's slot is read by a symbolic index, not by a switch over every slot
@@ -457,8 +457,8 @@ def ground_functions() -> tuple[ca.Function, ca.Function, ca.Function, ca.Functi
     us = ca.vertsplit(u)
     y = ca.vertcat(*ground_outputs(x, us, named, memory))
     empty = ca.MX(0, 1)
-    x0 = ca.DM(ground.initial_record())
-    return (ca.Function("ground_step", [x, u, p, h], [ground.record(x, us, named), empty],
+    x0 = ca.DM(ground.no_ruts())
+    return (ca.Function("ground_step", [x, u, p, h], [ground.lay_ruts(x, us, named), empty],
                         ["x", "u", "p", "h"], ["x_next", "memory"]),
             ca.Function("ground_outputs", [x, u, p, memory], [y], ["x", "u", "p", "memory"],
                         ["y"]),
@@ -526,6 +526,6 @@ STATE_MODELS = {
     "Terrain": StateModel(
         "Terrain", "ground", ground.STATES, ground.INPUTS, GROUND_OUTPUTS, ground.NAMES, 0,
         None, 0.0, (), {}, _ground_step, ground_outputs,
-        lambda p: ground.initial_record(), lambda x: None, ground_functions),
+        lambda p: ground.no_ruts(), lambda x: None, ground_functions),
 }
 """The state-space FMUs by model name."""

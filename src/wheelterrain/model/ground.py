@@ -7,21 +7,21 @@ soil. Here the map is one soil (the ``soil.*`` rows) with a patch of another (th
 rows) on [``patch.start``, ``patch.end``) along the path: a soft patch under the front axle and
 then the rear in the rover's ``soft-patch`` scenario.
 
-The rut record (the soil's memory along a track): a Terrain answers the query points of one
-track, QUERY (the leading wheel, then the one behind it). Each step it records, at each query
+The rut profile (the soil's memory along a track): a Terrain answers the query points of one
+track, QUERY (the leading wheel, then the one behind it). Each step it lays, at each query
 point's position, the rut that wheel leaves (WheelTerrain's ``rut_left``): the track is cut into
 cells of ``terrain.cell``, each keeping the deepest rut left in it. A wheel meets the rut
 ``terrain.lookahead`` ahead of its axle (the front of its contact; linear between the middles
 of the two cells around that point, :func:`met`), WheelTerrain's input
 ``rut_met`` (its contact takes the deeper of it and its soil's ``soil.rut_depth``), so the
 wheel behind runs in the rut of the wheel ahead, the query-point pattern of vehicle-terrain
-co-simulation. The record is a ring of RUT_CELLS cells (the track's last RUT_CELLS * cell
+co-simulation. The rut profile is a ring of RUT_CELLS cells (the track's last RUT_CELLS * cell
 metres), each holding the rut and the number of the cell it belongs to (:func:`cell_after`).
 
 Written once as plain arithmetic on numbers or CasADi symbols: Terrain.fmu (both flavours, a
-state model whose state is the record) and the in-process rover (:mod:`wheelterrain.cosim.rover`,
-which replays the same record between its blocks of steps) run :func:`soil_at`,
-:func:`met`, :func:`outputs` and :func:`record`.
+state model whose state is the rut profile) and the in-process rover
+(:mod:`wheelterrain.cosim.rover`, which replays the same rut profile between its blocks of
+steps) run :func:`soil_at`, :func:`met`, :func:`outputs` and :func:`lay_ruts`.
 """
 
 from __future__ import annotations
@@ -40,17 +40,17 @@ PATCH_NAMES = tuple(f"patch.{n.split('.', 1)[1]}" for n in SOIL_NAMES)
 """The patch's rows, in the order of :data:`SOIL_NAMES`."""
 NAMES = (*SOIL_NAMES, *(p.name for p in GROUND_TABLE))
 """The map's parameters: the soil rows, then the map's own (patch.start, patch.end, the rut
-record's terrain.cell and terrain.lookahead, patch.*)."""
+rut profile's terrain.cell and terrain.lookahead, patch.*)."""
 QUERY = ("q1", "q2")
 """A Terrain's query points: the wheels of one track, the leading one first."""
 RUT_CELLS = 256
-"""Cells of the rut record: it remembers the track's last RUT_CELLS * terrain.cell metres."""
+"""Cells of the rut profile: it remembers the track's last RUT_CELLS * terrain.cell metres."""
 EMPTY = -1.0e15
 """The cell number of a cell no wheel has left a rut in yet (no cell has this number:
 |position| <= 1e6 m, terrain.cell >= 1 mm)."""
 STATES: tuple[str, ...] = (*(f"rut[{k}]" for k in range(RUT_CELLS)),
                            *(f"cell[{k}]" for k in range(RUT_CELLS)))
-"""The record: the rut of each ring slot [m], then the number of the cell it holds."""
+"""The rut profile: the rut of each ring slot [m], then the number of the cell it holds."""
 INPUTS = tuple(f"{q}.{n}" for q in QUERY for n in ("position", "rut_left"))
 
 
@@ -75,7 +75,7 @@ SOFT_PATCH_START, SOFT_PATCH_LENGTH = 0.50, 0.30
 
 def map_values(base, patched, start: float, end: float) -> dict[str, float]:
     """The map's parameters (NAMES) for a soil ``base`` with a patch of the soil ``patched``
-    on [start, end) m (both indexed by table name; start = end: no patch), the rut record's
+    on [start, end) m (both indexed by table name; start = end: no patch), the rut profile's
     rows at their defaults."""
     out = {**defaults(), **{name: base[name] for name in SOIL_NAMES}}
     out.update({patch: patched[soil] for soil, patch in zip(SOIL_NAMES, PATCH_NAMES,
@@ -101,8 +101,8 @@ def defaults() -> dict[str, float]:
     return {name: float(rows[name].default) for name in NAMES}
 
 
-def initial_record() -> list[float]:
-    """The record before any wheel passed: no rut, every slot empty."""
+def no_ruts() -> list[float]:
+    """The rut profile before any wheel passed: no rut, every slot empty."""
     return [0.0] * RUT_CELLS + [EMPTY] * RUT_CELLS
 
 
@@ -124,7 +124,7 @@ def _slot(number):
 
 
 def cell_after(rut, cell, number, left):
-    """One slot of the record after a wheel left the rut ``left`` [m] in cell ``number``, the
+    """One slot of the rut profile after a wheel left the rut ``left`` [m] in cell ``number``, the
     slot holding ``rut`` for cell ``cell``: the deeper of the two where the slot holds that
     cell, else (a cell the ring comes round to again) the new rut alone. ``(rut, cell)``."""
     if not any(isinstance(v, (ca.SX, ca.MX)) for v in (rut, cell, number, left)):
@@ -133,8 +133,8 @@ def cell_after(rut, cell, number, left):
     return ca.if_else(cell == number, ca.fmax(left, rut), left), number
 
 
-def recorded(x, number):
-    """The rut the record ``x`` (:data:`STATES`: a list of floats, or a CasADi MX vector)
+def rut_in_cell(x, number):
+    """The rut the rut profile ``x`` (:data:`STATES`: a list of floats, or a CasADi MX vector)
     holds for cell ``number`` [m]; 0 where no wheel has left one there (or the ring has come
     round since). MX: the slot is read by a symbolic index (one lookup, not one switch a
     slot)."""
@@ -146,19 +146,19 @@ def recorded(x, number):
     return ca.if_else(cells[slot] == number, ruts[slot], 0)
 
 
-def record(x, u, p):
-    """The record after a step: each query point (in QUERY order) leaves its input rut_left at
-    its position (:func:`record_one`). ``x`` a list of floats or an MX vector, as returned."""
+def lay_ruts(x, u, p):
+    """The rut profile after a step: each query point (in QUERY order) leaves its input rut_left at
+    its position (:func:`lay_rut`). ``x`` a list of floats or an MX vector, as returned."""
     inputs = dict(zip(INPUTS, u, strict=True))
     x = list(x) if isinstance(x, (list, tuple)) else x
     for q in QUERY:
-        x = record_one(x, inputs[f"{q}.position"], inputs[f"{q}.rut_left"], p)
+        x = lay_rut(x, inputs[f"{q}.position"], inputs[f"{q}.rut_left"], p)
     return x
 
 
-def record_one(x, position, left, p):
-    """The record ``x`` after a wheel at ``position`` left the rut ``left``: only the slot of its
-    cell changes (:func:`cell_after`). On floats that slot is written; on an MX vector it is
+def lay_rut(x, position, left, p):
+    """The rut profile ``x`` after a wheel at ``position`` left the rut ``left``: only the slot
+    of its cell changes (:func:`cell_after`). On floats that slot is written; on an MX vector it is
     read by a symbolic index and written by a switch over the slots. Leaving the ruts r1, r2,
     ... in one cell one after the other is leaving their deepest once (the in-process rover
     replays its steps so)."""
@@ -198,13 +198,13 @@ def between(near, far, share):
 
 
 def met(x, position, p):
-    """The rut a wheel at ``position`` meets: the record's, linear between the middles of the
+    """The rut a wheel at ``position`` meets: the rut profile's, linear between the middles of the
     two cells around the point it meets (:func:`met_cells`). Piecewise linear along the track,
     not a staircase: a staircase steps the rut under a wheel at every cell's edge, and those
     steps were a disturbance of the rover's steady motion that depended on the cell's length
     (the Moon's climb stalled 23.3-25.4 deg for cells of 10-2 mm)."""
     first, share = met_cells(position, p)
-    return between(recorded(x, first), recorded(x, first + 1), share)
+    return between(rut_in_cell(x, first), rut_in_cell(x, first + 1), share)
 
 
 def outputs(x, u, p) -> tuple:
