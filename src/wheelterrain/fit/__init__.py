@@ -1,3 +1,4 @@
 """Fitting and judging the model against rig data: calibration (:mod:`.calibration`),
-sensitivity (:mod:`.sensitivity`) and the prediction protocols of ``wheelterrain validate``
-(:mod:`.prediction`)."""
+sensitivity (:mod:`.sensitivity`), the test-data format (:mod:`.datasets`), model forms across
+wheels and soils with prediction intervals (:mod:`.crosswheel`) and the prediction protocols of
+``wheelterrain validate`` (:mod:`.prediction`)."""
