@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -279,3 +281,17 @@ def test_in_process_plant_refuses_a_locked_wheel_with_the_fmus_sentence():
         plant.advance(0.5, 1, lambda *a: None)
     assert "wheel speed 0 rad/s with carriage speed 0.03 m/s" in str(err.value)
     assert "outside the model's domain" in str(err.value)
+
+
+def test_the_default_solver_is_quiet(tmp_path):
+    """`wheelterrain mpc` with the default solver printed 600-800 CasADi warnings ("nlp_grad
+    failed: NaN detected for output grad_gamma_p") although every solve succeeded: the
+    parameters' multipliers, which nothing uses, were computed from a gradient that is NaN where
+    a parameter's derivative is not defined. Nothing but the progress bar on standard error."""
+    run = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "mpc", "--plant", "casadi",
+                          "--out", str(tmp_path), "--json", "-"],
+                         capture_output=True, text=True, timeout=600, check=False)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "WARNING" not in run.stderr + run.stdout
+    assert "NaN detected" not in run.stderr + run.stdout
+    assert json.loads(run.stdout)["failed_solves"] == 0

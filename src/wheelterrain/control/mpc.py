@@ -367,7 +367,10 @@ class Controller:
         s = self.settings
         # not expanded to SX: the contact's switch then runs the preset's form only (expanded,
         # every form is evaluated: ipopt on the VM 88 ms per solve instead of 40 ms)
-        common: dict = {"expand": False}
+        # calc_lam_p off: the parameters' multipliers are not used, and their gradient is NaN
+        # where a parameter's derivative is not defined (the exit ratio at 0, virgin soil's rut
+        # depth): CasADi then printed a "NaN detected" warning per solve (600-800 a run)
+        common: dict = {"expand": False, "calc_lam_p": False}
         if self.gauss_newton is not None:
             common["hess_lag"] = self.gauss_newton
         if s.solver == "sqpmethod":
