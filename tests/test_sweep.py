@@ -5,6 +5,10 @@ from __future__ import annotations
 
 import csv
 import math
+import os
+import subprocess
+import sys
+import time
 
 import pytest
 from click.testing import CliRunner
@@ -194,3 +198,36 @@ def test_ctrl_c_stops_a_parallel_sweep_at_once_and_leaves_no_worker(fmu, tmp_pat
     alive = [pid for pid in workers if os.path.exists(f"/proc/{pid}")
              and "Z" not in Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]]
     assert not alive, f"workers left running: {alive}"
+
+
+def test_an_unreachable_dask_scheduler_is_one_line_and_exit_2(fmu, tmp_path):
+    """`--dask tcp://scheduler:8786` (the docs' own example) printed a 63-83-line traceback
+    and exited 1 after 30 s; now one line, exit 2, within the connect timeout, no folder left."""
+    pytest.importorskip("dask.distributed")
+    out = tmp_path / "out"
+    started = time.perf_counter()
+    run = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "sweep", "--fmu", str(fmu),
+                          "--dask", "tcp://no-such-scheduler.invalid:8786", "--slip", "0.1",
+                          "--out", str(out)], capture_output=True, text=True, timeout=120,
+                         check=False)
+    assert run.returncode == 2, run.stderr
+    lines = [line for line in (run.stdout + run.stderr).splitlines() if line.strip()]
+    assert len(lines) == 1, lines
+    assert "no dask scheduler answered" in lines[0]
+    assert time.perf_counter() - started < sweeper.DASK_CONNECT_TIMEOUT + 15
+    assert not out.exists()
+
+
+def test_a_local_dask_sweep_leaves_nothing_in_the_temporary_folder(fmu, tmp_path):
+    """Each run on a local cluster left the extracted FMU (3.1 MB) and dask's scratch space in
+    the temporary folder."""
+    pytest.importorskip("dask.distributed")
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    run = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "sweep", "--fmu", str(fmu),
+                          "--dask", "local", "--slip", "0:0.5:20", "--out", str(tmp_path / "o")],
+                         capture_output=True, text=True, timeout=300, check=False,
+                         env={**os.environ, "TMPDIR": str(scratch)})
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert (tmp_path / "o" / "sweep.csv").is_file()
+    assert list(scratch.iterdir()) == []

@@ -863,13 +863,20 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
                      "several sweeps, or a higher --max-points")
     try:
         label = f"sweeping {total} point{'s' if total != 1 else ''}"
-        with click.progressbar(length=total, label=label, file=sys.stderr) as bar:
+        with _progress_bars() as progress:  # drawn from the first points done
+            done = [0]
+
+            def advance(points: int) -> None:
+                done[0] += points
+                progress(label, done[0], total)
+
             rows = sweeper.run(Path(fmu), sweeper.base_values(ps), axes, slip_definition,
-                               workers=workers, dask_address=dask_address,
-                               progress=bar.update)
-    except (FileNotFoundError, FMUError) as err:
+                               workers=workers, dask_address=dask_address, progress=advance)
+    except FileNotFoundError as err:
         click.echo(f"error: {err}", err=True)
         sys.exit(EXIT_USAGE)
+    except WheelTerrainError as err:
+        _fail(err)
     sweeper.write_csv(csv_path, rows)
     bad = sum(r["status"] != "ok" for r in rows)
     x = "slip" if len(axes["slip"]) > 1 else max(axes, key=lambda k: len(axes[k]))

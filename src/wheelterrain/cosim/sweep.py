@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelterrain.errors import ParameterError
+from wheelterrain.errors import ParameterError, UsageError
 from wheelterrain.fmu.instance import Instance, read_description
 from wheelterrain.fmu.variables import TERRAIN_OUTPUTS
 from wheelterrain.model.slip import DEFAULT_DEFINITION, reference_radius, traction_from_paper
@@ -221,26 +221,66 @@ def _run_chunk(task: tuple) -> tuple[int, list[dict]]:
     return k, run_points(*args)
 
 
+DASK_CONNECT_TIMEOUT = 10.0  # s: how long a scheduler's address is tried before it is refused
+
+
 def _run_dask(fmu, base, chunks, slip_definition, address, results, progress) -> None:
+    """The chunks on a dask.distributed cluster: a LocalCluster for "local", else the
+    scheduler at ``address`` (UsageError, one line, where none answers within
+    DASK_CONNECT_TIMEOUT). Each worker extracts the FMU once; when the sweep ends every worker
+    frees its instance, which removes that folder (a worker outlives the sweep)."""
+    import logging
+
     try:
         from dask.distributed import Client, LocalCluster, as_completed
     except ImportError as err:
-        raise RuntimeError("--dask needs dask.distributed: pip install 'dask[distributed]'") \
-            from err
-    cluster = LocalCluster(n_workers=os.cpu_count() or 1, threads_per_worker=1,
-                           processes=True, dashboard_address=None) if address == "local" \
-        else None
-    with Client(cluster if cluster is not None else address) as client:
-        futures = [client.submit(run_points, fmu, base, c, slip_definition, pure=False)
-                   for c in chunks]
-        index = {f.key: k for k, f in enumerate(futures)}
-        for future in as_completed(futures):
-            k = index[future.key]
-            results[k] = future.result()
-            if progress:
-                progress(len(chunks[k]))
-    if cluster is not None:
-        cluster.close()
+        raise UsageError("--dask needs dask.distributed: pip install 'dask[distributed]'"
+                         ) from err
+    import shutil
+    import tempfile
+
+    import dask
+
+    scratch = tempfile.mkdtemp(prefix="wheelterrain_dask_") if address == "local" else None
+    if scratch is not None:  # dask's own scratch space goes there, not in the temp folder
+        with dask.config.set({"temporary-directory": scratch}):
+            cluster = LocalCluster(n_workers=os.cpu_count() or 1, threads_per_worker=1,
+                                   processes=True, dashboard_address=None,
+                                   local_directory=scratch)
+    else:
+        cluster = None
+    quiet = logging.getLogger("distributed")
+    level = quiet.level
+    quiet.setLevel(logging.CRITICAL)  # its retries would print a traceback per attempt
+    try:
+        try:
+            client = Client(cluster if cluster is not None else address,
+                            timeout=DASK_CONNECT_TIMEOUT)
+        except (OSError, TimeoutError, ValueError) as err:
+            reason = str(err).splitlines()[0] if str(err) else "no reply"
+            raise UsageError(f"--dask {address}: no dask scheduler answered within "
+                             f"{DASK_CONNECT_TIMEOUT:g} s ({type(err).__name__}: {reason}); "
+                             "give a running scheduler's address (tcp://host:8786) or 'local'"
+                             ) from None
+        finally:
+            quiet.setLevel(level)
+        with client:
+            try:
+                futures = [client.submit(run_points, fmu, base, c, slip_definition, pure=False)
+                           for c in chunks]
+                index = {f.key: k for k, f in enumerate(futures)}
+                for future in as_completed(futures):
+                    k = index[future.key]
+                    results[k] = future.result()
+                    if progress:
+                        progress(len(chunks[k]))
+            finally:
+                client.run(_close_worker)  # each worker's extracted FMU removed
+    finally:
+        if cluster is not None:
+            cluster.close()
+        if scratch is not None:  # the local workers' scratch space
+            shutil.rmtree(scratch, ignore_errors=True)
 
 
 def write_csv(path: Path, rows: list[dict]) -> None:
