@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import subprocess
 import sys
 from dataclasses import replace
@@ -217,6 +218,27 @@ def test_sinkage_from_is_read_and_a_wrong_word_names_its_line():
     assert {p.sinkage_from for p in sets["rashid-rig"].points} == {"surface"}  # empty cell
     lines[header + 1] = lines[header + 1].rsplit(",", 1)[0] + ",grousers"
     with pytest.raises(DataError, match=f"line {header + 2}: sinkage_from = 'grousers'"):
+        datasets.parse("\n".join(lines))
+
+
+@pytest.mark.parametrize(("column", "value", "words"), [
+    ("drawbar_pull", "1e300", "drawbar_pull = 1e+300 N is beyond 3 times the load"),
+    ("drawbar_pull", "-400", "drawbar_pull = -400 N is beyond 3 times the load"),
+    ("sinkage", "-0.5", "sinkage = -0.5 m is below 0"),
+    ("sinkage", "0.9", "sinkage = 0.9 m is beyond the wheel's radius"),
+], ids=["pull-1e300", "pull-negative", "sinkage-negative", "sinkage-past-the-axle"])
+def test_an_impossible_measurement_is_refused_with_its_line(column, value, words):
+    """`validate --data` took a pull of 1e300 N and a sinkage of -0.5 m with exit 0: a
+    measurement no wheel test can give is a DataError naming its line (the bound:
+    datasets.PULL_BOUND)."""
+    lines = _shipped_text().splitlines()
+    header = next(k for k, line in enumerate(lines) if not line.startswith("#"))
+    names = lines[header].split(",")
+    row = header + 1  # the rig's first point (surface datum, 62 N, R = 0.05 m)
+    cells = lines[row].split(",")
+    cells[next(k for k, n in enumerate(names) if n.split(" [")[0] == column)] = value
+    lines[row] = ",".join(cells)
+    with pytest.raises(DataError, match=re.escape(f"line {row + 1}: {words}")):
         datasets.parse("\n".join(lines))
 
 

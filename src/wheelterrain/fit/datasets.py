@@ -209,10 +209,44 @@ def _point(cells: dict[str, str], line: int) -> Point:
     if datum not in SINKAGE_FROM:
         raise DataError(f"line {line}: sinkage_from = {datum!r}: one of "
                         f"{', '.join(SINKAGE_FROM)} (or empty: surface)")
+    _check_measured(line, values, load, get("drawbar_pull"), get("sinkage"),
+                    get("torque", False), datum)
     return Point(dataset=cells.get("dataset") or "user", case=cells.get("case") or f"line {line}",
                  values=values, spread=spread, load=load, slip=slip,
                  drawbar_pull=get("drawbar_pull"), sinkage=get("sinkage"),
                  torque=get("torque", False), sinkage_from=datum)
+
+
+PULL_BOUND = 3.0
+"""|drawbar_pull| <= PULL_BOUND * load: a measured pull beyond it is refused as impossible. The
+soil's Mohr-Coulomb limit at the table's largest friction angle (60 deg) is tan(60 deg) = 1.73
+times the load; the shipped data sets reach 0.6. The same bound times the wheel's outer radius
+(R + h_g) bounds the torque."""
+
+
+def _check_measured(line: int, values: dict, load: float, pull: float, sinkage: float,
+                    torque: float, datum: str) -> None:
+    """Refuse, naming the line, a measurement no wheel test can give: a pull or torque beyond
+    PULL_BOUND times the load (and the outer radius), a sinkage below the surface it is counted
+    from or past the wheel's axle."""
+    radius = values["wheel.radius"]
+    if abs(pull) > PULL_BOUND * load:
+        raise DataError(f"line {line}: drawbar_pull = {pull:g} N is beyond {PULL_BOUND:g} times "
+                        f"the load ({load:g} N): no wheel on soil pulls that (the Mohr-Coulomb "
+                        "limit at phi = 60 deg is 1.73 times the load); check its unit (N)")
+    outer = radius + values["grouser.height"]
+    if not math.isnan(torque) and abs(torque) > PULL_BOUND * load * outer:
+        raise DataError(f"line {line}: torque = {torque:g} N.m is beyond {PULL_BOUND:g} times "
+                        f"the load times the wheel's outer radius ({PULL_BOUND * load * outer:g} "
+                        "N.m); check its unit (N.m)")
+    if datum == "surface" and sinkage < 0:
+        raise DataError(f"line {line}: sinkage = {sinkage:g} m is below 0, above the soil's "
+                        "surface it is counted from (sinkage_from = surface); if it is counted "
+                        "from the wheel at rest, say sinkage_from = rest")
+    if abs(sinkage) > radius:
+        raise DataError(f"line {line}: sinkage = {sinkage:g} m is beyond the wheel's radius "
+                        f"({radius:g} m): the axle would be below the surface; check its unit "
+                        "(m)")
 
 
 def read(path: str | Path) -> list[Dataset]:
