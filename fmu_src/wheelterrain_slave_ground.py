@@ -11,9 +11,12 @@ from wheelterrain.fmu.slaves import GroundCore
 
 
 class Terrain(Fmi2Slave):
-    description = ("Terrain map along a path: one soil with a patch of another; its output is "
-                   "the soil at the query point's position (the ground.* inputs of a "
-                   "WheelTerrain with soil_from_inputs)")
+    description = ("Terrain of one track: the soil map along the path (one soil with a patch "
+                   "of another) at its two query points (the ground.* inputs of a WheelTerrain "
+                   "with soil_from_inputs), and the rut profile it keeps as its state: the "
+                   "deepest rut each wheel left in each terrain.cell of the track's last 256, "
+                   "which the wheel behind meets (q*.rut_met); saved and restored with the FMU "
+                   "state, laid only by co-simulation steps")
     license = "MIT"
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=10.0, step_size=0.002)
 

@@ -1463,3 +1463,20 @@ def test_no_state_call_reads_freed_memory(flavours, tmp_path):
     bad = [b for b in blocks if re.search(r"== (Invalid (read|write|free)|Mismatched free)", b)
            and "binaries/" in b]
     assert not bad, bad[0][:3000]
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_fmi3_descriptions_say_their_names_are_structured(flavours, name):
+    """The FMI 3 descriptions lacked variableNamingConvention (the FMI 2 ones say
+    "structured"): a tool then reads soil.phi as a flat name, not a path."""
+    with zipfile.ZipFile(flavours["root"] / "native" / "fmi3" / f"{name}.fmu") as z:
+        text = z.read("modelDescription.xml").decode()
+    assert 'variableNamingConvention="structured"' in text
+    assert validate_fmu(str(flavours["root"] / "native" / "fmi3" / f"{name}.fmu")) == []
+
+
+@pytest.mark.parametrize("flavour", ["pythonfmu", "native"])
+def test_the_terrain_fmu_says_what_it_keeps(flavours, flavour):
+    """Terrain's description did not mention the rut profile, its state."""
+    md = read_model_description(str(flavours["root"] / flavour / "Terrain.fmu"))
+    assert "rut profile it keeps as its state" in md.description

@@ -585,8 +585,11 @@ def build(out: str, flavor: str) -> None:
                        f"{folder / 'package.mo'} in a Modelica tool)")
             for note in notes:
                 click.echo(f"note: {note}", err=True)
+        def say(message: str) -> None:  # each FMU and platform as it starts
+            click.echo(f"{message} ...", err=True)
+
         if flavor in ("pythonfmu", "all"):
-            paths += build_pythonfmu(out)
+            paths += build_pythonfmu(out, say=say)
         # --flavor all builds what this machine can; --flavor native without a compiler is
         # an error (build_native says so)
         native = flavor == "native" or (flavor == "all" and native_compiler() is not None)
@@ -594,8 +597,9 @@ def build(out: str, flavor: str) -> None:
             click.echo("note: no C compiler (cc/gcc, or $CC) on PATH, so only the pythonfmu "
                        "FMUs were built; the native ones need one (Debian/Ubuntu: apt-get "
                        "install gcc)", err=True)
-        if native:
-            paths += build_native(Path(out) / "native")
+        if native:  # its descriptions from the pythonfmu FMUs just built, where they were
+            paths += build_native(Path(out) / "native",
+                                  reference_dir=Path(out) if flavor == "all" else None, say=say)
             if cross_compiler() is None:
                 click.echo(f"note: no {WIN64_CC} on PATH, so the native FMUs have no win64 "
                            "binary (Debian/Ubuntu: apt-get install gcc-mingw-w64-x86-64)",

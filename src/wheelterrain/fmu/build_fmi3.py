@@ -42,7 +42,7 @@ def description(fmi2: ET.Element) -> ET.Element:
     """The FMI 3.0 modelDescription of the native FMU described (FMI 2) by ``fmi2``."""
     root = ET.Element("fmiModelDescription", fmiVersion="3.0")
     _copy(fmi2, root, ("modelName", "description", "author", "version", "copyright",
-                       "license", "generationTool"))
+                       "license", "generationTool", "variableNamingConvention"))
     root.set("instantiationToken", fmi2.get("guid"))
     identifier = fmi2.find("CoSimulation").get("modelIdentifier")
     common = {"modelIdentifier": identifier, "needsExecutionTool": "false",

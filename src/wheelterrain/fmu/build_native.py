@@ -22,6 +22,7 @@ import shutil
 import subprocess
 import tempfile
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
@@ -247,10 +248,15 @@ def _native_description(root: ET.Element, model: str) -> ET.Element:
 
 
 def build(out: Path, models: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig",
-                                               "RoverChassis", "Terrain")) -> list[Path]:
+                                               "RoverChassis", "Terrain"),
+          reference_dir: Path | None = None,
+          say: Callable[[str], None] = lambda message: None) -> list[Path]:
     """Build the native FMUs into ``out`` (FMI 2.0) and ``out/fmi3`` (FMI 3.0); returns their
     paths, per model the FMI 2 then the FMI 3 one. Each has Linux binaries and, when the
-    MinGW-w64 cross compiler is installed, Windows ones, all from the same sources."""
+    MinGW-w64 cross compiler is installed, Windows ones, all from the same sources.
+    ``reference_dir``: where the pythonfmu FMUs of this build are (their modelDescription is
+    the native one's start; built here when not given); ``say(message)``: told as each FMU and
+    platform starts."""
     cc = native.compiler()
     if cc is None:
         raise BuildError("the native flavour needs a C compiler (cc/gcc, or $CC) on PATH")
@@ -261,7 +267,12 @@ def build(out: Path, models: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig"
     built = []
     with tempfile.TemporaryDirectory(prefix="wheelterrain_native_") as tmp:
         tmp = Path(tmp)
-        reference = build_pythonfmu(tmp / "pythonfmu", models, compiled=False)
+        given = [Path(reference_dir) / f"{m}.fmu" for m in models] if reference_dir else []
+        if given and all(f.is_file() for f in given):
+            reference = given
+        else:
+            say("describing the FMUs (a pythonfmu build of their modelDescription)")
+            reference = build_pythonfmu(tmp / "pythonfmu", models, compiled=False)
         for model, fmu in zip(models, reference, strict=True):
             with zipfile.ZipFile(fmu) as z:
                 root = _native_description(ET.fromstring(z.read("modelDescription.xml")), model)
@@ -274,8 +285,10 @@ def build(out: Path, models: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig"
             for header in ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"):
                 shutil.copyfile(headers / header, src / header)
             libraries = {"linux64": tmp / model / f"{model}.so"}
+            say(f"compiling {model} (native, FMI 2, linux64)")
             _compile(cc, CFLAGS, src, libraries["linux64"], model)
             if cross is not None:
+                say(f"compiling {model} (native, FMI 2, win64)")
                 libraries["win64"] = tmp / model / f"{model}.dll"
                 _compile(cross, WIN64_CFLAGS, src, libraries["win64"], model, libs=())
             target = out / f"{model}.fmu"
@@ -287,6 +300,8 @@ def build(out: Path, models: tuple[str, ...] = ("WheelTerrain", "SingleWheelRig"
                 for name in SOURCES:
                     z.write(src / name, f"sources/{name}")
             built.append(target)
+            say(f"compiling {model} (native, FMI 3, "
+                f"{'x86_64-linux and x86_64-windows' if cross else 'x86_64-linux'})")
             built.append(_build_fmi3(model, root, src, tmp / model, out / "fmi3", cc, cross))
     return built
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 import shutil
 import tempfile
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
@@ -29,8 +30,10 @@ from wheelterrain.fmu.variables import VARIABLES
 
 
 def build(out: Path, models: tuple[str, ...] = tuple(SLAVE_SCRIPTS),
-          compiled: bool = True) -> list[Path]:
-    """Build the pythonfmu FMUs into ``out``; returns their paths.
+          compiled: bool = True,
+          say: Callable[[str], None] = lambda message: None) -> list[Path]:
+    """Build the pythonfmu FMUs into ``out``; returns their paths. ``say(message)`` is told as
+    each FMU starts.
 
     ``compiled``: also generate WheelTerrain's Functions (:mod:`wheelterrain.fmu.functions`) as C,
     compile them and ship the libraries in its bundled package (``_compiled/*.so``), which the
@@ -43,6 +46,7 @@ def build(out: Path, models: tuple[str, ...] = tuple(SLAVE_SCRIPTS),
     out.mkdir(parents=True, exist_ok=True)
     built = []
     for name in models:
+        say(f"building {name}.fmu (pythonfmu)")
         script = source_dir() / SLAVE_SCRIPTS[name]
         with tempfile.TemporaryDirectory(prefix="wheelterrain_build_") as tmp:
             staged = Path(tmp) / "wheelterrain"

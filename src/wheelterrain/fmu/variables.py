@@ -323,8 +323,9 @@ GROUND_IO: tuple[Var, ...] = tuple(v for q in QUERY_POINTS for v in (
           p.unit, p.quantity, p.display_unit, depends_on=(f"{q}.position",))
       for p in SOIL_ROWS),
     Var(f"{q}.rut_met", "output", f"The rut the wheel at {q} meets (to its WheelTerrain's "
-        "input rut_met): the deepest rut profileed in the cell terrain.lookahead ahead of its "
-        "position, 0 where no wheel has left one (or the record has moved on)", "m", "Length",
+        "input rut_met): the deepest rut left in the cell terrain.lookahead ahead of its "
+        "position (its rut profile, linear between cells' middles), 0 where no wheel has left "
+        "one (or the profile has moved on)", "m", "Length",
         "mm", depends_on=(f"{q}.position",))))
 
 
