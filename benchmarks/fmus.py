@@ -6,7 +6,9 @@ one core, with the fmpy master (Python) for both flavours and with ecos (C++) fo
     python benchmarks/fmus.py [--fmu-dir build] [--steps 5000] [--repeats 5] [--no-c1-c4]
     python benchmarks/fmus.py --quick --json      # fewer steps and repeats, one JSON object
 
-``--json`` prints (seconds): ``native_step_c_host_s`` (a WheelTerrain set + doStep + get of
+``--json`` prints (seconds): ``<flavour>_start_up_wheel_s`` and ``<flavour>_start_up_rover_s``
+(a fresh process's wait from its imports to the first WheelTerrain instance, or the rover's
+seven instances, ready), ``native_step_c_host_s`` (a WheelTerrain set + doStep + get of
 the native binary from a C host compiled here, no Python in the loop), ``pythonfmu_step_fmpy_s``
 (the same through fmpy on the pythonfmu flavour), ``c1_c4_pythonfmu_fmpy_s`` (C1-C4, fmpy
 master, pythonfmu), ``c1_c4_fastest_s`` and ``c1_c4_fastest_how`` (the fastest path measured in
@@ -232,6 +234,13 @@ def main() -> None:
                       f"{quasi['cold'] / quasi['warm']:.1f}x)")
     print(f"baseline: core contact Function call from Python: "
           f"{per_call(core, args.steps, args.repeats):.1f} us")
+    for label, d in dirs.items():  # a host's wait before the first step
+        if all((d / f"{m}.fmu").is_file() for m in ("RoverChassis", "Terrain")):
+            for what in ("wheel", "rover"):
+                figures[f"{label}_start_up_{what}_s"] = start_up(d, what, args.repeats)
+            print(f"{label}: start-up in a fresh process (median of {args.repeats}): first "
+                  f"WheelTerrain instance {figures[f'{label}_start_up_wheel_s']:.2f} s, the "
+                  f"rover's seven instances {figures[f'{label}_start_up_rover_s']:.2f} s")
     if args.no_c1_c4:
         _emit(args, figures)
         return
@@ -274,6 +283,44 @@ def main() -> None:
     fastest = min(walls, key=walls.get)
     figures["c1_c4_fastest_s"], figures["c1_c4_fastest_how"] = walls[fastest], how[fastest]
     _emit(args, figures)
+
+
+START_UP = """
+import sys, time
+started = time.perf_counter()
+from pathlib import Path
+from wheelterrain import presets
+from wheelterrain.cosim import rover as engine, rover_fmus
+from wheelterrain.fmu.instance import Instance
+imported = time.perf_counter()
+folder = Path(sys.argv[1])
+if sys.argv[2] == "wheel":
+    inst = Instance(folder / "WheelTerrain.fmu", name="t").start({})
+    ready = time.perf_counter()
+    inst.fmu.doStep(0.0, 1e-3)
+    inst.close()
+else:
+    rover = rover_fmus.RoverFMUs(folder, engine.Soil(presets.load(presets.DEFAULT_PRESET)), {}, 1.0)
+    ready = time.perf_counter()
+    rover.exchange()
+    rover.step(0.0, 1e-3)
+    rover.close()
+print(ready - imported, time.perf_counter() - started)
+"""
+
+
+def start_up(fmu_dir: Path, what: str, repeats: int) -> float:
+    """Seconds from the imports done to the instances ready (``what``: "wheel", the first
+    WheelTerrain instance; "rover", the rover's seven instances), each in a fresh process, the
+    median of ``repeats``."""
+    import subprocess
+
+    runs = []
+    for _ in range(repeats):
+        out = subprocess.run([sys.executable, "-c", START_UP, str(fmu_dir), what],
+                             capture_output=True, text=True, check=True)
+        runs.append(float(out.stdout.split()[0]))
+    return statistics.median(runs)
 
 
 def _emit(args, figures: dict) -> None:
