@@ -852,7 +852,7 @@ def test_the_ssp_carries_its_step_and_stop_where_engines_read_them(flavours, tmp
 
     from wheelterrain.cosim import rover as rover_system
     from wheelterrain.cosim import rover_fmus
-    from wheelterrain.cosim.master import file_mode
+    from wheelterrain.files import file_mode
 
     pytest.importorskip("libcosimpy")
     root = flavours["root"] / "native"
