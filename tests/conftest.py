@@ -1,13 +1,21 @@
-"""Shared fixtures; ``classical_reference`` beside this file is the independent Wong-Reece code."""
+"""Shared fixtures; ``classical_reference`` beside this file is the independent Wong-Reece code.
+
+The builds (the FMUs of both flavours, the Modelica library) are made once per test run, also
+when pytest-xdist runs the tests in several worker processes: the first worker to need one
+builds it, holding a lock, and the others wait and read it (:func:`built_once`)."""
 
 from __future__ import annotations
 
 import math
+import os
+import shutil
+from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
 from wheelterrain import compiled as native
-from wheelterrain import presets
+from wheelterrain import files, presets
 from wheelterrain.fmu import build_native as nativebuild
 from wheelterrain.fmu import build_pythonfmu as fmubuild
 from wheelterrain.parameters import ParameterSet
@@ -18,23 +26,38 @@ def table2() -> ParameterSet:
     return presets.load("paper-table2-arc")
 
 
+def built_once(tmp_path_factory, name: str, make: Callable[[Path], object]) -> Path:
+    """A folder ``make(folder)`` fills once per test run, shared by every xdist worker of the
+    run (a worker's base folder is the run's, one level down): the first to ask builds it under
+    a lock, the others wait for it and read it. Tests only read it."""
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent
+    folder = root / f"shared-{name}"
+    with files.locked(root / f".shared-{name}.lock"):
+        if not (folder / ".built").exists():
+            shutil.rmtree(folder, ignore_errors=True)
+            folder.mkdir()
+            make(folder)
+            (folder / ".built").touch()
+    return folder
+
+
 @pytest.fixture(scope="session")
 def fmu_dir(tmp_path_factory):
     """Every pythonfmu FMU, built once per test run for every test that only runs them."""
-    out = tmp_path_factory.mktemp("fmus")
-    fmubuild.build(out)
-    return out
+    return built_once(tmp_path_factory, "fmus", fmubuild.build)
 
 
 @pytest.fixture(scope="session")
-def native_dir(tmp_path_factory):
+def native_dir(tmp_path_factory, fmu_dir):
     """Every native FMU (FMI 2 here, FMI 3 in fmi3/; win64 binaries where MinGW-w64 is
-    installed), built once per test run for every test that only runs them."""
+    installed), built once per test run for every test that only runs them (their
+    descriptions from the pythonfmu FMUs of the run, as `build --flavor all` does)."""
     if native.compiler() is None:
         pytest.skip("the native FMUs need a C compiler")
-    out = tmp_path_factory.mktemp("native")
-    nativebuild.build(out)
-    return out
+    return built_once(tmp_path_factory, "native",
+                      lambda out: nativebuild.build(out, reference_dir=fmu_dir))
 
 
 @pytest.fixture(scope="session")
@@ -43,9 +66,7 @@ def modelica_root(tmp_path_factory):
     the folder holding WheelTerrain/ (tests read it, never write into it)."""
     from wheelterrain.modelica import library
 
-    out = tmp_path_factory.mktemp("modelica")
-    library.write(out)
-    return out
+    return built_once(tmp_path_factory, "modelica", library.write)
 
 
 @pytest.fixture(scope="session")

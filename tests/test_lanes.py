@@ -26,13 +26,17 @@ PRESETS = ("paper-table2-arc", "rashid-patch", "paper-table1", "paper-table2", "
 
 
 @pytest.fixture(scope="session")
-def lane_cache(tmp_path_factory):
-    """A fresh cache for the session, so that the compile path is exercised."""
-    return tmp_path_factory.mktemp("lanes_cache")
+def lane_cache():
+    """The machine's cache of compiled libraries (``compiled.cache_directory()``): a fresh
+    machine (CI) compiles the lanes here once, which exercises the compile path, and every
+    other test that evaluates many points reuses them (a cache of its own compiled them twice,
+    ~100 s)."""
+    return native.cache_directory()
 
 
 def compiled_in(cache, factory):
-    """``factory()`` compiled into ``cache`` (not a library an earlier call kept)."""
+    """``factory()`` with ``cache`` as the cache of compiled libraries (not the object an earlier
+    call in this process kept: its library is looked up, or compiled, anew)."""
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("WHEELTERRAIN_CACHE", str(cache))
         factory.cache_clear()

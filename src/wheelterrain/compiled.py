@@ -24,7 +24,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from wheelterrain.files import replacing
+from wheelterrain.files import locked, replacing
 
 CFLAGS = ("-fPIC", "-shared")  # with the optimisation level compile_function is given
 
@@ -88,7 +88,9 @@ def cached_library(fn: ca.Function, kind: str, jacobian: bool = False,
     place = cache_directory() / kind / fingerprint(fn)[:16]
     library = place / f"{fn.name()}.so"
     if not library.is_file():
-        compile_function(fn, place, jacobian=jacobian, optimisation=optimisation)
+        with locked(place.parent / f".{place.name}.lock"):  # another process may compile it
+            if not library.is_file():
+                compile_function(fn, place, jacobian=jacobian, optimisation=optimisation)
     return library
 
 

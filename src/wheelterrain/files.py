@@ -7,7 +7,9 @@ run (Ctrl-C, SIGTERM, a full disk) leaves nothing behind.
   gets the mode a plain ``open`` would give (the user's umask), not a temporary file's 0600;
 - :func:`write_atomic`: text or bytes through :func:`replacing`; a path that is not a regular
   file (/dev/null, /dev/stdout, a named pipe) is written in place;
-- :func:`one_set`: a set of files that appear in a folder together, or not at all.
+- :func:`one_set`: a set of files that appear in a folder together, or not at all;
+- :func:`locked`: one process at a time in a block (the compiled-library caches: processes
+  that need the same library wait for the one compiling it instead of compiling it again).
 """
 
 from __future__ import annotations
@@ -62,6 +64,26 @@ def write_atomic(path: Path, data: str | bytes) -> None:
             partial.write_bytes(data)
         else:
             partial.write_text(data, encoding="utf-8")
+
+
+@contextlib.contextmanager
+def locked(path: Path) -> Iterator[None]:
+    """Hold an exclusive lock on the file ``path`` (created if missing) for the block: other
+    processes asking for it wait. Where the system has no ``fcntl`` (Windows) the block runs
+    unlocked (a second process then does the work again; the results are still written whole)."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover (not on Linux)
+        yield
+        return
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
 
 
 @contextlib.contextmanager

@@ -44,6 +44,7 @@ from wheelterrain.compiled import (
     no_compiler_reason,
     run_compiler,
 )
+from wheelterrain.files import locked
 from wheelterrain.model import contact as _contact
 from wheelterrain.model import solve as _solve
 
@@ -448,15 +449,30 @@ def compile_source(source: str, name: str) -> tuple[Path, bool]:
         raise CompileError(no_compiler_reason())
     key = hashlib.sha256("\0".join((source, cc, " ".join(_COMMON), _processor())).encode())
     place = cache_directory() / "lanes" / key.hexdigest()[:16]
-    for flags in _FLAG_SETS:
-        library = place / f"{name}_{len(flags)}.so"
-        if library.is_file():
-            return library, bool(flags)
+    found = _cached_lanes(place, name)
+    if found is not None:
+        return found
     try:
         place.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise CompileError(f"cannot create the cache directory {place} ({err}); set "
                            "WHEELTERRAIN_CACHE to a writable one") from err
+    with locked(place / f".{name}.lock"):  # another process may be compiling it
+        found = _cached_lanes(place, name)
+        return found if found is not None else _compile_lanes(source, name, place, cc)
+
+
+def _cached_lanes(place: Path, name: str) -> tuple[Path, bool] | None:
+    """The library ``name`` in the cache folder ``place`` (the best flag set's), or None."""
+    for flags in _FLAG_SETS:
+        library = place / f"{name}_{len(flags)}.so"
+        if library.is_file():
+            return library, bool(flags)
+    return None
+
+
+def _compile_lanes(source: str, name: str, place: Path, cc: str) -> tuple[Path, bool]:
+    """Compile ``source`` into ``place`` with the first flag set the compiler takes."""
     # the first use waits for the compiler (20-80 s): say so, once, rather than stall silently
     print(f"wheelterrain: compiling {name} for this processor, once (kept in {place})",
           file=sys.stderr, flush=True)

@@ -35,6 +35,7 @@ from pathlib import Path
 import casadi as ca
 
 from wheelterrain import compiled
+from wheelterrain.files import locked
 from wheelterrain.fmu.toolchain import BuildError, cross_compiler
 
 STEM = "WheelTerrainExternal"
@@ -156,13 +157,16 @@ def _cached(platform: str, key: str, c_sources: Path, compile_into, say) -> Path
     place = compiled.cache_directory() / "modelica-external" / platform / key
     if all((place / name).is_file() for name in BINARIES[platform]):
         return place
-    say(f"compiling Functions.External for {platform} (a minute or two, once: later builds "
-        "reuse it)")
-    with tempfile.TemporaryDirectory(prefix="wheelterrain_ext_") as tmp:
-        compile_into(Path(tmp))
-        place.mkdir(parents=True, exist_ok=True)
-        for name in BINARIES[platform]:
-            compiled.install(Path(tmp) / name, place / name)
+    with locked(place.parent / f".{key}.lock"):  # another process may be compiling it
+        if all((place / name).is_file() for name in BINARIES[platform]):
+            return place
+        say(f"compiling Functions.External for {platform} (a minute or two, once: later "
+            "builds reuse it)")
+        with tempfile.TemporaryDirectory(prefix="wheelterrain_ext_") as tmp:
+            compile_into(Path(tmp))
+            place.mkdir(parents=True, exist_ok=True)
+            for name in BINARIES[platform]:
+                compiled.install(Path(tmp) / name, place / name)
     return place
 
 

@@ -1,0 +1,354 @@
+"""The figures README.md and docs/ quote, made by the commands that make them, and the check
+that every quote is still what those commands print.
+
+    python3 validation/figures.py                    # check every quote (exit 1 on a drift)
+    python3 validation/figures.py --update           # rerun every source (~15 min), rewrite
+                                                     # validation/figures.json and the quotes
+    python3 validation/figures.py --update --only reproduce validate   # some sources only
+
+A quote in Markdown is ``<!--f:KEY-->TEXT<!--/f-->`` (an inline figure; TEXT is the figure
+formatted as FIGURES says) or a block ``<!--table:NAME-->`` ... ``<!--/table-->`` (a table
+TABLES writes whole). GitHub and MkDocs show TEXT and the table; the markers are invisible.
+``--update`` reruns the sources, keeps their figures in validation/figures.json (with the
+command and the date of each) and rewrites every quote from it: what changed is then in the
+diff, for the prose around it to be read again. The check needs no run: it compares every quote
+with figures.json (tests/test_figures.py runs it, and recomputes the quick sources).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import re
+import subprocess
+import sys
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+STORE = ROOT / "validation" / "figures.json"
+QUOTED_IN = ("README.md", "docs/*.md", "validation/*.md")
+INLINE = re.compile(r"<!--f:([\w.\-]+)-->(.*?)<!--/f-->", re.S)
+BLOCK = re.compile(r"(<!--table:([\w.\-]+)-->\n)(.*?)(<!--/table-->)", re.S)
+
+
+@dataclass(frozen=True)
+class Source:
+    """A command whose JSON the figures come from: ``argv`` with {json} (the file it writes)
+    and {tmp} (a scratch folder) filled in; ``python`` runs a script, else the CLI."""
+
+    argv: tuple[str, ...]
+    python: bool = False
+    quick: bool = False  # a few seconds: tests/test_figures.py recomputes it
+
+    def command(self) -> str:
+        head = "python3" if self.python else "wheelterrain"
+        return " ".join([head, *self.argv]).replace(" {json}", "").replace(
+            " --out {tmp}", "").replace("--json {json}", "--json")
+
+    def run(self) -> dict:
+        with tempfile.TemporaryDirectory(prefix="wheelterrain_figures_") as tmp:
+            target = Path(tmp) / "out.json"
+            argv = [a.format(json=target, tmp=tmp) for a in self.argv]
+            if self.python:
+                run = subprocess.run([sys.executable, *argv], cwd=ROOT, capture_output=True,
+                                     text=True, check=False)
+                if run.returncode != 0:
+                    raise RuntimeError(f"{self.command()} failed: {run.stderr[-2000:]}")
+                return json.loads(run.stdout)
+            run = subprocess.run([sys.executable, "-m", "wheelterrain.cli", *argv], cwd=ROOT,
+                                 capture_output=True, text=True, check=False)
+            if run.returncode != 0:
+                raise RuntimeError(f"{self.command()} failed: {run.stderr[-2000:]}")
+            return json.loads(target.read_text())
+
+
+SOURCES = {
+    "reproduce": Source(("reproduce", "--json", "{json}", "--out", "{tmp}"), quick=True),
+    "validate": Source(("validate", "--json", "{json}")),
+    **{f"rover-{s}-{g}": Source(("rover", "--scenario", s, "--gravity", g, "--json", "{json}",
+                                 "--out", "{tmp}"))
+       for s in ("level", "slope", "descent") for g in ("earth", "moon")},
+    "bench-rover": Source(("benchmarks/rover.py", "--quick", "--json"), python=True),
+    "bench-fmus": Source(("benchmarks/fmus.py", "--quick", "--json"), python=True),
+    "bench-core": Source(("benchmarks/core.py", "--quick", "--json"), python=True),
+}
+
+
+@dataclass(frozen=True)
+class Figure:
+    source: str
+    get: Callable[[dict], float | str | None]
+    fmt: str = "{:.2f}"
+
+    def text(self, value) -> str:
+        return "none" if value is None else self.fmt.format(value)
+
+
+def _nested(doc: dict, dataset: str, model: str) -> dict:
+    """The nested protocol's row of ``dataset``: the line's (``model`` "line") or the rule's."""
+    return next(r for r in doc["rows"] if r["protocol"] == "nested-leave-one-dataset-out"
+                and r["dataset"] == dataset and (r["model"] == "line") == (model == "line"))
+
+
+def _case(doc: dict, case: str) -> dict:
+    return next(c for c in doc["cases"] if c["case"] == case)
+
+
+def _wheel_mean(doc: dict, key: str, wheels: tuple[str, ...]) -> float:
+    return sum(w[key] for w in doc["wheels"] if w["name"] in wheels) / len(wheels)
+
+
+FRONT, REAR = ("front_left", "front_right"), ("rear_left", "rear_right")
+
+FIGURES: dict[str, Figure] = {
+    # the rig, C1-C4 through the FMUs (wheelterrain reproduce, default preset)
+    "reproduce.pull_mae": Figure("reproduce", lambda d: d["mean_absolute_error"]["drawbar_pull"]),
+    "reproduce.sinkage_mae_mm": Figure(
+        "reproduce", lambda d: 1e3 * d["mean_absolute_error"]["sinkage"]),
+    "reproduce.wall_s": Figure("reproduce", lambda d: d["wall_time_s"], "{:.1f}"),
+    **{f"reproduce.{c}.sinkage_mm": Figure("reproduce",
+                                            lambda d, c=c: 1e3 * _case(d, c)["sinkage"])
+       for c in ("C1", "C2", "C3", "C4")},
+    **{f"reproduce.{c}.pull": Figure("reproduce", lambda d, c=c: _case(d, c)["drawbar_pull"])
+       for c in ("C1", "C2", "C3", "C4")},
+    # the cross-wheel headline (wheelterrain validate, nested protocol)
+    "validate.rule.pull": Figure(
+        "validate", lambda d: d["default_form_rule"]["judged_by"]["rule"]["drawbar_pull_mae"],
+        "{:.1f}"),
+    "validate.rule.pull_per_load": Figure(
+        "validate",
+        lambda d: d["default_form_rule"]["judged_by"]["rule"]["drawbar_pull_mae_per_load"],
+        "{:.3f}"),
+    "validate.line.pull": Figure(
+        "validate", lambda d: d["default_form_rule"]["judged_by"]["line"]["drawbar_pull_mae"]),
+    "validate.line.pull_per_load": Figure(
+        "validate",
+        lambda d: d["default_form_rule"]["judged_by"]["line"]["drawbar_pull_mae_per_load"],
+        "{:.3f}"),
+    "validate.rule.sinkage_mm": Figure(
+        "validate", lambda d: 1e3 * d["default_form_rule"]["judged_by"]["rule"]["sinkage_mae"],
+        "{:.1f}"),
+    "validate.line.sinkage_mm": Figure(
+        "validate", lambda d: 1e3 * d["default_form_rule"]["judged_by"]["line"]["sinkage_mae"],
+        "{:.1f}"),
+    "validate.rule.coverage": Figure(
+        "validate",
+        lambda d: 100 * d["default_form_rule"]["judged_by"]["rule"]["interval_coverage"],
+        "{:.0f} %"),
+    # the rover (wheelterrain rover --json, in process)
+    **{f"rover.{g}.level.sinkage_{end}_mm": Figure(
+        f"rover-level-{g}", lambda d, ws=ws: 1e3 * _wheel_mean(d, "mean_sinkage", ws))
+       for g in ("earth", "moon") for end, ws in (("front", FRONT), ("rear", REAR))},
+    **{f"rover.{g}.level.rtf": Figure(f"rover-level-{g}", lambda d: d["real_time_factor"],
+                                      "{:.0f}") for g in ("earth", "moon")},
+    **{f"rover.{g}.slope.stall_deg": Figure(f"rover-slope-{g}", lambda d: d["stall_slope_deg"],
+                                            "{:.1f}°") for g in ("earth", "moon")},
+    **{f"rover.{g}.slope.predicted_deg": Figure(
+        f"rover-slope-{g}", lambda d: d["predicted_stall_slope_deg"], "{:.1f}°")
+       for g in ("earth", "moon")},
+    **{f"rover.{g}.slope.cause": Figure(f"rover-slope-{g}", lambda d: d["stall_cause"], "{}")
+       for g in ("earth", "moon")},
+    **{f"rover.{g}.slope.predicted_limit": Figure(
+        f"rover-slope-{g}", lambda d: d["predicted_stall_limit"], "{}")
+       for g in ("earth", "moon")},
+    **{f"rover.{g}.descent.slide_deg": Figure(
+        f"rover-descent-{g}", lambda d: abs(d["slide_slope_deg"])
+        if d["slide_slope_deg"] is not None else None, "{:.1f}°")
+       for g in ("earth", "moon")},
+    **{f"rover.{g}.descent.cause": Figure(f"rover-descent-{g}", lambda d: d["stall_cause"],
+                                          "{}") for g in ("earth", "moon")},
+    **{f"rover.{g}.descent.predicted_deg": Figure(
+        f"rover-descent-{g}", lambda d: abs(d["predicted_descent_limit_deg"]), "{:.1f}°")
+       for g in ("earth", "moon")},
+    **{f"rover.{g}.descent.predicted_limit": Figure(
+        f"rover-descent-{g}", lambda d: d["predicted_descent_limit"], "{}")
+       for g in ("earth", "moon")},
+    # speed (benchmarks, --quick, median of repeats on the machine that ran them)
+    "bench.rover.in_process": Figure("bench-rover", lambda d: d["rover_rtf_fastest"], "{:.0f}×"),
+    "bench.rover.fmpy": Figure("bench-rover", lambda d: d["rover_rtf_fmpy"], "{:.1f}×"),
+    "bench.fmus.c1_c4_ratio": Figure(
+        "bench-fmus", lambda d: d["c1_c4_ratio_pythonfmu_over_fastest"], "{:.0f}×"),
+    "bench.fmus.c1_c4_fastest_s": Figure("bench-fmus", lambda d: d["c1_c4_fastest_s"],
+                                         "{:.2f} s"),
+    "bench.fmus.native_step_us": Figure("bench-fmus", lambda d: 1e6 * d["native_step_c_host_s"],
+                                        "{:.2f} µs"),
+    "bench.fmus.pythonfmu_start_up_rover_s": Figure(
+        "bench-fmus", lambda d: d["pythonfmu_start_up_rover_s"], "{:.2f} s"),
+    "bench.core.force_ratio": Figure("bench-core", lambda d: d["force_eval_ratio"], "{:.0f}×"),
+    "bench.core.solve_ratio": Figure("bench-core", lambda d: d["solve_ratio"], "{:.0f}×"),
+}
+
+
+def _percent(x) -> str:
+    return "–" if x is None else f"{100 * x:.0f} %"
+
+
+NAMES = {"rashid-rig": "Rashid rig C1–C4", "ding2011-smooth": "Ding 2011 smooth",
+         "ding2011-lugged": "Ding 2011 lugged", "kls1-smooth": "KLS-1 smooth",
+         "kls1-lugged": "KLS-1 lugged", "rashid1-fjs1": "Rashid-1 wheel, FJS-1"}
+
+
+def _nested_table(docs: dict[str, dict]) -> str:
+    """The README's headline: per held-out data set, the line and the form the fold's rule
+    chose, in N and mm and as shares of the load W and the radius R."""
+    doc = docs["validate"]
+    lines = ["| held-out data set (points, load) | line (2 free): pull, sinkage | the fold's "
+             "rule chose | that form: pull, sinkage (90 % coverage) |", "|---|---|---|---|"]
+    for dataset, name in NAMES.items():
+        line, rule = _nested(doc, dataset, "line"), _nested(doc, dataset, "rule")
+        load = rule["drawbar_pull_mae"] / rule["drawbar_pull_mae_per_load"]
+        lines.append(
+            f"| {name} ({rule['points']}, {load:.3g} N) | {line['drawbar_pull_mae']:.2f} N "
+            f"({line['drawbar_pull_mae_per_load']:.3f} W), {1e3 * line['sinkage_mae']:.1f} mm "
+            f"({line['sinkage_mae_per_radius']:.3f} R) | `{rule['model']}` | "
+            f"{rule['drawbar_pull_mae']:.2f} N ({rule['drawbar_pull_mae_per_load']:.3f} W), "
+            f"{1e3 * rule['sinkage_mae']:.1f} mm ({rule['sinkage_mae_per_radius']:.3f} R) "
+            f"({_percent(rule['interval_coverage'])}) |")
+    judged = doc["default_form_rule"]["judged_by"]
+    a, b = judged["line"], judged["rule"]
+    lines.append(f"| mean over data sets | {a['drawbar_pull_mae']:.2f} N "
+                 f"({a['drawbar_pull_mae_per_load']:.3f} W), {1e3 * a['sinkage_mae']:.1f} mm "
+                 f"({a['sinkage_mae_per_radius']:.3f} R) | {len(b['forms'])} forms | "
+                 f"{b['drawbar_pull_mae']:.2f} N ({b['drawbar_pull_mae_per_load']:.3f} W), "
+                 f"{1e3 * b['sinkage_mae']:.1f} mm ({b['sinkage_mae_per_radius']:.3f} R) "
+                 f"({_percent(b['interval_coverage'])}) |")
+    return "\n".join(lines) + "\n"
+
+
+RIG_PRESETS = ("line", "rashid-patch", "paper-table2", "rashid-calibrated", "paper-table2-arc")
+
+
+def _rig_table(docs: dict[str, dict]) -> str:
+    """The rig's C1-C4 (quasi-static, `validate`): held-out, in-sample and transfer errors."""
+    rows = docs["validate"]["rows"]
+
+    def row(model: str, protocol: str, data: str = "") -> dict | None:
+        return next((r for r in rows if r["model"] == model and r["protocol"] == protocol
+                     and str(r.get("data", "")).startswith(data)), None)
+
+    def cell(r: dict | None) -> str:
+        if r is None:
+            return "—"
+        mark = " *in-sample*" if r["in_sample"] else ""
+        return f"{r['drawbar_pull_mae']:.2f} N, {1e3 * r['sinkage_mae']:.2f} mm{mark}"
+
+    lines = ["| model | free | leave-one-out | the paper's C2-only protocol | C1–C4 as "
+             "shipped | transfer to Ding 2011: lugged / smooth |",
+             "|---|---|---|---|---|---|"]
+    for model in RIG_PRESETS:
+        shipped = row(model, "all-case")
+        free = len(shipped["free"]) if shipped else "—"
+        transfer = [row(model, "transfer", f"ding2011-{w}") for w in ("lugged", "smooth")]
+        moved = "—" if transfer[0] is None else f"{cell(transfer[0])} / {cell(transfer[1])}"
+        lines.append(f"| `{model}` | {free} | {cell(row(model, 'leave-one-out'))} | "
+                     f"{cell(row(model, 'c2-only'))} | {cell(shipped)} | {moved} |")
+    return "\n".join(lines) + "\n"
+
+
+TABLES: dict[str, tuple[tuple[str, ...], Callable[[dict], str]]] = {
+    "nested": (("validate",), _nested_table),
+    "rig": (("validate",), _rig_table),
+}
+
+
+# --- the store and the quotes ----------------------------------------------------------------
+
+def load() -> dict:
+    return json.loads(STORE.read_text(encoding="utf-8")) if STORE.is_file() else {
+        "sources": {}, "figures": {}, "tables": {}}
+
+
+def evaluate(docs: dict[str, dict], store: dict, only: set[str] | None = None) -> dict:
+    """``store`` with the figures and tables of the sources in ``docs`` made anew."""
+    for key, figure in FIGURES.items():
+        if figure.source in docs and (only is None or figure.source in only):
+            value = figure.get(docs[figure.source])
+            store["figures"][key] = {"value": value, "text": figure.text(value),
+                                     "source": figure.source}
+    for name, (needs, render) in TABLES.items():
+        if all(s in docs for s in needs) and (only is None or set(needs) & only):
+            store["tables"][name] = render(docs)
+    return store
+
+
+def quoted_files() -> list[Path]:
+    return sorted({p for pattern in QUOTED_IN for p in ROOT.glob(pattern)})
+
+
+def problems(store: dict) -> list[str]:
+    """Every quote that is not figures.json's figure or table, and every key nothing makes."""
+    out = []
+    for path in quoted_files():
+        text = path.read_text(encoding="utf-8")
+        where = path.relative_to(ROOT)
+        for key, quoted in INLINE.findall(text):
+            if key not in FIGURES:
+                out.append(f"{where}: <!--f:{key}--> names no figure of validation/figures.py")
+            elif key not in store["figures"]:
+                out.append(f"{where}: {key} has not been made (--update)")
+            elif quoted != store["figures"][key]["text"]:
+                out.append(f"{where}: {key} quoted {quoted!r}, made "
+                           f"{store['figures'][key]['text']!r}")
+        for _, name, quoted, _ in BLOCK.findall(text):
+            if name not in TABLES:
+                out.append(f"{where}: <!--table:{name}--> names no table of "
+                           "validation/figures.py")
+            elif quoted != store["tables"].get(name):
+                out.append(f"{where}: the table {name} is not the one made")
+    return out
+
+
+def rewrite_quotes(store: dict) -> list[Path]:
+    """Every quote made anew from ``store``; returns the files that changed."""
+    changed = []
+    for path in quoted_files():
+        text = path.read_text(encoding="utf-8")
+
+        def inline(m: re.Match) -> str:
+            made = store["figures"].get(m.group(1))
+            return m.group(0) if made is None else f"<!--f:{m.group(1)}-->{made['text']}<!--/f-->"
+
+        def block(m: re.Match) -> str:
+            made = store["tables"].get(m.group(2))
+            return m.group(0) if made is None else m.group(1) + made + m.group(4)
+
+        new = BLOCK.sub(block, INLINE.sub(inline, text))
+        if new != text:
+            path.write_text(new, encoding="utf-8")
+            changed.append(path)
+    return changed
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--update", action="store_true",
+                    help="rerun the sources, rewrite validation/figures.json and the quotes")
+    ap.add_argument("--only", nargs="*", choices=sorted(SOURCES), metavar="SOURCE",
+                    help=f"with --update, only these sources ({', '.join(SOURCES)})")
+    args = ap.parse_args()
+    store = load()
+    if args.update:
+        chosen = args.only or list(SOURCES)
+        docs = {}
+        for name in chosen:
+            print(f"{SOURCES[name].command()} ...", file=sys.stderr, flush=True)
+            docs[name] = SOURCES[name].run()
+            store["sources"][name] = {"command": SOURCES[name].command(),
+                                      "date": datetime.date.today().isoformat()}
+        evaluate(docs, store, set(chosen))
+        STORE.write_text(json.dumps(store, indent=1, sort_keys=True, ensure_ascii=False) + "\n",
+                         encoding="utf-8")
+        for path in rewrite_quotes(store):
+            print(f"rewrote the quotes in {path.relative_to(ROOT)}", file=sys.stderr)
+    found = problems(store)
+    for line in found:
+        print(line)
+    sys.exit(1 if found else 0)
+
+
+if __name__ == "__main__":
+    main()
