@@ -107,3 +107,21 @@ def test_the_documentation_builds_with_no_warning_and_its_links_resolve(tmp_path
     broken = _build_site(copy, tmp_path / "broken")
     assert broken.returncode != 0
     assert "no-such-page.md" in broken.stderr
+
+
+@pytest.mark.skipif(native.compiler() is None, reason="needs a C compiler")
+def test_the_python_blocks_run_as_written(tmp_path, fmu_dir, native_dir):
+    """Each ```python block of the README and docs/ (the quick start's FMU in fmpy) runs in a
+    folder laid out as `wheelterrain build --flavor all` writes build/, exit status 0."""
+    blocks = [block for page in PAGES
+              for block in re.findall(r"```python\n(.*?)```", page.read_text(encoding="utf-8"),
+                                      flags=re.S)]
+    assert len(blocks) >= 2  # the README's quick start and the getting-started page
+    (tmp_path / "build").mkdir()
+    for fmu in fmu_dir.glob("*.fmu"):
+        (tmp_path / "build" / fmu.name).symlink_to(fmu)
+    (tmp_path / "build" / "native").symlink_to(native_dir, target_is_directory=True)
+    for block in blocks:
+        run = subprocess.run([sys.executable, "-c", block], cwd=tmp_path, capture_output=True,
+                             text=True, timeout=600, check=False)
+        assert run.returncode == 0, (block, run.stderr[-2000:])

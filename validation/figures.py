@@ -109,7 +109,6 @@ FIGURES: dict[str, Figure] = {
     "reproduce.pull_mae": Figure("reproduce", lambda d: d["mean_absolute_error"]["drawbar_pull"]),
     "reproduce.sinkage_mae_mm": Figure(
         "reproduce", lambda d: 1e3 * d["mean_absolute_error"]["sinkage"]),
-    "reproduce.wall_s": Figure("reproduce", lambda d: d["wall_time_s"], "{:.1f}"),
     **{f"reproduce.{c}.sinkage_mm": Figure("reproduce",
                                             lambda d, c=c: 1e3 * _case(d, c)["sinkage"])
        for c in ("C1", "C2", "C3", "C4")},
