@@ -274,6 +274,12 @@ def evaluate(docs: dict[str, dict], store: dict, only: set[str] | None = None) -
     return store
 
 
+def save(store: dict) -> None:
+    from wheelterrain.files import write_atomic
+
+    write_atomic(STORE, json.dumps(store, indent=1, sort_keys=True, ensure_ascii=False) + "\n")
+
+
 def quoted_files() -> list[Path]:
     return sorted({p for pattern in QUOTED_IN for p in ROOT.glob(pattern)})
 
@@ -332,15 +338,12 @@ def main() -> None:
     store = load()
     if args.update:
         chosen = args.only or list(SOURCES)
-        docs = {}
-        for name in chosen:
+        for name in chosen:  # each source's figures kept as soon as it has run
             print(f"{SOURCES[name].command()} ...", file=sys.stderr, flush=True)
-            docs[name] = SOURCES[name].run()
+            evaluate({name: SOURCES[name].run()}, store, {name})
             store["sources"][name] = {"command": SOURCES[name].command(),
                                       "date": datetime.date.today().isoformat()}
-        evaluate(docs, store, set(chosen))
-        STORE.write_text(json.dumps(store, indent=1, sort_keys=True, ensure_ascii=False) + "\n",
-                         encoding="utf-8")
+            save(store)
         for path in rewrite_quotes(store):
             print(f"rewrote the quotes in {path.relative_to(ROOT)}", file=sys.stderr)
     found = problems(store)

@@ -30,7 +30,6 @@ late (chassis -> track -> wheel): at the rover's speed, 0.1 mm of travel.
 from __future__ import annotations
 
 import contextlib
-import os
 import tempfile
 import time
 import zipfile
@@ -281,7 +280,7 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
     with tempfile.TemporaryDirectory(prefix="wheelterrain_rover_") as tmp:
         path = write_ssp(Path(tmp) / "Rover.ssp", fmu_dir, scenario, soil, values, stop, step)
         t0 = time.perf_counter()
-        with _stdout_to_stderr():  # the engines' own log lines: not on standard output
+        with ssp.engine_output_to_stderr():  # their log lines: not on standard output
             if engine == "libcosim":
                 out = ssp.simulate_with_libcosim(path, stop, step, dotted, progress)
                 wall = time.perf_counter() - t0
@@ -381,23 +380,6 @@ def _chassis_slips(data: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
         traction, _, _ = functions.slips(wheels[w]["wheel_speed"], chassis["speed"], radius)
         data[k * len(RECORD) + RECORD.index("slip")] = np.asarray(traction).ravel()
     return data
-
-
-@contextlib.contextmanager
-def _stdout_to_stderr():
-    """File descriptor 1 pointed at standard error for the duration (C++ engines log there;
-    standard output may be a JSON document)."""
-    import sys
-
-    sys.stdout.flush()
-    saved = os.dup(1)
-    try:
-        os.dup2(2, 1)
-        yield
-    finally:
-        sys.stdout.flush()
-        os.dup2(saved, 1)
-        os.close(saved)
 
 
 # --- Rover.ssp --------------------------------------------------------------------------------

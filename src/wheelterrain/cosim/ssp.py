@@ -184,6 +184,21 @@ def simulate_with_fmpy(path: Path, stop: float, step: float):
     return simulate_ssp(str(path), stop_time=stop, step_size=step, parameter_set=merged)
 
 
+@contextlib.contextmanager
+def engine_output_to_stderr():
+    """File descriptor 1 pointed at standard error for the duration: the C++ engines (ecos,
+    libcosim) write their log lines to it, and standard output may be a JSON document."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        os.dup2(2, 1)
+        yield
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
 def simulate_with_ecos(path: Path, case: str | None, stop: float, step: float, csv: Path,
                        variables: tuple[str, ...],
                        go_on: Callable[[Callable[[str], float]], bool] | None = None,
@@ -207,7 +222,7 @@ def simulate_with_ecos(path: Path, case: str | None, stop: float, step: float, c
     if case not in names:
         raise RuntimeError(f"{path} binds the parameter sets {names}, not {case!r}: ecos would "
                            "run its FMUs at their start values")
-    with _ecos(path, step) as sim:
+    with engine_output_to_stderr(), _ecos(path, step) as sim:
         sim.add_csv_writer(str(csv), identifiers=list(variables), decimation_factor=1)
         if not sim.init(0.0, case):
             raise RuntimeError(f"ecos could not initialise {path} with parameter set {case}")
