@@ -8,6 +8,8 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 from wheelterrain import model, presets
 from wheelterrain.model.slip import traction_from_paper
 
@@ -17,6 +19,7 @@ def wt(*args, cwd, env=None):
                           capture_output=True, text=True, check=False, env=env)
 
 
+@pytest.mark.slow
 def test_build_then_reproduce_writes_the_contract(tmp_path):
     built = wt("build", "--out", "fmus", cwd=tmp_path)
     assert built.returncode == 0, built.stderr
@@ -55,6 +58,7 @@ def test_reproduce_without_fmus_says_how_to_build(tmp_path):
     assert "wheelterrain build" in run.stderr
 
 
+@pytest.mark.slow
 def test_the_main_command_without_a_c_compiler_builds_and_runs_the_pythonfmu_pair(tmp_path):
     """The README's first command on a machine without a C compiler: `build --flavor all`
     builds the pythonfmu pair, says the native one needs a compiler, exits 0; `reproduce`

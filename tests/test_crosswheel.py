@@ -159,6 +159,7 @@ def test_a_data_set_the_form_cannot_predict_adds_nothing_to_the_discrepancy(ship
     assert cw.Discrepancy.learn(form, [({}, ds) for ds in sets]) == alone
 
 
+@pytest.mark.slow
 def test_leave_one_dataset_out_rows_are_whole(shipped):
     rows = cw.lodo_rows(shipped)
     for r in rows:
@@ -297,6 +298,7 @@ def test_cli_validate_data_malformed_file_exits_2_with_one_line(tmp_path):
     assert run.stderr.startswith("error: line 2:")
 
 
+@pytest.mark.slow
 def test_cli_validate_data_json_rows(tmp_path):
     """A user's own file (one data set, Bekker soil, units in the header): one row per form."""
     text = _shipped_text()
@@ -354,6 +356,7 @@ def test_the_datum_check_flags_kls1_read_from_the_surface_and_nothing_else(shipp
     assert not any(r["suspect"] for r in cw.datum_check(shipped))
 
 
+@pytest.mark.slow
 def test_cli_validate_data_flags_a_sinkage_that_looks_measured_from_rest(tmp_path):
     """A user's file of KLS-1's rows with the sinkage_from column left empty (read from the
     surface): validate --data says what to check, in the text and in the JSON."""

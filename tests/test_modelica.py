@@ -230,6 +230,7 @@ def _same(got: np.ndarray, ref: np.ndarray, substituted: bool, what: str) -> Non
         assert np.all(np.abs(got - ref)[finite] <= 1e-10 * scale[finite] + 1e-300), what
 
 
+@pytest.mark.slow
 def test_every_generated_function_is_its_casadi_function_bit_for_bit(probed):
     points, result = probed
     vectors = {name: presets.load(name).vector() for name in presets.available()}
@@ -264,6 +265,7 @@ def test_every_generated_function_is_its_casadi_function_bit_for_bit(probed):
         _same(got, ref, False, e.name + "Der")
 
 
+@pytest.mark.slow
 def test_the_dispatchers_run_the_form_the_case_picks_and_every_form_is_reached(probed):
     points, result = probed
     vectors = {name: presets.load(name).vector() for name in presets.available()}
@@ -311,6 +313,7 @@ def test_the_export_kernels_are_the_models_contact_and_steady_state():
             assert np.allclose(got, ref, rtol=1e-12, atol=1e-12), (name, slip)
 
 
+@pytest.mark.slow
 def test_each_derivative_function_is_the_casadi_jacobian_times_the_seed():
     rng = np.random.default_rng(7)
     p = presets.load("paper-table2-arc").vector()
@@ -353,6 +356,7 @@ def quasi_static(built):
     return model.simulate((0.0, 1.0), dt=0.05)
 
 
+@pytest.mark.slow
 def test_steady_c2_matches_the_steady_state(built, quasi_static):
     expected = api.steady_state(presets.load(), 62.0, 0.25, slip_definition="paper")
     ref = reference.read(built, "SteadyC2")
@@ -362,6 +366,7 @@ def test_steady_c2_matches_the_steady_state(built, quasi_static):
         assert abs(got - expected[key]) <= 1e-8 * abs(expected[key]), key
 
 
+@pytest.mark.slow
 def test_a_slip_ramp_of_the_quasi_static_wheel_matches_the_steady_state(built, quasi_static):
     ref = reference.read(built, "SlipRamp")
     assert np.allclose(np.asarray(quasi_static.time), ref["time"], rtol=0, atol=1e-12)
@@ -386,6 +391,7 @@ their largest value (0.06 N, in the first second) is 6e-10 N, below rumoca's err
 steps cross the contact's switches over 10 s (1.4e-9 N, as in the other examples)."""
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("group", list(ROVER_GROUPS))
 def test_the_rover_of_four_wheels_follows_the_python_models_trajectory(built, group):
     """Examples.Rover (over its first second), RoverSlope, RoverDescent, RoverPullTest and
@@ -426,6 +432,7 @@ def test_the_rover_of_four_wheels_follows_the_python_models_trajectory(built, gr
             assert np.max(np.abs(got - want)) <= 1e-8 * np.max(np.abs(want)), (example, key)
 
 
+@pytest.mark.slow
 def test_the_rover_examples_climb_descend_and_pull_as_their_profiles_say(built):
     """The examples' references over their last 2 s: the wheels' pulls carry the weight's
     share along the slope (10 deg up, 5 deg down) or the holding force (1 N/s), within 1 %;
@@ -449,6 +456,7 @@ def test_the_rover_examples_climb_descend_and_pull_as_their_profiles_say(built):
         assert abs(pull - expected) <= 0.01 * max(abs(expected), 2.0), (example, pull)
 
 
+@pytest.mark.slow
 def test_a_wheel_running_the_external_contact_is_balanced_and_refused_by_name(built):
     """Redeclared to Functions.External.contact, the Wheel is plug-compatible (rumoca flattens
     it and finds it balanced); rumoca cannot execute external C and says so, naming the C

@@ -85,6 +85,7 @@ def test_interval_jacobian_matches_central_differences():
                                f"vs FD {numeric[tuple(bad[0])]!r}")
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
 def test_compiled_interval_and_jacobian_equal_the_vm(tmp_path, monkeypatch):
     monkeypatch.setenv("WHEELTERRAIN_CACHE", str(tmp_path))

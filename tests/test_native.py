@@ -33,6 +33,7 @@ def test_missing_compiler_is_a_clear_error(tmp_path, monkeypatch):
         native.compile_function(model_functions.build().contact, tmp_path)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
 @pytest.mark.parametrize("which", [0, 1, 2])
 def test_compiled_fmu_functions_equal_the_vm(tmp_path, which):

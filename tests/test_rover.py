@@ -76,6 +76,7 @@ def test_motor_power_is_traction_power_plus_losses(level_elastic):
         assert motor == pytest.approx(parts, rel=1e-6)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("memory", [0, 1], ids=["elastic-soil", "soil-with-memory"])
 @pytest.mark.parametrize("gravity", ["earth", "moon"])
 def test_simulated_stall_slope_is_the_predicted_one(quiet, gravity, memory):
@@ -101,6 +102,7 @@ def test_simulated_stall_slope_is_the_predicted_one(quiet, gravity, memory):
     assert rows[-1]["mean_slip"] > rows[len(rows) // 2]["mean_slip"] > rows[1]["mean_slip"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("gravity", ["earth", "moon"])
 def test_the_descent_approached_slowly_slides_at_the_predicted_limit(quiet, gravity):
     """The descent scenario tilts at 1 deg/s towards the 20 deg the Rashid rover is specified
@@ -176,6 +178,7 @@ def test_rear_wheels_pull_more_per_newton_with_the_shear_the_rut_remembers(level
         assert run.wheels[rear]["normal_force"][-1] == pytest.approx(b["loads"][rear], rel=1e-3)
 
 
+@pytest.mark.slow
 def test_a_stall_inside_a_block_of_steps_ends_the_run(quiet):
     """With the rut's shear remembered the rover stalls on the slope by sliding back within a
     block of the in-process run's steps, further than the rut profile's two cells: the run ends

@@ -215,6 +215,7 @@ def test_an_engine_s_run_ends_where_a_wheel_leaves_the_model_s_domain(built, ter
         assert rows[-1] == pytest.approx(2.0, abs=1.5e-3)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("engine", ["libcosim", "ecos"])
 def test_a_whole_moon_stall_scenario_agrees_in_the_one_step_late_engines(built, terrain,
                                                                         engine):
@@ -236,6 +237,7 @@ def test_a_whole_moon_stall_scenario_agrees_in_the_one_step_late_engines(built, 
         ref["figures"]["slide_slope_deg"], abs=0.01)
 
 
+@pytest.mark.slow
 def test_earth_s_stall_in_a_one_step_late_engine_closes_on_ours_as_the_step_halves(built,
                                                                                    terrain):
     """With the soil's memory a wheel that lifts meets a stiff elastic line, and handed over

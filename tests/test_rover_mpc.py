@@ -115,6 +115,7 @@ def test_cli_refuses_what_the_controllers_do_not_run(tmp_path, args, message):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_cli_mpc_json_reports_the_controllers_and_the_score(tmp_path):
     run = CliRunner().invoke(main, ["rover", "--scenario", "level", "--controller", "mpc",
                                     "--out", str(tmp_path), "--json", str(tmp_path / "f.json")])

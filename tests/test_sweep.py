@@ -200,6 +200,7 @@ def test_ctrl_c_stops_a_parallel_sweep_at_once_and_leaves_no_worker(fmu, tmp_pat
     assert not alive, f"workers left running: {alive}"
 
 
+@pytest.mark.slow
 def test_an_unreachable_dask_scheduler_is_one_line_and_exit_2(fmu, tmp_path):
     """`--dask tcp://scheduler:8786` (the docs' own example) printed a 63-83-line traceback
     and exited 1 after 30 s; now one line, exit 2, within the connect timeout, no folder left."""

@@ -104,6 +104,7 @@ def test_report_states_the_pull_floor_from_its_figures(monkeypatch, floor, sinka
     assert text.count("| every |") == 1
 
 
+@pytest.mark.slow
 def test_modelica_examples_runs_the_slip_ramp_in_rumoca_and_draws_it(tmp_path):
     """Without MSL the script runs SlipRamp and RoverSlope, says why RigC2 was not run, and
     prints and writes the measured difference from the Python model."""

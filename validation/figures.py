@@ -9,8 +9,9 @@ that every quote is still what those commands print.
 A quote in Markdown is ``<!--f:KEY-->TEXT<!--/f-->`` (an inline figure; TEXT is the figure
 formatted as FIGURES says) or a block ``<!--table:NAME-->`` ... ``<!--/table-->`` (a table
 TABLES writes whole). GitHub and MkDocs show TEXT and the table; the markers are invisible.
-``--update`` reruns the sources, keeps their figures in validation/figures.json (with the
-command and the date of each) and rewrites every quote from it: what changed is then in the
+``--update`` reruns the sources, keeps what each printed in validation/figures/<source>.json and
+the figures read from it in validation/figures.json (with the command and the date of each),
+and rewrites every quote from it: what changed is then in the
 diff, for the prose around it to be read again. The check needs no run: it compares every quote
 with figures.json (tests/test_figures.py runs it, and recomputes the quick sources).
 """
@@ -30,6 +31,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 STORE = ROOT / "validation" / "figures.json"
+RAW = ROOT / "validation" / "figures"
+"""Each source's JSON as its command printed it (RAW/<source>.json): the evidence the figures
+are read from, and what a table of two sources reads when only one is run again."""
 QUOTED_IN = ("README.md", "docs/*.md", "validation/*.md")
 INLINE = re.compile(r"<!--f:([\w.\-]+)-->(.*?)<!--/f-->", re.S)
 BLOCK = re.compile(r"(<!--table:([\w.\-]+)-->\n)(.*?)(<!--/table-->)", re.S)
@@ -68,6 +72,8 @@ class Source:
 
 SOURCES = {
     "reproduce": Source(("reproduce", "--json", "{json}", "--out", "{tmp}"), quick=True),
+    "reproduce-me": Source(("reproduce", "--interface", "me", "--json", "{json}", "--out",
+                            "{tmp}")),
     "validate": Source(("validate", "--json", "{json}")),
     **{f"rover-{s}-{g}": Source(("rover", "--scenario", s, "--gravity", g, "--json", "{json}",
                                  "--out", "{tmp}"))
@@ -107,6 +113,8 @@ FRONT, REAR = ("front_left", "front_right"), ("rear_left", "rear_right")
 FIGURES: dict[str, Figure] = {
     # the rig, C1-C4 through the FMUs (wheelterrain reproduce, default preset)
     "reproduce.pull_mae": Figure("reproduce", lambda d: d["mean_absolute_error"]["drawbar_pull"]),
+    "reproduce.normal_force_mae": Figure(
+        "reproduce", lambda d: d["mean_absolute_error"]["normal_force"]),
     "reproduce.sinkage_mae_mm": Figure(
         "reproduce", lambda d: 1e3 * d["mean_absolute_error"]["sinkage"]),
     **{f"reproduce.{c}.sinkage_mm": Figure("reproduce",
@@ -248,7 +256,31 @@ def _rig_table(docs: dict[str, dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _interfaces_table(docs: dict[str, dict]) -> str:
+    """C1-C4 through co-simulation and model exchange (the native pair; the pythonfmu pair and
+    FMI 3 give co-simulation's numbers bit for bit: tests/test_native_fmus.py)."""
+    cs, me = docs["reproduce"], docs["reproduce-me"]
+
+    def cells(doc: dict) -> tuple[str, str]:
+        cases = [_case(doc, c) for c in ("C1", "C2", "C3", "C4")]
+        return (" / ".join(f"{c['drawbar_pull']:.2f}" for c in cases),
+                " / ".join(f"{1e3 * c['sinkage']:.2f}" for c in cases))
+
+    worst = max(abs(_case(me, c)[k] - _case(cs, c)[k]) / abs(_case(cs, c)[k])
+                for c in ("C1", "C2", "C3", "C4") for k in ("drawbar_pull", "sinkage"))
+    rows = ["| interface | command | C1 / C2 / C3 / C4 drawbar pull [N] | sinkage [mm] | "
+            "largest relative difference to co-simulation |", "|---|---|---|---|---|"]
+    pull, sink = cells(cs)
+    rows.append(f"| co-simulation (pythonfmu and native, FMI 2 and 3: the same numbers) | "
+                f"`wheelterrain reproduce` | {pull} | {sink} | — |")
+    pull, sink = cells(me)
+    rows.append(f"| model exchange (native, RK4 master) | `wheelterrain reproduce --interface "
+                f"me` | {pull} | {sink} | {worst:.1e} |")
+    return "\n".join(rows) + "\n"
+
+
 TABLES: dict[str, tuple[tuple[str, ...], Callable[[dict], str]]] = {
+    "interfaces": (("reproduce", "reproduce-me"), _interfaces_table),
     "nested": (("validate",), _nested_table),
     "rig": (("validate",), _rig_table),
 }
@@ -261,8 +293,15 @@ def load() -> dict:
         "sources": {}, "figures": {}, "tables": {}}
 
 
+def raw_documents() -> dict[str, dict]:
+    """The sources' JSON kept in RAW, by source."""
+    return {p.stem: json.loads(p.read_text(encoding="utf-8"))
+            for p in sorted(RAW.glob("*.json")) if p.stem in SOURCES}
+
+
 def evaluate(docs: dict[str, dict], store: dict, only: set[str] | None = None) -> dict:
-    """``store`` with the figures and tables of the sources in ``docs`` made anew."""
+    """``store`` with the figures and tables made anew from the sources' documents ``docs``
+    (those of ``only`` where given, and every table that reads one of them)."""
     for key, figure in FIGURES.items():
         if figure.source in docs and (only is None or figure.source in only):
             value = figure.get(docs[figure.source])
@@ -337,10 +376,14 @@ def main() -> None:
     args = ap.parse_args()
     store = load()
     if args.update:
+        from wheelterrain.files import write_atomic
+
         chosen = args.only or list(SOURCES)
-        for name in chosen:  # each source's figures kept as soon as it has run
+        for name in chosen:  # each source's document and figures kept as soon as it has run
             print(f"{SOURCES[name].command()} ...", file=sys.stderr, flush=True)
-            evaluate({name: SOURCES[name].run()}, store, {name})
+            document = SOURCES[name].run()
+            write_atomic(RAW / f"{name}.json", json.dumps(document, indent=1) + "\n")
+            evaluate(raw_documents(), store, {name})
             store["sources"][name] = {"command": SOURCES[name].command(),
                                       "date": datetime.date.today().isoformat()}
             save(store)
