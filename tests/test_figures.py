@@ -4,6 +4,7 @@ validation/figures.json (validation/figures.py), and the quick sources made anew
 from __future__ import annotations
 
 import importlib.util
+import sys
 from pathlib import Path
 
 import pytest
@@ -17,6 +18,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def figures():
     spec = importlib.util.spec_from_file_location("figures", ROOT / "validation" / "figures.py")
     module = importlib.util.module_from_spec(spec)
+    sys.modules["figures"] = module  # its dataclasses look their module up there
     spec.loader.exec_module(module)
     return module
 

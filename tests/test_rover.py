@@ -256,6 +256,8 @@ def test_cli_rover_json_contract(tmp_path):
                           "level", "--out", str(tmp_path), "--json"], capture_output=True,
                          text=True, timeout=600)
     assert run.returncode == 0, run.stderr
+    # in a log (standard error not a terminal) the progress is lines, not a bar's label alone
+    assert run.stderr.splitlines()[:2] == ["simulating level ...", "simulating level: 100 %"]
     out = json.loads(run.stdout)
     for key in ("scenario", "gravity", "engine", "simulated_time_s", "wall_time_s",
                 "real_time_factor", "wheels"):

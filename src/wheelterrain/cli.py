@@ -11,6 +11,7 @@ import errno
 import json
 import math
 import sys
+import time
 
 import click
 import numpy as np
@@ -72,28 +73,53 @@ def json_option(what: str):
              "output instead of the text. FILE's folder must exist.")
 
 
+PROGRESS_LINES_EVERY = 10.0
+"""s: where standard error is not a terminal (a log, a pipe), a progress line at most this often
+(and at each stage's start and end); on a terminal, a bar."""
+
+
 @contextlib.contextmanager
 def _progress_bars():
     """``progress(stage, done, total)`` for the run layer: one progress bar per stage on
-    standard error (a new stage ends the one before), each drawn to ``done`` of ``total``."""
+    standard error (a new stage ends the one before), each drawn to ``done`` of ``total``; in a
+    log or a pipe, lines 'stage: 40 %' instead (a bar there shows only its label)."""
     current: dict = {}  # the stage, its bar and how far it is drawn
+    terminal = sys.stderr.isatty()
+
+    def say(text: str) -> None:
+        with contextlib.suppress(OSError):
+            click.echo(text, err=True)
 
     def close() -> None:
         if current:
-            current["bar"].__exit__(None, None, None)
+            if terminal:
+                current["bar"].__exit__(None, None, None)
+            elif current["drawn"] < current["length"]:
+                say(f"{current['stage']}: ended at {current['percent']:.0f} %")
             current.clear()
 
     def progress(stage: str, done: float, total: float) -> None:
         if current.get("stage") != stage:
             close()
-            bar = click.progressbar(length=max(round(total), 1), label=stage, file=sys.stderr,
-                                    show_pos=False)
-            bar.__enter__()
-            current.update(stage=stage, bar=bar, drawn=0)
-        now = min(round(done), current["bar"].length)
+            length = max(round(total), 1)
+            current.update(stage=stage, drawn=0, length=length, said=time.monotonic(),
+                           percent=0.0)
+            if terminal:
+                current["bar"] = click.progressbar(length=length, label=stage,
+                                                   file=sys.stderr, show_pos=False)
+                current["bar"].__enter__()
+            else:
+                say(f"{stage} ...")
+        now = min(round(done), current["length"])
         if now > current["drawn"]:
-            current["bar"].update(now - current["drawn"])
+            if terminal:
+                current["bar"].update(now - current["drawn"])
             current["drawn"] = now
+            current["percent"] = 100 * now / current["length"]
+            due = time.monotonic() - current["said"] >= PROGRESS_LINES_EVERY
+            if not terminal and (due or now == current["length"]):
+                say(f"{stage}: {current['percent']:.0f} %")
+                current["said"] = time.monotonic()
 
     try:
         yield progress
@@ -1176,9 +1202,14 @@ def validate(json_target: str | None, starts: int, data_file: str | None) -> Non
     if data_file is not None:
         _validate_user_data(data_file, json_target, starts)
         return
-    with click.progressbar(length=prediction.step_count(), label="prediction protocols",
-                           file=sys.stderr) as bar:
-        result = prediction.run(progress=lambda _: bar.update(1), starts=starts)
+    total, done = prediction.step_count(), [0]
+    with _progress_bars() as progress:
+        def advance(_row: str) -> None:
+            done[0] += 1
+            progress("prediction protocols", done[0], total)
+
+        progress("prediction protocols", 0, total)
+        result = prediction.run(progress=advance, starts=starts)
     if _emit_json(json_target, result):
         return
     click.echo(prediction.format_table(result))
