@@ -712,9 +712,15 @@ def _at_entry_angle(theta_f, slip, wheel_angle, P: Params, nodes: tuple[int, int
 
 def entry_angle(z, P: Params):
     """theta_f = arccos(1 - z/R_c) in its half-angle form, accurate for tiny sinkage (1 - z/R_c
-    rounds); 0 for z <= 0."""
+    rounds); 0 for z <= 0, with a derivative of 0 there. The square root is taken of 1, not of
+    0, where z <= 0: its infinite derivative at 0, multiplied by the zero adjoint of a branch
+    not taken, made every reverse-mode Jacobian column through R_c NaN (the rut maker's angle
+    of model.rut_shear is 0 where the shear is not cumulative: the calibration's Jacobian by
+    wheel.radius, grouser.height and model.contact_radius_factor)."""
     Rc, _, _ = radii(P)
-    return 2 * ca.asin(ca.sqrt(ca.fmax(z, 0) / (2 * Rc)))
+    share = z / (2 * Rc)
+    inside = share > 0
+    return ca.if_else(inside, 2 * ca.asin(ca.sqrt(ca.if_else(inside, share, 1))), 0)
 
 
 SCALED = ("normal_force", "drawbar_pull", "torque", "gross_thrust", "compaction_resistance",
