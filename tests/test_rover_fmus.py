@@ -342,3 +342,33 @@ def test_ecos_runs_every_rover_ssp_on_the_pythonfmu_fmus_as_on_the_native_ones(b
             np.testing.assert_allclose(py.wheels[w][key], values, rtol=1e-9,
                                        atol=1e-9 * max(1.0, float(np.max(np.abs(values)))),
                                        err_msg=f"{scenario}: {w}.{key}")
+
+
+ECOS_UNDER = """
+import sys
+from pathlib import Path
+from wheelterrain import presets
+from wheelterrain.cosim import rover as engine, rover_fmus
+res = rover_fmus.simulate_ssp("ecos", Path(sys.argv[1]), "level",
+                              engine.Soil(presets.load(presets.DEFAULT_PRESET)), {}, 0.2)
+print(res.time.size)
+"""
+
+
+def test_ecos_under_a_temporary_folder_with_a_space_prints_no_chmod_lines(built, tmp_path):
+    """ecos runs chmod on what it unzips through a shell, the path unquoted: with a space in
+    the temporary folder it printed 35 'chmod: cannot access' lines a run. Its scratch folder
+    is taken where the path has no white space."""
+    import os
+    import subprocess
+    import sys
+
+    _skip_unless_installed("ecos")
+    spaced = tmp_path / "a b"
+    spaced.mkdir()
+    run = subprocess.run([sys.executable, "-c", ECOS_UNDER, str(built / "native")],
+                         capture_output=True, text=True, timeout=300, check=False,
+                         env={**os.environ, "TMPDIR": str(spaced)})
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stdout.split() == ["201"]
+    assert "chmod" not in run.stdout + run.stderr

@@ -239,6 +239,20 @@ def simulate_with_ecos(path: Path, case: str | None, stop: float, step: float, c
         sim.terminate()
 
 
+def _plain_root() -> str | None:
+    """A temporary folder whose path has no white space, for ecos (it runs ``chmod`` on the
+    binaries it unzips through a shell, the path unquoted: under a folder with a space it
+    printed a line per part of the path, 35 a run); None (the usual one) where that has none
+    or no other is writable."""
+    usual = tempfile.gettempdir()
+    if not any(c.isspace() for c in usual):
+        return None
+    for candidate in ("/tmp", "/var/tmp", "/dev/shm"):
+        if os.path.isdir(candidate) and os.access(candidate, os.W_OK | os.X_OK):
+            return candidate
+    return None
+
+
 @contextlib.contextmanager
 def _ecos(path: Path, step: float):
     """An ecos simulation of the SSP at ``path``, freed after the block. ecos unzips the SSP and
@@ -246,7 +260,7 @@ def _ecos(path: Path, step: float):
     directory and leaves them there: it is given one of ours, removed after."""
     from ecospy import EcosSimulation
 
-    with tempfile.TemporaryDirectory(prefix="wheelterrain_ecos_") as scratch:
+    with tempfile.TemporaryDirectory(prefix="wheelterrain_ecos_", dir=_plain_root()) as scratch:
         saved = os.environ.get("TMPDIR")
         os.environ["TMPDIR"] = scratch  # read by ecos when it unzips, in the constructor
         try:
