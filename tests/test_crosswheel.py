@@ -210,15 +210,67 @@ def test_a_bad_cell_names_its_line():
         datasets.parse("\n".join(lines))
 
 
+def _set_cell(lines: list[str], row: int, column: str, value: str) -> None:
+    """Write ``value`` into ``column`` of the data row ``row`` (an index into ``lines``)."""
+    header = next(k for k, line in enumerate(lines) if not line.startswith("#"))
+    names = [n.split(" [")[0] for n in lines[header].split(",")]
+    cells = lines[row].split(",")
+    cells[names.index(column)] = value
+    lines[row] = ",".join(cells)
+
+
 def test_sinkage_from_is_read_and_a_wrong_word_names_its_line():
     lines = _shipped_text().splitlines()
     header = next(k for k, line in enumerate(lines) if not line.startswith("#"))
-    assert lines[header].split(",")[-1] == "sinkage_from"
+    assert "sinkage_from" in lines[header].split(",")
     sets = {ds.name: ds for ds in datasets.parse("\n".join(lines))}
     assert {p.sinkage_from for p in sets["kls1-smooth"].points} == {"rest"}
     assert {p.sinkage_from for p in sets["rashid-rig"].points} == {"surface"}  # empty cell
-    lines[header + 1] = lines[header + 1].rsplit(",", 1)[0] + ",grousers"
+    _set_cell(lines, header + 1, "sinkage_from", "grousers")
     with pytest.raises(DataError, match=f"line {header + 2}: sinkage_from = 'grousers'"):
+        datasets.parse("\n".join(lines))
+
+
+def test_soil_source_is_read_one_per_data_set_and_a_wrong_word_names_its_line(shipped):
+    """Where each data set's soil values come from: the rig's Table I, measured for Ding's and
+    KLS-1's, the Lunar Sourcebook's nominal values behind the FJS-1 set's n, k_c and k_phi."""
+    sources = {ds.name: ds.soil_source for ds in shipped}
+    assert sources == {"rashid-rig": "table-i", "ding2011-smooth": "measured",
+                       "ding2011-lugged": "measured", "kls1-smooth": "measured",
+                       "kls1-lugged": "measured", "rashid1-fjs1": "sourcebook-nominal"}
+    assert set(sources.values()) <= set(datasets.SOIL_SOURCES)
+    lines = _shipped_text().splitlines()
+    header = next(k for k, line in enumerate(lines) if not line.startswith("#"))
+    wrong = list(lines)
+    _set_cell(wrong, header + 1, "soil_source", "catalogue")
+    with pytest.raises(DataError, match=f"line {header + 2}: soil_source = 'catalogue'"):
+        datasets.parse("\n".join(wrong))
+    mixed = list(lines)  # the rig's second point says another source than its first
+    _set_cell(mixed, header + 2, "soil_source", "measured")
+    with pytest.raises(DataError, match=f"line {header + 3}: soil_source = 'measured', but "
+                                        "data set 'rashid-rig' said 'table-i'"):
+        datasets.parse("\n".join(mixed))
+    without = [",".join(line.split(",")[:-1]) if k >= header else line
+               for k, line in enumerate(lines)]  # a user's file without the column
+    assert {ds.soil_source for ds in datasets.parse("\n".join(without))} == {"unstated"}
+
+
+def test_kls1_measured_bekker_values_with_a_negative_k_c_convert_at_the_wheel_width(shipped):
+    """Lim, Le & Bahati 2021's least-squares k_c is negative; at the KLS-1 wheel's width
+    (0.08 m) k_c/b + k_phi is positive and is what Reece's form carries; at a width where it
+    is not, the row is refused with a reason instead of a negative modulus."""
+    kls = next(ds for ds in shipped if ds.name == "kls1-smooth").points[0]
+    k_c, k_phi, n, b = -44055.4, 3581810.6, 1.2594, 0.08
+    assert kls.values["soil.n0"] == n
+    assert kls.values["soil.k_c"] == 0.0
+    assert kls.values["soil.k_phi"] == pytest.approx(
+        (k_c / b + k_phi) * b ** (n - 1) / kls.values["soil.gamma"], rel=1e-12)
+    lines = _shipped_text().splitlines()
+    row = next(k for k, line in enumerate(lines) if line.startswith("kls1-smooth,"))
+    _set_cell(lines, row, "wheel.width", "0.01")  # -4.4e6 + 3.6e6 < 0
+    with pytest.raises(DataError, match=re.escape(
+            f"line {row + 1}: bekker.k_c/b + bekker.k_phi = -823729 N/m^(n+2) at this wheel's "
+            "width b = 0.01 m: no pressure under the wheel")):
         datasets.parse("\n".join(lines))
 
 
@@ -324,6 +376,9 @@ def test_cli_validate_data_json_rows(tmp_path):
         assert r["drawbar_pull_mae_per_load"] == pytest.approx(r["drawbar_pull_mae"] / 80.0)
         assert r["sinkage_mae_per_radius"] >= 0
         assert "my-wheel" not in r["trained_on"]
+        assert r["soil_source"] == "measured"  # the column came with Ding's rows
+        assert r["sinkage_increment_from"] == "my-wheel-i00"  # the lowest slip
+    assert result["soil_sources"] == {"my-wheel": "measured"}
     line = rows[0]["drawbar_pull_mae"]
     assert result["beats_the_line"] == {"my-wheel": [r["model"] for r in rows[1:]
                                                      if r["drawbar_pull_mae"] < line]}
@@ -335,6 +390,7 @@ def test_cli_validate_data_json_rows(tmp_path):
     assert "sinkage datum check" in text.stdout
     assert "far below" not in text.stdout  # Ding's sinkage starts near its static one
     assert "my-wheel: inside its training sets' range" in text.stdout  # Ding's own values
+    assert f"my-wheel: measured: {datasets.SOIL_SOURCES['measured']}" in text.stdout
     assert all(r["outside_training"] == {} for r in rows)
     (check,) = result["sinkage_datum"]
     assert check["dataset"] == "my-wheel"
@@ -361,8 +417,10 @@ def test_cli_validate_data_flags_a_sinkage_that_looks_measured_from_rest(tmp_pat
     """A user's file of KLS-1's rows with the sinkage_from column left empty (read from the
     surface): validate --data says what to check, in the text and in the JSON."""
     lines = [line for line in _shipped_text().splitlines() if not line.startswith("#")]
-    mine = [lines[0]] + [line.replace("kls1-smooth", "my-wheel").rsplit(",", 1)[0] + ","
+    mine = [lines[0]] + [line.replace("kls1-smooth", "my-wheel")
                          for line in lines if line.startswith("kls1-smooth")]
+    for row in range(1, len(mine)):
+        _set_cell(mine, row, "sinkage_from", "")
     path = tmp_path / "mine.csv"
     path.write_text("\n".join(mine) + "\n", encoding="utf-8")
     run = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "validate", "--data",
@@ -459,8 +517,9 @@ def test_a_held_out_data_set_cannot_change_its_own_folds_choice(shipped, few_can
 
 def test_nested_rows_carry_the_contract_and_the_line_beside(shipped, few_candidates):
     rows = cw.nested_rows(shipped[:3], starts=1)
-    assert {r["model"] for r in rows if r["model"] == "line"} == {"line"}
-    assert len(rows) == 2 * 3
+    assert {r["model"] for r in rows if r["role"] == "line"} == {"line"}
+    assert {r["model"] for r in rows if r["role"] == "classical"} == {"classical"}
+    assert len(rows) == len(cw.ROLES) * 3
     for r in rows:
         assert set(r) >= NESTED_KEYS, NESTED_KEYS - set(r)
         assert r["protocol"] == cw.NESTED
@@ -469,7 +528,7 @@ def test_nested_rows_carry_the_contract_and_the_line_beside(shipped, few_candida
             [abs(e["drawbar_pull"]) / p.load for e, p in zip(
                 r["errors"].values(), next(ds for ds in shipped
                                            if ds.name == r["dataset"]).points, strict=True)]))
-        if r["model"] != "line":
+        if r["role"] == "rule":
             assert r["model"] in {f.name for f in cw.CANDIDATES}
             assert r["selection"]["rule"] == cw.SELECTION
             assert set(r["at_bound"]) <= set(r["fitted"])
@@ -522,3 +581,69 @@ def test_the_form_choice_widens_the_interval_to_every_form_within_reach():
 def test_the_rule_on_every_shipped_data_set_picks_the_default_form(shipped):
     chosen, scores = cw.choose(shipped)
     assert chosen == cw.DEFAULT_FORM, scores
+
+
+# ---- judging without a datum, paired comparisons, the oracle ------------------------------
+
+def test_the_sinkage_from_the_lowest_slip_does_not_see_the_datum(shipped):
+    """Every measured sinkage of a data set moved by the same 3 mm (another datum): the
+    absolute sinkage error moves, the error of the sinkage gained from the lowest slip does
+    not; and it is each point's error less the lowest slip's."""
+    form, ds = cw.BY_FORM["patch"], shipped[1]
+    moved = replace(ds, points=[replace(p, sinkage=p.sinkage + 0.003) for p in ds.points])
+    rows = [cw.judge(form, {}, cw.Discrepancy(0.0, 0.0), d, intervals=False).as_row()
+            for d in (ds, moved)]
+    steps = [cw.increment_errors(r, d) for r, d in zip(rows, (ds, moved), strict=True)]
+    assert rows[0]["sinkage_mae"] != pytest.approx(rows[1]["sinkage_mae"], abs=1e-4)
+    assert steps[0]["mae"] == pytest.approx(steps[1]["mae"], abs=1e-12)
+    first = min(ds.points, key=lambda p: p.slip).case
+    assert steps[0]["from"] == first
+    assert first not in steps[0]["errors"]
+    assert len(steps[0]["errors"]) == len(ds.points) - 1
+    for case, e in steps[0]["errors"].items():
+        assert e == pytest.approx(rows[0]["errors"][case]["sinkage"]
+                                  - rows[0]["errors"][first]["sinkage"], abs=1e-15)
+    failed = {**rows[0], "errors": {**rows[0]["errors"], first: {}}}  # no prediction there
+    assert cw.increment_errors(failed, ds)["mae"] is None
+
+
+def _nested(role, dataset, pull, sink, step):
+    return {"protocol": cw.NESTED, "role": role, "dataset": dataset, "model": role,
+            "drawbar_pull_mae_per_load": pull, "sinkage_mae_per_radius": sink,
+            "sinkage_increment_mae_per_radius": step}
+
+
+def test_paired_comparisons_count_mean_error_and_verdict():
+    """Rule - baseline per data set: a rule lower by 0.05 +/- 0.01 on every set is better at
+    95 %, one whose differences straddle 0 is indistinguishable, one higher everywhere worse;
+    a set a metric lacks is left out of that metric only."""
+    rows = []
+    for k, name in enumerate("abcdef"):
+        rows += [_nested("rule", name, 0.10 + 0.01 * (k % 2), 0.05, 0.02 + 0.1 * (k % 2)),
+                 _nested("classical", name, 0.15, 0.05 + 0.02 * (-1) ** k, 0.01),
+                 _nested("line", name, 0.10, 0.04, None if name == "f" else 0.03)]
+    out = cw.paired(rows)
+    pull = out["rule-classical"]["drawbar_pull_mae_per_load"]
+    assert pull["mean"] == pytest.approx(-0.045)
+    assert pull["standard_error"] == pytest.approx(np.std([-0.05, -0.04] * 3, ddof=1)
+                                                   / math.sqrt(6))
+    assert (pull["better_on"], pull["datasets"], pull["verdict"]) == (6, 6, "better")
+    assert out["rule-classical"]["sinkage_mae_per_radius"]["verdict"] == "indistinguishable"
+    assert out["rule-classical"]["sinkage_mae_per_radius"]["better_on"] == 3
+    assert out["rule-classical"]["sinkage_increment_mae_per_radius"]["verdict"] == "worse"
+    assert out["rule-line"]["sinkage_increment_mae_per_radius"]["datasets"] == 5
+    lines = cw.format_paired(out)
+    assert lines[0].startswith("rule - classical: pull/W -0.045 ± 0.002 (better; lower on "
+                               "6 of 6)")
+
+
+def test_the_oracle_takes_the_best_form_per_data_set_in_hindsight():
+    folds = {"a": [_fold("a", [0.10]), _fold("a", [0.30])],
+             "b": [_fold("b", [0.20]), _fold("b", [0.05])]}
+    folds["a"][1].dataset = folds["b"][1].dataset = "y"
+    rows = [{**_nested("line", "x", 0.12, 0, 0)}, {**_nested("line", "y", 0.07, 0, 0)}]
+    out = cw.oracle(folds, rows)
+    assert out["forms"] == {"x": "a", "y": "b"}
+    assert out["differences"] == pytest.approx({"x": -0.02, "y": -0.02})
+    assert out["mean"] == pytest.approx(-0.02)
+    assert out["standard_error"] == pytest.approx(0.0, abs=1e-15)

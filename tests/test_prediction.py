@@ -50,15 +50,20 @@ def test_validate_prints_every_contract_row(validate_json):
     # the headline first: the nested rows, the line beside, in both units
     nested = [r for r in rows if r["protocol"] == "nested-leave-one-dataset-out"]
     assert rows[:len(nested)] == nested
-    assert len(nested) == 12
-    assert sum(r["model"] == "line" for r in nested) == 6
+    assert len(nested) == 18
+    for role in ("rule", "classical", "line"):  # the rule's pick and both baselines
+        assert sum(r["role"] == role for r in nested) == 6, role
+    assert {r["model"] for r in nested if r["role"] == "classical"} == {"classical"}
     for r in nested:
         assert r["drawbar_pull_mae_per_load"] >= 0
         assert r["sinkage_mae_per_radius"] >= 0
+        assert r["sinkage_increment_mae_per_radius"] >= 0
         assert r["dataset"] not in r["trained_on"]
+        assert r["soil_source"] == validate_json["soil_sources"][r["dataset"]]
     judged = validate_json["default_form_rule"]["judged_by"]
-    assert judged["rule"]["datasets"] == judged["line"]["datasets"] == 6
-    picks = [r for r in nested if r["model"] != "line"]
+    assert judged["rule"]["datasets"] == judged["classical"]["datasets"] == \
+        judged["line"]["datasets"] == 6
+    picks = [r for r in nested if r["role"] == "rule"]
     assert judged["rule"]["drawbar_pull_mae"] == pytest.approx(
         sum(r["drawbar_pull_mae"] for r in picks) / 6)
     assert judged["rule"]["forms"] == sorted({r["model"] for r in picks})
@@ -73,6 +78,76 @@ def test_validate_prints_every_contract_row(validate_json):
         # only an all-case row of something fitted (by us or the paper's authors) is in-sample
         assert r["in_sample"] == (r["protocol"] == "all-case"
                                   and bool(r["free"] or r.get("tuned_on")))
+
+
+def _by_hand(rows, sets):
+    """Per nested row (role, data set): pull/W, z/R and z/R from the lowest slip, recomputed
+    from the row's errors and the data set's points alone."""
+    out = {}
+    for r in rows:
+        ds = sets[r["dataset"]]
+        errors = [r["errors"][case] for case in r["judged_on"]]
+        first = min(range(len(ds.points)), key=lambda k: ds.points[k].slip)
+        steps = [abs(e["sinkage"] - errors[first]["sinkage"]) / p.values["wheel.radius"]
+                 for k, (e, p) in enumerate(zip(errors, ds.points, strict=True)) if k != first]
+        out[r["role"], r["dataset"]] = {
+            "drawbar_pull_mae_per_load": np.mean([abs(e["drawbar_pull"]) / p.load for e, p in
+                                                  zip(errors, ds.points, strict=True)]),
+            "sinkage_mae_per_radius": np.mean([abs(e["sinkage"]) / p.values["wheel.radius"]
+                                               for e, p in zip(errors, ds.points, strict=True)]),
+            "sinkage_increment_mae_per_radius": np.mean(steps)}
+    return out
+
+
+@pytest.mark.slow
+def test_the_paired_figures_are_recomputed_from_the_rows(validate_json):
+    """Each paired comparison (rule - baseline, per data set) recomputed here from the nested
+    rows' per-point errors and the shipped points: the differences, their mean, its standard
+    error, the count of data sets where the rule is lower, and the verdict at the t bound."""
+    from scipy.stats import t as student
+
+    from wheelterrain.fit import datasets
+
+    sets = {ds.name: ds for ds in datasets.shipped()}
+    nested = [r for r in validate_json["rows"] if r["protocol"] == "nested-leave-one-dataset-out"]
+    mine = _by_hand(nested, sets)
+    paired = validate_json["paired"]
+    assert set(paired) == {"rule-classical", "rule-line"}
+    for name, entry in paired.items():
+        other = name.split("-", 1)[1]
+        for metric, got in entry.items():
+            diffs = {ds: mine["rule", ds][metric] - mine[other, ds][metric] for ds in sets}
+            assert got["differences"] == pytest.approx(diffs, rel=1e-9, abs=1e-12)
+            d = np.array(list(diffs.values()))
+            se = d.std(ddof=1) / np.sqrt(len(d))
+            assert got["mean"] == pytest.approx(d.mean(), rel=1e-9, abs=1e-12)
+            assert got["standard_error"] == pytest.approx(se, rel=1e-9)
+            assert got["better_on"] == int((d < 0).sum())
+            bound = student.ppf(0.975, len(d) - 1) * se
+            want = ("better" if d.mean() < -bound else "worse" if d.mean() > bound
+                    else "indistinguishable")
+            assert got["verdict"] == want
+    judged = validate_json["default_form_rule"]["judged_by"]
+    for role, entry in judged.items():  # the headline means, and without an inferred datum
+        rows = [r for r in nested if r["role"] == role]
+        assert entry["sinkage_increment_mae_per_radius"] == pytest.approx(
+            np.mean([mine[role, r["dataset"]]["sinkage_increment_mae_per_radius"]
+                     for r in rows]), rel=1e-9)
+        surface = [r for r in rows if sets[r["dataset"]].points[0].sinkage_from == "surface"]
+        assert entry["without_inferred_datum"]["datasets"] == len(surface) < len(rows)
+        assert entry["without_inferred_datum"]["sinkage_mae"] == pytest.approx(
+            np.mean([r["sinkage_mae"] for r in surface]), rel=1e-9)
+    oracle = validate_json["oracle"]
+    line = {r["dataset"]: mine["line", r["dataset"]]["drawbar_pull_mae_per_load"]
+            for r in nested if r["role"] == "line"}
+    leave_out = {(r["model"], r["dataset"]): r["drawbar_pull_mae_per_load"]
+                 for r in validate_json["rows"] if r["protocol"] == "leave-one-dataset-out"}
+    for ds, form in oracle["forms"].items():  # the oracle is at least as good as any form
+        best = oracle["differences"][ds] + line[ds]
+        assert all(best <= share + 1e-12 for (m, d), share in leave_out.items()
+                   if d == ds and m != "line" and share is not None), ds
+        if (form, ds) in leave_out:
+            assert leave_out[form, ds] == pytest.approx(best, rel=1e-9)
 
 
 @pytest.mark.slow

@@ -1170,17 +1170,22 @@ def validate(json_target: str | None, starts: int, data_file: str | None) -> Non
                         held out, a rule written once picks the form (and so its mechanisms)
                         on the other data sets alone (each candidate held out in turn among
                         them; the lowest mean pull/W wins), that form is fitted on them and
-                        predicts the held-out set with its own soil values; the line beside
+                        predicts the held-out set with its own soil values; beside it, under
+                        the same protocol, the two baselines: classical Wong-Reece and the line
       FORM leave-data-out  each form's global constants fitted on every other data set,
                         judged on the one left out: forms compared with every set in view
                         (picking the best of these rows is not a held-out figure)
-    Every cross-wheel row gives pull/W and z/R beside N and mm, and the share of its points
-    inside their 90 % interval (the soil values' spread, and the form's errors on data sets
-    it was not fitted to, learned inside the fold; nested, widened to every form the rule
-    cannot tell from its choice). Folds start from the preset as it was
-    before its own fit, so no held-out case reaches a fit. Takes about a minute on a 2-core
-    machine (the nested rule fits 6 candidates in 5 inner folds of each of 7 outer ones; a fit
-    asked for again is remembered, not redone).
+    Every cross-wheel row gives pull/W and z/R beside N and mm, the sinkage gained from the
+    set's lowest slip (no datum needed: where a rig zeroed its sensor at rest, the datum is
+    inferred), and the share of its points inside their 90 % interval (the soil values'
+    spread, the form's errors on data sets it was not fitted to, learned inside the fold, and
+    an inferred datum's uncertainty; nested, widened to every form the rule cannot tell from
+    its choice). Below the rows: the rule against each baseline paired data set by data set
+    (mean difference, its standard error, a verdict at 95 %), and an oracle that picks the
+    best form per data set with hindsight: the most these forms could gain on the line.
+    Folds start from the preset as it was before its own fit, so no held-out case reaches a
+    fit. Takes under a minute on a 2-core machine (the nested rule fits 6 candidates in 5
+    inner folds of each of 7 outer ones; a fit asked for again is remembered, not redone).
 
     \b
     --data FILE.csv: '#' comment lines, a header, one row per test point. Columns (SI; a
@@ -1193,7 +1198,8 @@ def validate(json_target: str | None, starts: int, data_file: str | None) -> Non
       at zero slip);
       soil.n0, soil.cohesion, soil.phi [rad], soil.gamma, soil.shear_modulus, and
       soil.k_c + soil.k_phi (Reece) or bekker.k_c [N/m^(n+1)] + bekker.k_phi [N/m^(n+2)];
-      optional sd.<soil column>: its standard deviation.
+      optional sd.<soil column>: its standard deviation; optional soil_source: where the soil
+      values come from (measured, table-i, sourcebook-nominal; one per data set).
     The shipped data set is in this format: wheelterrain/data/wheel_tests.csv.
     """
     from wheelterrain.fit import prediction
@@ -1233,6 +1239,7 @@ def _validate_user_data(data_file: str, json_target: str | None, starts: int) ->
                         "drawbar_pull_mae_per_load": "1", "sinkage_mae_per_radius": "1"}}
     result["beats_the_line"] = crosswheel.verdicts(rows)
     result["sinkage_datum"] = crosswheel.datum_check(user)
+    result["soil_sources"] = {ds.name: ds.soil_source for ds in user}
     forms = [r for r in rows if r["model"] != "line"]
     failed = [r for r in forms if r.get("error")]
     if not _emit_json(json_target, result):

@@ -31,10 +31,18 @@ choice (:func:`within_reach`: a score within one standard error of the chosen on
 
 Coverage is the share of held-out points inside their interval; its nominal value is 90 %.
 
+The nested protocol puts two baselines beside the rule under the same protocol (:data:`ROLES`):
+classical Wong-Reece (nothing to choose or fit; its discrepancy learned on the other data sets)
+and the line. :func:`paired` compares the rule with each, data set by data set (mean difference,
+its standard error over data sets, a verdict at the Student-t bound); :func:`oracle` is the most
+these forms could gain on the line, picking the best one per data set with hindsight.
+
 Every comparison is made in the terms each point was measured in (:func:`as_measured`): a
 sinkage measured from the wheel at rest (the data's ``sinkage_from``) is compared with the
-prediction less its sinkage at zero slip; :func:`datum_check` is the check, with no fitted
-constant, that flags a data set whose sinkage looks measured so.
+prediction less its sinkage at zero slip, the interval widened by that datum's uncertainty
+(:data:`REST_DATUM_SPREAD`); :func:`datum_check` is the check, with no fitted constant, that
+flags a data set whose sinkage looks measured so; :func:`increment_errors` judges a sinkage by
+what it gains from the data set's lowest slip, where no datum enters.
 """
 
 from __future__ import annotations
@@ -242,6 +250,22 @@ def soil_sigma(form: Form, point: Point, constants: dict[str, float],
     return {k: math.sqrt(v) for k, v in var.items()}
 
 
+REST_DATUM_SPREAD = 0.2
+"""Where a sinkage is measured from the wheel at rest, the datum's uncertainty as a share of the
+sinkage taken off (the rolling wheel's at zero slip, :func:`rest_sinkage`): a wheel standing
+still has a symmetric contact and sinks less than a rolling one, about 0.8 of it in single-wheel
+press tests (not a figure any source here gives: this project's assumption, its band 0 to 0.2).
+Added to the sinkage's 90 % half-width in quadrature."""
+
+
+def datum_half_width(form: Form, point: Point, constants: dict[str, float] | None) -> float:
+    """The sinkage datum's share of ``point``'s 90 % half-width [m]: REST_DATUM_SPREAD of the
+    sinkage at rest where the sinkage is measured from the wheel at rest, else 0."""
+    if point.sinkage_from != "rest":
+        return 0.0
+    return REST_DATUM_SPREAD * abs(rest_sinkage(form, point, constants))
+
+
 def _quantile(values: Sequence[float], weights: Sequence[float], q: float) -> float:
     """The smallest value v with at least a share ``q`` of the total weight at or below it."""
     order = np.argsort(values)
@@ -277,9 +301,11 @@ class Discrepancy:
                     out = as_measured(form, pt, constants, state)
                 except WheelTerrainError:
                     continue
+                datum = {"drawbar_pull": 0.0, "sinkage": datum_half_width(form, pt, constants)}
                 for key, scale, needed in (("drawbar_pull", pt.load, pull),
                                            ("sinkage", 1.0, sink)):
-                    excess = (out[key] - getattr(pt, key)) ** 2 - (Z90 * sigma[key]) ** 2
+                    excess = ((out[key] - getattr(pt, key)) ** 2 - (Z90 * sigma[key]) ** 2
+                              - datum[key] ** 2)
                     needed.append(math.sqrt(max(excess, 0.0)) / scale)
                 kept += 1
             weight += [1 / kept] * kept if kept else []
@@ -287,9 +313,12 @@ class Discrepancy:
             return cls(math.inf, math.inf)
         return cls(_quantile(pull, weight, COVERAGE), _quantile(sink, weight, COVERAGE))
 
-    def half_widths(self, sigma: dict[str, float], load: float) -> dict[str, float]:
+    def half_widths(self, sigma: dict[str, float], load: float, datum: float = 0.0
+                    ) -> dict[str, float]:
+        """The 90 % half-widths: the discrepancy, the soil's spread and (sinkage from the wheel
+        at rest) the datum's uncertainty ``datum`` [m], in quadrature."""
         return {"drawbar_pull": math.hypot(self.pull_share * load, Z90 * sigma["drawbar_pull"]),
-                "sinkage": math.hypot(self.sinkage, Z90 * sigma["sinkage"])}
+                "sinkage": math.hypot(self.sinkage, Z90 * sigma["sinkage"], datum)}
 
 
 @dataclass
@@ -314,9 +343,9 @@ class Fold:
                 if p.get(key) is not None]
         return float(np.mean(errs)) if errs and len(errs) == len(self.points) else None
 
-    def coverage(self) -> float | None:
-        inside = [p["inside"][k] for p in self.points for k in ("drawbar_pull", "sinkage")
-                  if p.get("inside")]
+    def coverage(self, keys: Sequence[str] = ("drawbar_pull", "sinkage")) -> float | None:
+        """The share of the points' ``keys`` measurements inside their intervals."""
+        inside = [p["inside"][k] for p in self.points for k in keys if p.get("inside")]
         return float(np.mean(inside)) if inside else None
 
     def at_bound(self) -> list[str]:
@@ -339,6 +368,8 @@ class Fold:
                "sinkage_mae_per_radius": self.mae_per_scale("sinkage"),
                # a row with no figures (a point the form cannot predict) has no coverage either
                "interval_coverage": None if self.error else self.coverage(),
+               "interval_coverage_by_output": {
+                   k: None if self.error else self.coverage((k,)) for k in SCALES},
                "in_sample": False, "fitted": self.constants, "at_bound": self.at_bound(),
                "judged_on": cases, "data": self.dataset,
                "errors": {case: {k: p[k] - p["measured"][k] for k in SCALES
@@ -373,7 +404,8 @@ def judge(form: Form, constants: dict[str, float], discrepancy: Discrepancy, hel
             continue
         entry.update(out)
         if intervals:
-            half = discrepancy.half_widths(soil_sigma(form, pt, constants, state), pt.load)
+            half = discrepancy.half_widths(soil_sigma(form, pt, constants, state), pt.load,
+                                           datum_half_width(form, pt, constants))
             entry["interval"] = {k: [out[k] - h, out[k] + h] for k, h in half.items()}
             entry["inside"] = {k: bool(abs(out[k] - entry["measured"][k]) <= h)
                                for k, h in half.items()}
@@ -516,25 +548,175 @@ def choose(sets: Sequence[Dataset], starts: int = 3,
     return min(scores, key=lambda name: scores[name]), scores
 
 
+ROLES = ("rule", "classical", "line")
+"""The nested protocol's rows per data set (their ``role``): the form the rule picks, and the
+two baselines beside it under the same protocol: classical Wong-Reece (physics, nothing to
+choose or fit) and the line (no physics)."""
+
+
 def nested_rows(sets: Sequence[Dataset], starts: int = 3,
                 progress: Callable[[str], None] | None = None) -> list[dict]:
     """Nested leave-one-dataset-out: for each held-out data set, the rule (:func:`choose`)
     picks a form on the other data sets alone, that form's constants are fitted on them, and it
-    predicts the held-out one with intervals. The line's rows beside, under the same protocol
-    (it has nothing to choose)."""
+    predicts the held-out one with intervals. Beside it, under the same protocol, the two
+    baselines, which have nothing to choose: the line and classical Wong-Reece (its
+    discrepancy learned on the other data sets). Each row says its ``role``
+    (:data:`ROLES`)."""
     rows = []
     for row in line_rows(sets):
         held = next(ds for ds in sets if ds.name == row["dataset"])
         train = [ds for ds in sets if ds.name != row["dataset"]]
-        rows.append({**row, "protocol": NESTED, "trained_on": [ds.name for ds in train],
+        rows.append({**row, "protocol": NESTED, "role": "line",
+                     "trained_on": [ds.name for ds in train],
                      "outside_training": outside_training(held, train)})
         if progress:
             progress(f"line without {row['dataset']}")
     for held in sets:
+        train = [ds for ds in sets if ds.name != held.name]
+        row = held_out(BY_FORM["classical"], sets, held, starts).as_row()
+        row.update(protocol=NESTED, role="classical", trained_on=[ds.name for ds in train],
+                   outside_training=outside_training(held, train))
+        rows.append(row)
+        if progress:
+            progress(f"classical without {held.name}")
+    for held in sets:
         rows.append(nested_fold(sets, held.name, starts))
         if progress:
             progress(f"rule and {rows[-1]['model']} without {held.name}")
+    return described(rows, sets)
+
+
+def described(rows: list[dict], sets: Sequence[Dataset]) -> list[dict]:
+    """``rows`` (each judging one of ``sets``), each given its data set's ``soil_source`` and
+    ``sinkage_from`` (one word, or "mixed") and the sinkage judged without a datum
+    (:func:`increment_errors`): ``sinkage_increment_mae`` [m] and
+    ``sinkage_increment_mae_per_radius``, None where a point has no prediction. In place;
+    returned."""
+    by_name = {ds.name: ds for ds in sets}
+    for row in rows:
+        ds = by_name[row["dataset"]]
+        datums = {p.sinkage_from for p in ds.points}
+        row["soil_source"] = ds.soil_source
+        row["sinkage_from"] = datums.pop() if len(datums) == 1 else "mixed"
+        steps = increment_errors(row, ds)
+        row["sinkage_increment_from"] = steps["from"]
+        row["sinkage_increment_mae"] = steps["mae"]
+        row["sinkage_increment_mae_per_radius"] = steps["mae_per_radius"]
     return rows
+
+
+def increment_errors(row: dict, ds: Dataset) -> dict:
+    """The sinkage judged by what it gains from ``ds``'s lowest measured slip (no datum
+    needed: a datum, measured or inferred, cancels): per point above that slip, the error of
+    the predicted increment, ``row``'s sinkage error there less its error at the lowest slip.
+    Returns the reference case (``from``), the errors by case [m], their mean absolute value
+    [m] and its mean as a share of the wheel's radius; None where there is no point above the
+    lowest slip or a point has no prediction."""
+    cases = row["judged_on"]
+    slips = [p.slip for p in ds.points]
+    first = int(np.argmin(slips))
+    out = {"from": cases[first], "errors": {}, "mae": None, "mae_per_radius": None}
+    errors = [row["errors"].get(case, {}).get("sinkage") for case in cases]
+    if errors[first] is None or any(e is None for e in errors):
+        return out
+    steps = {case: errors[k] - errors[first] for k, case in enumerate(cases)
+             if k != first and slips[k] > slips[first]}
+    if not steps:
+        return out
+    radius = {case: p.values["wheel.radius"] for case, p in zip(cases, ds.points, strict=True)}
+    out["errors"] = steps
+    out["mae"] = float(np.mean([abs(e) for e in steps.values()]))
+    out["mae_per_radius"] = float(np.mean([abs(e) / radius[c] for c, e in steps.items()]))
+    return out
+
+
+PAIRED = (("rule", "classical"), ("rule", "line"))
+"""The nested protocol's paired comparisons (:func:`paired`): the rule against each baseline."""
+PAIRED_METRICS = {"drawbar_pull_mae_per_load": "pull/W",
+                  "sinkage_mae_per_radius": "z/R",
+                  "sinkage_increment_mae_per_radius": "z/R from the lowest slip"}
+"""What :func:`paired` compares, with its short name: per data set, dimensionless."""
+CONFIDENCE = 0.95
+
+
+def paired(rows: Sequence[dict]) -> dict[str, dict]:
+    """The rule against each baseline, data set by data set (nested rows, by ``role``): per
+    :data:`PAIRED_METRICS` metric the differences rule - baseline per data set, their mean,
+    its standard error over data sets (sample standard deviation / sqrt(n)), on how many data
+    sets the rule is lower (better), and a verdict: "better" or "worse" where the mean is
+    beyond the two-sided :data:`CONFIDENCE` Student-t bound (n - 1 degrees of freedom), else
+    "indistinguishable". A metric a data set lacks (None) leaves that set out of it."""
+    from scipy.stats import t as student
+
+    by_role: dict[str, dict[str, dict]] = {}
+    for r in rows:
+        if r.get("protocol") == NESTED and r.get("role") in ROLES:
+            by_role.setdefault(r["role"], {})[r["dataset"]] = r
+    out = {}
+    for mine, other in PAIRED:
+        if mine not in by_role or other not in by_role:
+            continue
+        entry = {}
+        for metric in PAIRED_METRICS:
+            diffs = {name: r[metric] - by_role[other][name][metric]
+                     for name, r in by_role[mine].items()
+                     if name in by_role[other] and r.get(metric) is not None
+                     and by_role[other][name].get(metric) is not None}
+            n = len(diffs)
+            values = list(diffs.values())
+            mean = float(np.mean(values)) if n else None
+            se = float(np.std(values, ddof=1) / math.sqrt(n)) if n > 1 else None
+            verdict = "indistinguishable"
+            if se is not None:
+                bound = float(student.ppf(0.5 + CONFIDENCE / 2, n - 1)) * se
+                verdict = ("better" if mean < -bound else "worse" if mean > bound
+                           else "indistinguishable")
+            entry[metric] = {"mean": mean, "standard_error": se, "datasets": n,
+                             "better_on": sum(v < 0 for v in values), "verdict": verdict,
+                             "differences": diffs}
+        out[f"{mine}-{other}"] = entry
+    return out
+
+
+def format_paired(result: dict[str, dict]) -> list[str]:
+    """:func:`paired` as one verdict line per comparison."""
+    lines = []
+    for name, entry in result.items():
+        mine, other = name.split("-", 1)
+        parts = []
+        for metric, short in PAIRED_METRICS.items():
+            e = entry.get(metric)
+            if not e or e["mean"] is None:
+                continue
+            se = "" if e["standard_error"] is None else f" ± {e['standard_error']:.3f}"
+            parts.append(f"{short} {e['mean']:+.3f}{se} ({e['verdict']}; lower on "
+                         f"{e['better_on']} of {e['datasets']})")
+        lines.append(f"{mine} - {other}: " + "; ".join(parts))
+    return lines
+
+
+def oracle(folds: dict[str, list[Fold]], rows: Sequence[dict]) -> dict:
+    """The most these forms could gain on the line with these data: an oracle that picks,
+    with hindsight, the candidate with the lowest held-out pull/W on each data set
+    (``folds``: every candidate's leave-one-dataset-out folds on all the data sets, as
+    :func:`choose` returns them), against the nested line rows of ``rows``. Per data set the
+    oracle's form and its pull/W less the line's; their mean and standard error."""
+    line = {r["dataset"]: r["drawbar_pull_mae_per_load"] for r in rows
+            if r.get("protocol") == NESTED and r.get("role") == "line"}
+    best: dict[str, tuple[float, str]] = {}
+    for name, per_set in folds.items():
+        for fold in per_set:
+            share = fold.mae_per_scale("drawbar_pull")
+            if share is not None and fold.dataset in line and (
+                    fold.dataset not in best or share < best[fold.dataset][0]):
+                best[fold.dataset] = (share, name)
+    diffs = {ds: share - line[ds] for ds, (share, _) in best.items()}
+    n = len(diffs)
+    return {"metric": "drawbar_pull_mae_per_load", "forms": {ds: f for ds, (_, f) in best.items()},
+            "differences": diffs, "datasets": n,
+            "mean": float(np.mean(list(diffs.values()))) if n else None,
+            "standard_error": (float(np.std(list(diffs.values()), ddof=1) / math.sqrt(n))
+                               if n > 1 else None)}
 
 
 def nested_fold(sets: Sequence[Dataset], held_name: str, starts: int = 3,
@@ -548,7 +730,7 @@ def nested_fold(sets: Sequence[Dataset], held_name: str, starts: int = 3,
     folds = [held_out(BY_CANDIDATE[name], sets, held, starts,
                       inner=[f.constants for f in inner[name]]) for name in near]
     row = widened(folds[0], folds[1:]).as_row()
-    row.update(protocol=NESTED, trained_on=[ds.name for ds in train],
+    row.update(protocol=NESTED, role="rule", trained_on=[ds.name for ds in train],
                selection={"rule": SELECTION, "scores": scores, "within_reach": near},
                outside_training=outside_training(held, train))
     return row
@@ -590,8 +772,9 @@ def lodo_rows(sets: Sequence[Dataset], starts: int = 3,
               progress: Callable[[str], None] | None = None) -> list[dict]:
     """The line and every shipped form held out data set by data set: the rows of
     `wheelterrain validate`."""
-    return [*line_rows(sets), *(fold.as_row() for form in FORMS
-                                for fold in leave_one_dataset_out(form, sets, starts, progress))]
+    return described([*line_rows(sets), *(fold.as_row() for form in FORMS for fold in
+                                          leave_one_dataset_out(form, sets, starts, progress))],
+                     sets)
 
 
 def user_rows(user: Sequence[Dataset], shipped: Sequence[Dataset], starts: int = 3,
@@ -619,7 +802,7 @@ def user_rows(user: Sequence[Dataset], shipped: Sequence[Dataset], starts: int =
             rows.append(row)
         if progress:
             progress(form.name)
-    return rows
+    return described(rows, user)
 
 
 REACH = {"wheel.radius": "m", "wheel.width": "m", "grouser.height": "m", "load": "N",

@@ -16,7 +16,9 @@ carry its unit in brackets (``load [N]``), which must then be the unit below:
   ``soil.cohesion`` [Pa], ``soil.phi`` [rad], ``soil.gamma`` [N/m3], ``soil.shear_modulus``
   [m]) or with the pressure-sinkage moduli in Bekker's form (``bekker.k_c`` [N/m^(n+1)],
   ``bekker.k_phi`` [N/m^(n+2)]), converted by :func:`reece_from_bekker`;
-- optional spreads ``sd.<soil column>``: one standard deviation of that value, in its unit.
+- optional spreads ``sd.<soil column>``: one standard deviation of that value, in its unit;
+- optional ``soil_source``: where the soil values come from (:data:`SOIL_SOURCES`), one per
+  data set.
 
 An empty cell is "not given". Anything else that is wrong (a missing column, a value that is
 not a number, a unit that is not the column's, a row without a complete soil) is one
@@ -43,7 +45,17 @@ REECE = ("soil.k_c", "soil.k_phi")
 BEKKER = ("bekker.k_c", "bekker.k_phi")
 UNITS = {"load": "N", "slip": "1", "drawbar_pull": "N", "sinkage": "m", "torque": "N.m",
          "bekker.k_c": "N/m^(n+1)", "bekker.k_phi": "N/m^(n+2)", "dataset": "", "case": "",
-         "sinkage_from": ""}
+         "sinkage_from": "", "soil_source": ""}
+SOIL_SOURCES = {
+    "measured": "measured on the tested soil, or on the same soil prepared to the same "
+                "nominal density (validation/DATA.md says which)",
+    "table-i": "the source paper's Table I (the collected soil's values)",
+    "sourcebook-nominal": "c and phi measured; n, k_c, k_phi the Lunar Sourcebook's nominal "
+                          "lunar-soil values (Carrier, Olhoeft & Mendell 1991, Table 9.28), "
+                          "not a measurement of the tested soil",
+    "unstated": "not said (a user's file without the column)",
+}
+"""Where a data set's soil values come from (the data column ``soil_source``), in words."""
 SINKAGE_FROM = ("surface", "rest")
 """Where a measured sinkage is measured from: the undisturbed surface (total sinkage) or the
 wheel at rest under its load (the static sinkage zeroed); see the module doc."""
@@ -83,6 +95,7 @@ class Point:
 class Dataset:
     name: str
     points: list[Point] = field(default_factory=list)
+    soil_source: str = "unstated"  # one of SOIL_SOURCES
 
 
 def reece_from_bekker(k_c: float, k_phi: float, n: float, width: float,
@@ -162,7 +175,16 @@ def parse(text: str, source: str = "data") -> list[Dataset]:
             raise DataError(f"line {line}: {len(row)} cells, the header has {len(columns)}")
         cells = {c: v.strip() for c, v in zip(columns, row, strict=True)}
         point = _point(cells, line)
-        sets.setdefault(point.dataset, Dataset(point.dataset)).points.append(point)
+        source = cells.get("soil_source") or "unstated"
+        if source not in SOIL_SOURCES:
+            raise DataError(f"line {line}: soil_source = {source!r}: one of "
+                            f"{', '.join(SOIL_SOURCES)} (or empty)")
+        ds = sets.setdefault(point.dataset, Dataset(point.dataset, soil_source=source))
+        if ds.soil_source != source:
+            raise DataError(f"line {line}: soil_source = {source!r}, but data set "
+                            f"{point.dataset!r} said {ds.soil_source!r} before: one soil, one "
+                            "source")
+        ds.points.append(point)
     return list(sets.values())
 
 
@@ -185,6 +207,12 @@ def _point(cells: dict[str, str], line: int) -> Point:
     elif all(bekker):
         n, b, gamma = values["soil.n0"], values["wheel.width"], values["soil.gamma"]
         k_c, k_phi = (get(c) for c in BEKKER)
+        if k_c / b + k_phi <= 0:
+            raise DataError(
+                f"line {line}: bekker.k_c/b + bekker.k_phi = {k_c / b + k_phi:g} N/m^(n+2) at "
+                f"this wheel's width b = {b:g} m: no pressure under the wheel. A bevameter "
+                "fit's negative k_c (KLS-1's is) holds only near the plate widths it was "
+                "measured with")
         values["soil.k_c"], values["soil.k_phi"] = reece_from_bekker(k_c, k_phi, n, b, gamma)
         sd_c, sd_phi = (get("sd." + c, False) for c in BEKKER)
         parts = [(sd_c / b if not math.isnan(sd_c) else 0.0),

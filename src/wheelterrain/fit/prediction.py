@@ -222,11 +222,11 @@ def step_count() -> int:
     """How many rows :func:`run` reports progress for: the line's three protocols, per
     shipped preset three protocols and two transfer wheels, per cross-wheel form and the
     cross-wheel line one fold per shipped data set, and per shipped data set the nested
-    protocol's two rows (the line's and the rule's pick)."""
+    protocol's three rows (the rule's pick, classical Wong-Reece's and the line's)."""
     sets = len(datasets.shipped())
     return (3 + 5 * len(presets.available())
             + (len(crosswheel.FORMS) + 1) * sets  # leave-one-dataset-out
-            + 2 * sets)  # nested: the line's and the rule's row per data set
+            + len(crosswheel.ROLES) * sets)  # nested: the rule's, classical's and line's
 
 
 def run(progress: Callable[[str], None] | None = None, starts: int = 4) -> dict:
@@ -276,48 +276,83 @@ def run(progress: Callable[[str], None] | None = None, starts: int = 4) -> dict:
         add(row)
     # the headline: every choice made inside each fold (nested), first in the rows
     nested = crosswheel.nested_rows(shipped, starts=min(starts, 3), progress=progress)
-    default, scores = crosswheel.choose(shipped, starts=min(starts, 3))
+    every: dict[str, list] = {}  # every candidate held out on each data set, in hindsight
+    default, scores = crosswheel.choose(shipped, starts=min(starts, 3), folds=every)
     rows[:0] = nested
     return {"rows": rows, "load": LOAD, "transfer_load": DING_LOAD,
             "sinkage_datum": crosswheel.datum_check(shipped),
+            "soil_sources": {ds.name: ds.soil_source for ds in shipped},
             "default_form": default,
             "default_form_rule": {"rule": crosswheel.SELECTION, "scores": scores,
                                   "judged_by": nested_summary(nested)},
+            "paired": crosswheel.paired(nested),
+            "oracle": crosswheel.oracle(every, nested),
             "units": {"drawbar_pull_mae": "N", "sinkage_mae": "m", "torque_mae": "N.m",
                       "drawbar_pull_mae_per_load": "1", "sinkage_mae_per_radius": "1"}}
 
 
 def nested_summary(rows: Sequence[dict]) -> dict:
-    """The means over data sets of the nested rows, per model ('rule': the forms the folds'
-    rule chose; 'line'): what judges the selection rule, in N and mm and as shares of the load
-    and the radius."""
+    """The means over data sets of the nested rows, per role ('rule': the forms the folds'
+    rule chose; 'classical'; 'line'): what judges the selection rule, in N and mm and as shares
+    of the load and the radius; the sinkage also without the data sets whose datum is inferred
+    (``sinkage_from`` rest) and judged from each set's lowest slip (no datum at all)."""
     out = {}
-    for label, chosen in (("rule", [r for r in rows if r["protocol"] == crosswheel.NESTED
-                                    and r["model"] != "line"]),
-                          ("line", [r for r in rows if r["protocol"] == crosswheel.NESTED
-                                    and r["model"] == "line"])):
+    for role in crosswheel.ROLES:
+        chosen = [r for r in rows if r["protocol"] == crosswheel.NESTED
+                  and r.get("role") == role]
         if not chosen:
             continue
         entry = {"datasets": len(chosen), "forms": sorted({r["model"] for r in chosen})}
-        if label == "rule":  # constants that end at a bound in most folds
+        if role == "rule":  # constants that end at a bound in most folds
             counts: dict[str, int] = {}
             for r in chosen:
                 for name in r.get("at_bound", []):
                     counts[name] = counts.get(name, 0) + 1
             entry["at_bound_in_most_folds"] = sorted(
                 n for n, c in counts.items() if c > len(chosen) / 2)
-        for key in ("drawbar_pull_mae", "sinkage_mae", "drawbar_pull_mae_per_load",
-                    "sinkage_mae_per_radius", "interval_coverage"):
-            values = [r[key] for r in chosen]
-            entry[key] = (None if any(v is None for v in values)
-                          else float(sum(values) / len(values)))
-        out[label] = entry
+        entry.update(_means(chosen, (
+            "drawbar_pull_mae", "sinkage_mae", "drawbar_pull_mae_per_load",
+            "sinkage_mae_per_radius", "sinkage_increment_mae",
+            "sinkage_increment_mae_per_radius", "interval_coverage")))
+        measured = [r for r in chosen if r.get("sinkage_from") != "rest"]
+        entry["inferred_datum"] = sorted(r["dataset"] for r in chosen
+                                         if r.get("sinkage_from") == "rest")
+        entry["without_inferred_datum"] = {
+            "datasets": len(measured),
+            **_means(measured, ("sinkage_mae", "sinkage_mae_per_radius"))}
+        entry["interval_coverage_by_dataset"] = {r["dataset"]: r["interval_coverage"]
+                                                 for r in chosen}
+        out[role] = entry
+    return out
+
+
+def _summary_line(label: str, entry: dict) -> str:
+    """One role of :func:`nested_summary` as text."""
+    def fig(key: str, scale: float, fmt: str) -> str:
+        v = entry.get(key)
+        return "-" if v is None else format(scale * v, fmt)
+    cover = entry.get("interval_coverage")
+    return (f"{label}: pull {fig('drawbar_pull_mae', 1, '.2f')} N (pull/W "
+            f"{fig('drawbar_pull_mae_per_load', 1, '.3f')}), sinkage "
+            f"{fig('sinkage_mae', 1e3, '.1f')} mm (z/R {fig('sinkage_mae_per_radius', 1, '.3f')}"
+            f"), from the lowest slip {fig('sinkage_increment_mae', 1e3, '.1f')} mm (z/R "
+            f"{fig('sinkage_increment_mae_per_radius', 1, '.3f')})"
+            + ("" if cover is None else f"; 90 % intervals cover {100 * cover:.0f} %"))
+
+
+def _means(rows: Sequence[dict], keys: Sequence[str]) -> dict:
+    """Per key the mean of ``rows``' values; None if a row lacks one or there is no row."""
+    out = {}
+    for key in keys:
+        values = [r.get(key) for r in rows]
+        out[key] = (None if not values or any(v is None for v in values)
+                    else float(sum(values) / len(values)))
     return out
 
 
 def format_table(result: dict) -> str:
     """The rows of :func:`run` as a text table, held-out and in-sample labelled."""
-    head = (f"{'model':18} {'protocol':14} {'free':>4} | {'pull MAE [N]':>12} "
+    head = (f"{'model':25} {'protocol':14} {'free':>4} | {'pull MAE [N]':>12} "
             f"{'sinkage MAE [mm]':>16} | judged on")
     lines = [head, "-" * len(head)]
     for r in result["rows"]:
@@ -330,9 +365,13 @@ def format_table(result: dict) -> str:
             share = r.get("drawbar_pull_mae_per_load")
             per_load = "" if share is None else (
                 f"pull/W {share:.3f}, z/R {r['sinkage_mae_per_radius']:.3f}; ")
+            role = {"rule": "the rule's pick, ", "classical": "baseline, ",
+                    "line": "baseline, "}.get(r.get("role", ""), "")
+            datum = ", sinkage datum inferred" if r.get("sinkage_from") == "rest" else ""
             data_name = (f"{'held-out' if r['protocol'] != 'user-data' else 'user data'} "
-                         f"{r['dataset']} ({r['points']} points, {per_load}90 % interval "
-                         "covers " + ("-" if cover is None else f"{100 * cover:.0f} %") + ")")
+                         f"{r['dataset']} ({role}{r['points']} points, {per_load}90 % interval "
+                         "covers " + ("-" if cover is None else f"{100 * cover:.0f} %")
+                         + f"{datum})")
         if r.get("error"):
             figures = f"{'failed':>12} {'':16} | {r['error']}"
         else:
@@ -340,26 +379,51 @@ def format_table(result: dict) -> str:
                        f"{data_name}")
         protocol = {"leave-one-dataset-out": "leave-data-out",
                     crosswheel.NESTED: "nested"}.get(r["protocol"], r["protocol"])
-        lines.append(f"{r['model']:18} {protocol:14} {len(r['free']):4d} | {figures}")
+        lines.append(f"{r['model']:25} {protocol:14} {len(r['free']):4d} | {figures}")
     judged = result.get("default_form_rule", {}).get("judged_by", {})
     if "rule" in judged and "line" in judged:
-        rule, line = judged["rule"], judged["line"]
-        lines.append("")
+        lines += ["", "nested (every choice made inside each fold; rule: lowest mean held-out "
+                  "pull/W), means over data sets:"]
+        for role, entry in judged.items():
+            label = {"rule": f"the rule ({', '.join(entry['forms'])})",
+                     "classical": "classical Wong-Reece", "line": "the line"}[role]
+            lines.append("  " + _summary_line(label, entry))
+        rule = judged["rule"]
         lines.append(
-            f"nested (every choice made inside each fold; rule: lowest mean held-out pull/W): "
-            f"the rule's forms {', '.join(rule['forms'])} give pull {rule['drawbar_pull_mae']:.2f}"
-            f" N (pull/W {rule['drawbar_pull_mae_per_load']:.3f}), sinkage "
-            f"{1e3 * rule['sinkage_mae']:.1f} mm (z/R {rule['sinkage_mae_per_radius']:.3f}); "
-            f"the line {line['drawbar_pull_mae']:.2f} N ({line['drawbar_pull_mae_per_load']:.3f}),"
-            f" {1e3 * line['sinkage_mae']:.1f} mm ({line['sinkage_mae_per_radius']:.3f}). "
-            f"On all data sets the rule picks {result['default_form']}. Constants at a bound of "
-            f"their plausible range in most folds: "
+            f"  On all data sets the rule picks {result['default_form']}. Constants at a bound "
+            f"of their plausible range in most folds: "
             f"{', '.join(rule['at_bound_in_most_folds']) or 'none'}.")
+        if rule["inferred_datum"]:
+            lines.append(f"  Sinkage datum inferred (measured from the wheel at rest) on "
+                         f"{', '.join(rule['inferred_datum'])}; without them:")
+            for role, entry in judged.items():
+                rest = entry["without_inferred_datum"]
+                if rest["sinkage_mae"] is not None:
+                    lines.append(f"    {role}: sinkage {1e3 * rest['sinkage_mae']:.1f} mm "
+                                 f"(z/R {rest['sinkage_mae_per_radius']:.3f}) on "
+                                 f"{rest['datasets']} data sets")
+    if result.get("paired"):
+        lines += ["", f"paired over data sets (rule - baseline per data set, mean ± standard "
+                  f"error; a verdict where beyond the two-sided "
+                  f"{100 * crosswheel.CONFIDENCE:.0f} % t bound):"]
+        lines += ["  " + line for line in crosswheel.format_paired(result["paired"])]
+    oracle = result.get("oracle")
+    if oracle and oracle.get("mean") is not None:
+        se = ("" if oracle["standard_error"] is None
+              else f" ± {oracle['standard_error']:.3f}")
+        lines += ["", f"oracle (with hindsight the best candidate form on each held-out data "
+                  f"set): pull/W {oracle['mean']:+.3f}{se} against the line over "
+                  f"{oracle['datasets']} data sets: the most these forms can gain on it with "
+                  f"these data."]
     reach = crosswheel.format_reach(result["rows"])
     if reach:
         lines += ["", "reach (each data set's values beyond its training sets' range: a fold "
                   "that predicts it extrapolates; nothing fitted):"]
         lines += ["  " + line for line in reach]
+    if result.get("soil_sources"):
+        lines += ["", "soil values (where each data set's come from; validation/DATA.md):"]
+        lines += [f"  {name}: {source}: {datasets.SOIL_SOURCES[source]}"
+                  for name, source in result["soil_sources"].items()]
     if result.get("sinkage_datum"):
         lines += ["", "sinkage datum check (lowest slip against the static sinkage, nothing "
                   "fitted):"]
