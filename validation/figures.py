@@ -95,10 +95,22 @@ class Figure:
         return "none" if value is None else self.fmt.format(value)
 
 
-def _nested(doc: dict, dataset: str, model: str) -> dict:
-    """The nested protocol's row of ``dataset``: the line's (``model`` "line") or the rule's."""
+def _nested(doc: dict, dataset: str, role: str) -> dict:
+    """The nested protocol's row of ``dataset`` in ``role``: "rule", "classical" or "line"."""
     return next(r for r in doc["rows"] if r["protocol"] == "nested-leave-one-dataset-out"
-                and r["dataset"] == dataset and (r["model"] == "line") == (model == "line"))
+                and r["dataset"] == dataset and r["role"] == role)
+
+
+def _judged(role: str, key: str, scale: float = 1.0) -> Callable[[dict], float | None]:
+    """A nested mean of ``role`` (validate's ``judged_by``) times ``scale``."""
+    def get(d: dict) -> float | None:
+        value = d["default_form_rule"]["judged_by"][role][key]
+        return None if value is None else scale * value
+    return get
+
+
+def _paired(name: str, metric: str, key: str) -> Callable[[dict], float | str]:
+    return lambda d: d["paired"][name][metric][key]
 
 
 def _case(doc: dict, case: str) -> dict:
@@ -124,29 +136,36 @@ FIGURES: dict[str, Figure] = {
     **{f"reproduce.{c}.pull": Figure("reproduce", lambda d, c=c: _case(d, c)["drawbar_pull"])
        for c in ("C1", "C2", "C3", "C4")},
     # the cross-wheel headline (wheelterrain validate, nested protocol)
-    "validate.rule.pull": Figure(
-        "validate", lambda d: d["default_form_rule"]["judged_by"]["rule"]["drawbar_pull_mae"],
-        "{:.1f}"),
-    "validate.rule.pull_per_load": Figure(
-        "validate",
-        lambda d: d["default_form_rule"]["judged_by"]["rule"]["drawbar_pull_mae_per_load"],
-        "{:.3f}"),
-    "validate.line.pull": Figure(
-        "validate", lambda d: d["default_form_rule"]["judged_by"]["line"]["drawbar_pull_mae"]),
-    "validate.line.pull_per_load": Figure(
-        "validate",
-        lambda d: d["default_form_rule"]["judged_by"]["line"]["drawbar_pull_mae_per_load"],
-        "{:.3f}"),
-    "validate.rule.sinkage_mm": Figure(
-        "validate", lambda d: 1e3 * d["default_form_rule"]["judged_by"]["rule"]["sinkage_mae"],
-        "{:.1f}"),
-    "validate.line.sinkage_mm": Figure(
-        "validate", lambda d: 1e3 * d["default_form_rule"]["judged_by"]["line"]["sinkage_mae"],
-        "{:.1f}"),
-    "validate.rule.coverage": Figure(
-        "validate",
-        lambda d: 100 * d["default_form_rule"]["judged_by"]["rule"]["interval_coverage"],
-        "{:.0f} %"),
+    **{f"validate.{role}.pull": Figure("validate", _judged(role, "drawbar_pull_mae"))
+       for role in ("rule", "classical", "line")},
+    **{f"validate.{role}.pull_per_load": Figure(
+        "validate", _judged(role, "drawbar_pull_mae_per_load"), "{:.3f}")
+       for role in ("rule", "classical", "line")},
+    **{f"validate.{role}.sinkage_mm": Figure("validate", _judged(role, "sinkage_mae", 1e3),
+                                             "{:.1f}") for role in ("rule", "classical", "line")},
+    **{f"validate.{role}.sinkage_per_radius": Figure(
+        "validate", _judged(role, "sinkage_mae_per_radius"), "{:.3f}")
+       for role in ("rule", "classical", "line")},
+    **{f"validate.{role}.increment_mm": Figure(
+        "validate", _judged(role, "sinkage_increment_mae", 1e3), "{:.1f}")
+       for role in ("rule", "classical", "line")},
+    **{f"validate.{role}.surface_datum_sinkage_mm": Figure(
+        "validate", lambda d, role=role: 1e3 * d["default_form_rule"]["judged_by"][role][
+            "without_inferred_datum"]["sinkage_mae"], "{:.1f}")
+       for role in ("rule", "classical", "line")},
+    **{f"validate.{role}.coverage": Figure("validate", _judged(role, "interval_coverage", 100),
+                                           "{:.0f} %") for role in ("rule", "classical")},
+    **{f"validate.paired.{name}.{short}.{key}": Figure(
+        "validate", _paired(name, metric, key), fmt)
+       for name in ("rule-classical", "rule-line")
+       for short, metric in (("pull", "drawbar_pull_mae_per_load"),
+                             ("sinkage", "sinkage_mae_per_radius"),
+                             ("increment", "sinkage_increment_mae_per_radius"))
+       for key, fmt in (("mean", "{:+.3f}"), ("standard_error", "{:.3f}"),
+                        ("better_on", "{}"), ("verdict", "{}"))},
+    "validate.oracle.gain": Figure("validate", lambda d: -d["oracle"]["mean"], "{:.3f}"),
+    "validate.oracle.standard_error": Figure(
+        "validate", lambda d: d["oracle"]["standard_error"], "{:.3f}"),
     # the rover (wheelterrain rover --json, in process)
     **{f"rover.{g}.level.sinkage_{end}_mm": Figure(
         f"rover-level-{g}", lambda d, ws=ws: 1e3 * _wheel_mean(d, "mean_sinkage", ws))
@@ -202,30 +221,43 @@ NAMES = {"rashid-rig": "Rashid rig C1–C4", "ding2011-smooth": "Ding 2011 smoot
          "kls1-lugged": "KLS-1 lugged", "rashid1-fjs1": "Rashid-1 wheel, FJS-1"}
 
 
+def _pair(row: dict) -> str:
+    """A nested row's pull and sinkage, in N and mm and as shares of W and R."""
+    return (f"{row['drawbar_pull_mae']:.2f} N ({row['drawbar_pull_mae_per_load']:.3f} W), "
+            f"{1e3 * row['sinkage_mae']:.1f} mm ({row['sinkage_mae_per_radius']:.3f} R)")
+
+
 def _nested_table(docs: dict[str, dict]) -> str:
-    """The README's headline: per held-out data set, the line and the form the fold's rule
-    chose, in N and mm and as shares of the load W and the radius R."""
+    """The README's headline: per held-out data set, the form the fold's rule chose beside the
+    two baselines under the same protocol (the line, classical Wong-Reece), in N and mm and as
+    shares of the load W and the radius R; the sinkage also from the set's lowest slip."""
     doc = docs["validate"]
-    lines = ["| held-out data set (points, load) | line (2 free): pull, sinkage | the fold's "
-             "rule chose | that form: pull, sinkage (90 % coverage) |", "|---|---|---|---|"]
+    lines = ["| held-out data set (points, load) | line (2 free): pull, sinkage | classical "
+             "Wong–Reece (0 free): pull, sinkage (90 % coverage) | the fold's rule chose | that "
+             "form: pull, sinkage (90 % coverage) | sinkage from the lowest slip: line, "
+             "classical, rule |", "|---|---|---|---|---|---|"]
     for dataset, name in NAMES.items():
-        line, rule = _nested(doc, dataset, "line"), _nested(doc, dataset, "rule")
+        line, classical, rule = (_nested(doc, dataset, role)
+                                 for role in ("line", "classical", "rule"))
         load = rule["drawbar_pull_mae"] / rule["drawbar_pull_mae_per_load"]
+        datum = " †" if rule["sinkage_from"] == "rest" else ""
         lines.append(
-            f"| {name} ({rule['points']}, {load:.3g} N) | {line['drawbar_pull_mae']:.2f} N "
-            f"({line['drawbar_pull_mae_per_load']:.3f} W), {1e3 * line['sinkage_mae']:.1f} mm "
-            f"({line['sinkage_mae_per_radius']:.3f} R) | `{rule['model']}` | "
-            f"{rule['drawbar_pull_mae']:.2f} N ({rule['drawbar_pull_mae_per_load']:.3f} W), "
-            f"{1e3 * rule['sinkage_mae']:.1f} mm ({rule['sinkage_mae_per_radius']:.3f} R) "
-            f"({_percent(rule['interval_coverage'])}) |")
+            f"| {name}{datum} ({rule['points']}, {load:.3g} N) | {_pair(line)} | "
+            f"{_pair(classical)} ({_percent(classical['interval_coverage'])}) | "
+            f"`{rule['model']}` | {_pair(rule)} ({_percent(rule['interval_coverage'])}) | "
+            + ", ".join(f"{1e3 * r['sinkage_increment_mae']:.1f}"
+                        for r in (line, classical, rule)) + " mm |")
     judged = doc["default_form_rule"]["judged_by"]
-    a, b = judged["line"], judged["rule"]
-    lines.append(f"| mean over data sets | {a['drawbar_pull_mae']:.2f} N "
-                 f"({a['drawbar_pull_mae_per_load']:.3f} W), {1e3 * a['sinkage_mae']:.1f} mm "
-                 f"({a['sinkage_mae_per_radius']:.3f} R) | {len(b['forms'])} forms | "
-                 f"{b['drawbar_pull_mae']:.2f} N ({b['drawbar_pull_mae_per_load']:.3f} W), "
-                 f"{1e3 * b['sinkage_mae']:.1f} mm ({b['sinkage_mae_per_radius']:.3f} R) "
-                 f"({_percent(b['interval_coverage'])}) |")
+    a, c, b = judged["line"], judged["classical"], judged["rule"]
+
+    def mean(e: dict) -> str:
+        return (f"{e['drawbar_pull_mae']:.2f} N ({e['drawbar_pull_mae_per_load']:.3f} W), "
+                f"{1e3 * e['sinkage_mae']:.1f} mm ({e['sinkage_mae_per_radius']:.3f} R)")
+    lines.append(f"| mean over data sets | {mean(a)} | {mean(c)} "
+                 f"({_percent(c['interval_coverage'])}) | {len(b['forms'])} forms | {mean(b)} "
+                 f"({_percent(b['interval_coverage'])}) | "
+                 + ", ".join(f"{1e3 * e['sinkage_increment_mae']:.1f}" for e in (a, c, b))
+                 + " mm |")
     return "\n".join(lines) + "\n"
 
 
