@@ -10,9 +10,13 @@ over a ground-fixed soil element while the wheel passes it, as the Soil Contact 
 j(theta) = R*int_theta^theta_f (1/(1 - i) - cos(t))*cos(t) dt, integrated here numerically
 (Gauss-Legendre) rather than in the closed form the package uses.
 
-For braking (i < 0) the shear displacement changes sign along the arc; the reference then uses the
-same odd extension of Janosi's law as the package (tau = sign(j)*(1 - exp(-|j|/K))*tau_max), and
-splits the quadrature at the sign change, which it finds with brentq.
+For braking (i < 0) the slip that enters the law is the skid s = (omega*R - V)/V = i/(1 - i)
+(down to -1, a locked wheel): theta_m = (a0 + a1*s)*theta_f, and the wheel element's shear
+displacement is counted per distance travelled, j = R*((1 + s)*(theta_f - theta) - (sin(theta_f)
+- sin(theta))) (the time of a rim element in contact taken as R*dtheta/V instead of
+dtheta/omega, finite at omega = 0). The shear displacement changes sign along the arc; the
+reference then uses the same odd extension of Janosi's law as the package (tau = sign(j)*(1 -
+exp(-|j|/K))*tau_max), and splits the quadrature at the sign change, found with brentq.
 """
 
 from __future__ import annotations
@@ -46,7 +50,8 @@ class Classical:
 
     def _parts(self, z: float, i: float):
         tf = math.acos(1.0 - z / self.R)
-        tm = (self.a0 + self.a1 * i) * tf
+        skid = i / (1.0 - i) if i < 0 else None  # braking: the skid s, -1 locked
+        tm = (self.a0 + self.a1 * (i if skid is None else skid)) * tf
         keq = (self.c * self.kc + self.gamma * self.b * self.kphi) * (self.R / self.b) ** self.n
 
         def sigma(t: float) -> float:
@@ -60,6 +65,8 @@ class Classical:
                 u = t + (tf - t) * (_GL_NODES + 1.0) / 2.0
                 rate = (1.0 / (1.0 - i) - np.cos(u)) * np.cos(u)
                 return self.R * (tf - t) / 2.0 * float(_GL_WEIGHTS @ rate)
+            if skid is not None:
+                return self.R * ((1.0 + skid) * (tf - t) - (math.sin(tf) - math.sin(t)))
             return self.R * ((tf - t) - (1.0 - i) * (math.sin(tf) - math.sin(t)))
 
         def tau(t: float) -> float:

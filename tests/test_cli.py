@@ -80,8 +80,9 @@ def test_set_overrides_by_table_name_and_accepts_degrees():
     (["--load", "-1"], 2, "input load = -1.0 is out of range"),
     (["--load", "nan"], 2, "input load = nan must be finite"),
     (["--load", "inf"], 2, "input load = inf must be finite"),
-    (["--slip", "1.5"], 2, "input slip = 1.5 is out of range; valid range [-1, 1]"),
-    (["--slip", "-0.7", "--slip-definition", "paper"], 2, "valid range [-0.5, inf)"),
+    (["--slip", "1.5"], 2, "input slip = 1.5 is out of range; valid range (-inf, 1]"),
+    (["--slip", "-1.2", "--slip-definition", "paper"], 2, "valid range [-1, inf)"),
+    (["--slip", "-1.2", "--slip-definition", "unified"], 2, "valid range [-1, 1]"),
     (["--load", "1000"], 3, "exceeds what the wheel can carry even fully buried"),
     (["--preset", "nope"], 2, "is neither a preset"),
 ])

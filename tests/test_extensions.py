@@ -72,17 +72,20 @@ def test_slip_sinkage_exponent_deepens_with_slip(table2):
     assert z_n1[1] - z_n1[0] > z_flat[1] - z_flat[0]
 
 
-@pytest.mark.parametrize(("slip", "cohesion"), [(0.1, 0.0), (0.5, 800.0), (-0.3, 0.0)])
+@pytest.mark.parametrize(("slip", "cohesion"), [(0.1, 0.0), (0.5, 800.0), (-0.3, 0.0),
+                                                (-1.0, 0.0)])
 def test_grouser_thrust_is_the_documented_passive_force_integral(table2, slip, cohesion):
     """Independent check with scipy quad of the grouser-thrust formula in contact.py
-    (rim contact: every grouser on the arc is buried over its full height)."""
+    (rim contact: every grouser on the arc is buried over its full height). ``slip`` is the
+    model's: braking, the skid, down to the locked wheel (-1)."""
     from scipy.integrate import quad
 
     ps = table2.with_values({"soil.cohesion": cohesion, "model.exit_ratio": 0.0,
                              "soil.n1": 0.0, "ripple.k_g": 0.0, "ripple.k_0": 0.0})
     z = 0.03
-    on = model.contact_forces(ps.with_values({"model.grouser_thrust": 1}), z, slip)
-    off = model.contact_forces(ps, z, slip)
+    on = model.contact_forces(ps.with_values({"model.grouser_thrust": 1}), z, slip,
+                              slip_definition="unified")
+    off = model.contact_forces(ps, z, slip, slip_definition="unified")
     R, h, b = ps["wheel.radius"], ps["grouser.height"], ps["wheel.width"]
     K, gamma, c = ps["soil.shear_modulus"], ps["soil.gamma"], cohesion
     kp = math.tan(math.pi / 4 + ps["soil.phi"] / 2) ** 2
@@ -93,7 +96,10 @@ def test_grouser_thrust_is_the_documented_passive_force_integral(table2, slip, c
         height = (R + h) * math.cos(t) - R * math.cos(tf) - top
         force = (0.5 * gamma * height**2 * kp + 2 * c * height * math.sqrt(kp)
                  + gamma * top * height * kp)
-        j = R * ((tf - t) - (1 - slip) * (math.sin(tf) - math.sin(t)))
+        if slip >= 0:  # the wheel element; braking, per distance travelled
+            j = R * ((tf - t) - (1 - slip) * (math.sin(tf) - math.sin(t)))
+        else:
+            j = R * ((1 + slip) * (tf - t) - (math.sin(tf) - math.sin(t)))
         g = math.copysign(1 - math.exp(-abs(j) / K), j)
         return force * g * {"x": math.cos(t), "z": math.sin(t), "t": R + h / 2}[part]
 

@@ -148,28 +148,35 @@ def test_dynamic_mode_matches_contact_forces(fmus):
         t.close()
 
 
-@pytest.mark.parametrize("slip", [-0.3, -0.9, 0.4])
+@pytest.mark.parametrize("slip", [-0.3, -0.9, -1.0, 0.4])
 def test_braking_and_driving_use_the_contact_models_slip(fmus, slip):
-    """The FMU hands the contact model the traction slip of the true kinematics,
-    V = (1 - i)*omega*R, braking included (V > omega*R): not a skid ratio it would misread."""
+    """The FMU hands the contact model the slip of the true kinematics, the traction slip
+    driving (V = (1 - i)*omega*R) and the skid braking (omega*R = (1 + s)*V), down to the
+    locked wheel (omega = 0): its ``slip`` output is that slip."""
     ps = presets.load(presets.DEFAULT_PRESET)
-    omega = 0.6
-    speed = omega * ps["wheel.radius"] * (1 - slip)
+    radius = ps["wheel.radius"]
+    if slip >= 0:
+        omega, speed = 0.6, 0.6 * radius * (1 - slip)
+    else:
+        speed = 0.03
+        omega = speed * (1 + slip) / radius
     t = terrain(fmus, sinkage=0.02, wheel_speed=omega, carriage_speed=speed)
     try:
         got = t.get(("normal_force", "drawbar_pull", "torque", "slip", "wheel_angle"))
         assert got[3] == pytest.approx(slip, rel=1e-12)
-        want = model.contact_forces(ps, 0.02, slip, wheel_angle=got[4])
+        want = model.contact_forces(ps, 0.02, slip, wheel_angle=got[4],
+                                    slip_definition="unified")
         for k, key in enumerate(("normal_force", "drawbar_pull", "torque")):
             assert got[k] == pytest.approx(want[key], rel=1e-12)
+        t.fmu.doStep(0.0, 1e-3)  # a locked wheel is a step like any other
     finally:
         t.close()
 
 
 @pytest.mark.parametrize(("omega", "speed", "slip"), [
-    (0.6, 0.6 * 0.05 * 2.5, "-1.5"),  # rim at 40 % of the carriage speed
-    (0.0, 0.01, "-1e+07"),  # locked wheel under a moving carriage
-    (-0.6, -0.02, "0.333333"),  # rolling backward
+    (-0.6, 0.01, "-4"),  # the wheel turning backward under a carriage moving forward
+    (0.6, -0.02, "1.66667"),  # the carriage moving backward
+    (-0.6, -0.02, "-1e+07"),  # rolling backward
 ])
 def test_speeds_outside_the_slip_domain_are_refused_with_the_reason(fmus, omega, speed, slip):
     t = terrain(fmus, sinkage=0.02, wheel_speed=omega, carriage_speed=speed)
@@ -177,8 +184,8 @@ def test_speeds_outside_the_slip_domain_are_refused_with_the_reason(fmus, omega,
         with pytest.raises(FMICallException):
             t.fmu.doStep(0.0, 1e-3)
         message = " ".join(t.errors())
-        assert f"gives traction slip {slip}, outside the model's domain" in message, t.log
-        assert "in [-1, 1]" in message
+        assert f"gives slip {slip}, outside the model's domain" in message, t.log
+        assert "in [-1, 1], from a locked wheel (-1) to spinning in place (1)" in message
     finally:
         t.close()
 

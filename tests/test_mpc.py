@@ -270,17 +270,18 @@ def test_cli_rejects_a_bad_interval_with_exit_code_2(tmp_path):
     assert "interval = 0.0015 s is out of range" in run.output
 
 
-def test_in_process_plant_refuses_a_locked_wheel_with_the_fmus_sentence():
-    """A wheel stopped under a moving carriage is outside the model's domain: the in-process
-    plant says so in the words both FMU flavours use, naming both speeds."""
+def test_in_process_plant_refuses_a_wheel_turning_backward_with_the_fmus_sentence():
+    """A wheel turning backward under a carriage moving forward is outside the model's domain
+    (a locked wheel is inside it): the in-process plant says so in the words both FMU
+    flavours use, naming both speeds."""
     ps = presets.load(presets.DEFAULT_PRESET)
     scenario = closed_loop.SCENARIOS["nominal"]
     plant = closed_loop.CasadiPlant(ps, closed_loop.rig_parameters(ps, scenario))
     z, z_rate, _, integral, _ = plant.x
-    plant.x = (z, z_rate, 0.0, integral, 0.03)
+    plant.x = (z, z_rate, -0.6, integral, 0.03)
     with pytest.raises(mpc.PlantError, match="refused the step") as err:
         plant.advance(0.5, 1, lambda *a: None)
-    assert "wheel speed 0 rad/s with carriage speed 0.03 m/s" in str(err.value)
+    assert "wheel speed -0.6 rad/s with carriage speed 0.03 m/s" in str(err.value)
     assert "outside the model's domain" in str(err.value)
 
 

@@ -8,7 +8,8 @@ import pytest
 
 from wheelterrain import presets
 from wheelterrain.errors import InputError, ParameterError
-from wheelterrain.model.slip import paper_from_traction, to_traction, traction_from_paper
+from wheelterrain.model import slip as slips
+from wheelterrain.model.slip import paper_from_traction, to_unified, traction_from_paper
 from wheelterrain.parameters import TABLE, ParameterSet, lookup, parse_assignments
 
 
@@ -57,20 +58,35 @@ def test_assignments_parse_degrees_only_for_angles():
         parse_assignments(["wheel.radius=3deg"])
 
 
-@pytest.mark.parametrize("s", [0.0, 0.25, 0.5, 0.75, -0.4, 10.0])
+@pytest.mark.parametrize("s", [0.0, 0.25, 0.5, 0.75, -0.4, -0.999, -1.0, 10.0])
 def test_slip_definitions_are_inverse(s):
+    """Traction i, the paper's s and the model's sigma (i driving, s braking) convert both
+    ways, the locked wheel included (s = -1, i = -inf, sigma = -1)."""
     i = traction_from_paper(s)
     assert paper_from_traction(i) == pytest.approx(s, rel=1e-14)
-    assert 1 - i == pytest.approx(1 / (1 + s), rel=1e-14)
-    assert to_traction(s, "paper") == pytest.approx(i, rel=1e-15)
+    if s > -1:
+        assert 1 - i == pytest.approx(1 / (1 + s), rel=1e-14)
+    sigma = to_unified(s, "paper")
+    assert sigma == pytest.approx(s if s < 0 else i, rel=1e-15)
+    assert slips.in_definition(sigma, "paper") == pytest.approx(s, rel=1e-14)
+    assert slips.in_definition(sigma, "traction") == pytest.approx(i, rel=1e-14)
+    if math.isfinite(i):
+        assert to_unified(i, "traction") == pytest.approx(sigma, rel=1e-14)
+    assert -1 <= sigma <= 1
 
 
 def test_slip_validation():
     assert math.isinf(paper_from_traction(1.0))
+    assert paper_from_traction(-math.inf) == -1.0
     with pytest.raises(InputError, match="slip_definition"):
-        to_traction(0.1, "wheel")
+        to_unified(0.1, "wheel")
     with pytest.raises(InputError, match=r"valid range \[-1, 1\]"):
-        to_traction(-1.2, "traction")
+        to_unified(-1.2, "unified")
+    with pytest.raises(InputError, match=r"valid range \[-1, inf\)"):
+        to_unified(-1.2, "paper")
+    with pytest.raises(InputError, match="locked wheel is traction slip -inf"):
+        to_unified(1.2, "traction")
+    assert to_unified(-3.0, "traction") == pytest.approx(-0.75)  # s = i/(1 - i)
 
 
 def test_plausible_ranges_are_a_column_inside_the_validity_range():

@@ -25,13 +25,14 @@ def _shear(j: float, K: float, Kr: float, hump: int) -> float:
 
 def reference(ps, load: float, slip: float) -> dict:
     """The patch equations as the module docstring states them, with the patch-mean shear
-    integrated by scipy.quad instead of its closed form."""
+    integrated by scipy.quad instead of its closed form. ``slip``: the model's (the traction
+    slip driving, the skid s = (omega*R - V)/V braking, -1 locked)."""
     R, h, b = ps["wheel.radius"], ps["grouser.height"], ps["wheel.width"]
     Rc = R + ps["model.contact_radius_factor"] * h
     Rs = R + ps["model.shear_radius_factor"] * h
     Rref = R + ps["model.slip_radius_factor"] * h
     c, lam = ps["soil.cohesion"], ps["model.exit_ratio"]
-    n = ps["soil.n0"] + ps["soil.n1"] * abs(slip)
+    n = ps["soil.n0"] + ps["soil.n1"] * max(slip, 0.0)  # held at n0 in skid
     modulus = c * ps["soil.k_c"] + ps["soil.gamma"] * b * ps["soil.k_phi"]
 
     def length(z):
@@ -42,8 +43,13 @@ def reference(ps, load: float, slip: float) -> dict:
 
     z = brentq(lambda z: b * length(z) * pressure(z) - load, 1e-12, Rc, xtol=1e-16, rtol=1e-15)
     l, p = length(z), pressure(z)
-    v = (1 - slip) * Rref
-    x = 1 - v / Rs if ps["model.shear_kinematics"] == 0 else Rs / v - 1
+    # the shearing surface's slip: omega*R_s/V - 1 for the soil element; for the wheel
+    # element 1 - V/(omega*R_s) driving and, per distance travelled, (1 + s) - R_ref/R_s braking
+    rim_over_speed = 1 / (1 - slip) if slip >= 0 else 1 + slip  # omega*R_ref/V
+    if ps["model.shear_kinematics"] == 1:
+        x = rim_over_speed * Rs / Rref - 1
+    else:
+        x = 1 - (1 - slip) * Rref / Rs if slip >= 0 else (1 + slip) - Rref / Rs
     J, K = x * l, ps["soil.shear_modulus"]
     hump, Kr = int(ps["model.shear_model"]), ps["soil.residual_ratio"]
     mean = quad(lambda u: _shear(J * u, K, Kr, hump), 0, 1, epsabs=1e-15, epsrel=1e-13)[0]
@@ -53,11 +59,13 @@ def reference(ps, load: float, slip: float) -> dict:
             "gross_thrust": thrust, "compaction_resistance": compaction, "contact_length": l}
 
 
-CASES = [  # (id, overrides on paper-table2, load, traction slip)
+CASES = [  # (id, overrides on paper-table2, load, the model's slip)
     ("paper-C1", {}, 62.0, 0.0),
     ("paper-C4", {}, 62.0, 0.75 / 1.75),
     ("wheel-element", {"model.shear_kinematics": 0}, 62.0, 0.3),
     ("braking", {"model.shear_kinematics": 0, "model.shear_radius_factor": 0.0}, 40.0, -0.4),
+    ("locked", {"model.shear_kinematics": 0}, 40.0, -1.0),
+    ("locked-soil-element", {"model.shear_kinematics": 1}, 40.0, -1.0),
     ("hump-cohesion", {"model.shear_model": 1, "soil.cohesion": 800.0,
                        "soil.residual_ratio": 0.5}, 62.0, 0.2),
     ("exit-half-radii", {"model.exit_ratio": 0.5, "model.contact_radius_factor": 0.5,
@@ -71,7 +79,7 @@ CASES = [  # (id, overrides on paper-table2, load, traction slip)
                          ids=[c[0] for c in CASES])
 def test_patch_form_is_its_documented_equations(overrides, load, slip):
     ps = presets.load("paper-table2").with_values(overrides)
-    got = model.steady_state(ps, load, slip)
+    got = model.steady_state(ps, load, slip, "unified")
     want = reference(ps, load, slip)
     for key, value in want.items():
         assert got[key] == pytest.approx(value, rel=TOL, abs=1e-12), key

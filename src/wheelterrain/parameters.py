@@ -148,11 +148,14 @@ TABLE: tuple[Parameter, ...] = (
        plausible=(10.0, 2000.0, "Reece k_phi' of sands and simulants (Wong, Theory of Ground "
                   "Vehicles: dry sand 1528; Table I/II 80)")),
     _P("soil.n0", "1", 1.1, 0.3, 2.0,
-       "Sinkage exponent at zero slip, n0 in n = n0 + n1*|i|.",
+       "Sinkage exponent at zero slip, n0 in n = n0 + n1*max(sigma, 0); the exponent in "
+       "skid (held there: no skid-sinkage law in the sources).",
        f"{_TABLE2}: n = 1.1 (Table I: 1)",
        plausible=(0.5, 1.5, "Reece sinkage exponent of sands, 0.5-1.3 (Wong); Table II 1.1")),
     _P("soil.n1", "1", 0.0, 0.0, 2.0,
-       "Slip-sinkage coefficient n1 in n = n0 + n1*|i| (i traction slip). 0 = classical model.",
+       "Slip-sinkage coefficient n1 in n = n0 + n1*max(sigma, 0) (sigma the model's slip, the "
+       "traction slip when driving). Driving only: Ding et al. fitted it on driven wheels. "
+       "0 = classical model.",
        "Ding et al. 2011, J. Terramechanics 48 (slip-sinkage exponent); presets read the paper's "
        "eta = 1.15 as n1 (it reproduces the measured sinkage trend)",
        plausible=(0.0, 2.0, "Slip-sinkage coefficient (Ding et al. 2011 report n1 ~ 0.3-1 for "
@@ -209,15 +212,18 @@ TABLE: tuple[Parameter, ...] = (
        "Irani et al. 2011; the paper gives no value", quantity="Angle", display_unit="deg"),
     # --- model form --------------------------------------------------------------------------
     _P("model.a0", "1", 0.40, 0.32, 0.5,
-       "Max-stress angle coefficient a0 in theta_m = (a0 + a1*i)*theta_f. The lower bound keeps "
-       "theta_m > 0 at slip -0.9 with the largest a1.",
+       "Max-stress angle coefficient a0 in theta_m = (a0 + a1*sigma)*theta_f (sigma the model's "
+       "slip). Its lower bound is model.a1's upper one: theta_m >= 0 down to the locked wheel "
+       "(sigma = -1).",
        "Ishigami et al. 2007, J. Field Robotics 24(3): 0.40 for lunar simulant (Wong-Reece sand: "
        "0.43)",
        plausible=(0.32, 0.45, "Wong & Reece 1967; Ishigami et al. 2007: a0 0.3-0.45")),
-    _P("model.a1", "1", 0.15, 0.0, 0.35,
-       "Max-stress angle coefficient a1 in theta_m = (a0 + a1*i)*theta_f.",
+    _P("model.a1", "1", 0.15, 0.0, 0.32,
+       "Max-stress angle coefficient a1 in theta_m = (a0 + a1*sigma)*theta_f. Bounded by "
+       "model.a0's lower bound, so that theta_m >= 0 down to the locked wheel.",
        "Ishigami et al. 2007: 0.15 for lunar simulant (Wong-Reece sand: 0.32)",
-       plausible=(0.0, 0.35, "Wong & Reece 1967; Ishigami et al. 2007: a1 up to 0.35")),
+       plausible=(0.0, 0.32, "Wong & Reece 1967 (sand 0.32); Ishigami et al. 2007 (lunar "
+                  "simulant 0.15)")),
     _P("model.exit_ratio", "1", 0.0, 0.0, 1.0,
        "Exit-angle ratio lambda: theta_r = -arccos(1 - lambda*z/R_c). 0 = Wong-Reece "
        "(theta_r = 0); "
@@ -240,7 +246,8 @@ TABLE: tuple[Parameter, ...] = (
        plausible=(0.0, 1.0, "Definition: rim (0) to grouser tips (1)")),
     _P("model.slip_radius_factor", "1", 0.0, 0.0, 1.0,
        "Radius R_ref = R + factor*h_g to which the slip input is referenced: carriage speed "
-       "V = (1 - i)*omega*R_ref. 0 = rim radius, as the rig defines slip from omega_r*R.",
+       "V = (1 - i)*omega*R_ref driving, omega*R_ref/(1 + s) braking. 0 = rim radius, as the rig "
+       "defines slip from omega_r*R.",
        f"{_PAPER}, eq. 4 (slip from omega_r*R)",
        plausible=(0.0, 1.0, "Definition: rim (0) to grouser tips (1)")),
     _P("model.grouser_thrust", "1", 0, 0, 1,
@@ -474,6 +481,18 @@ ROVER_TABLE: tuple[Parameter, ...] = (
        "Largest torque a wheel motor delivers, either sign (the speed loops saturate there; "
        "the integrator stops while saturated).",
        f"{_ASSUMED}: a small geared DC motor", quantity="Torque"),
+    *(_V(f"rover.grouser_phase.{wheel}", "rad", phase, 0.0, 2 * math.pi,
+         f"Where the {wheel.replace('_', ' ')} wheel's grousers stand at the start, as a phase "
+         "of its grouser ripple (2*pi: one grouser pitch): added to its WheelTerrain's "
+         "ripple.phase (in an SSP, that wheel's binding; the chassis does not use it). "
+         "Unused with the ripple off.",
+         "Assumption: wheels mounted independently have no reason to start aligned; the "
+         "four spread evenly over one grouser pitch (left and right opposed, front and rear "
+         "a quarter apart), so that the ripples do not beat in phase. The rover's limits "
+         "report their band over every alignment (docs/rover.md)",
+         quantity="Angle", display_unit="deg")
+      for wheel, phase in (("front_left", 0.0), ("front_right", math.pi),
+                           ("rear_left", math.pi / 2), ("rear_right", 3 * math.pi / 2))),
 )
 
 

@@ -150,7 +150,7 @@ def closed_loop(result, scenario, path: Path) -> None:
     fig, axes = plt.subplots(5, 1, figsize=(8, 10), sharex=True)
     axes[0].plot(t, s["slip"], lw=0.8, label="slip (plant)")
     axes[0].plot(t, s["slip_reference"], "k--", lw=0.8, label="reference")
-    axes[0].set_ylabel("traction slip [1]")
+    axes[0].set_ylabel("slip [1]")
     axes[1].plot(t, s["motor_torque"], lw=0.8, label="motor torque [N.m]")
     axes[1].plot(t, s["command"], lw=0.8, label="speed command [rad/s]")
     axes[1].set_ylabel("drive [N.m, rad/s]")
@@ -204,7 +204,7 @@ def rover(result, figures: dict, path: Path) -> None:
     limit_panel = scenario in LIMIT_SCENARIOS
     rows = 7 if limit_panel else 6
     fig, axes = plt.subplots(rows, 1, figsize=(8, 1.9 * rows + 1), sharex=False)
-    quantities = (("slip", 1.0, "traction slip [1]"), ("sinkage", 1e3, "sinkage [mm]"),
+    quantities = (("slip", 1.0, "slip (braking: skid) [1]"), ("sinkage", 1e3, "sinkage [mm]"),
                   ("normal_force", 1.0, "normal force [N]"),
                   ("drawbar_pull", 1.0, "drawbar pull [N]"))
     for ax, (key, scale, label) in zip(axes, quantities, strict=False):
@@ -235,7 +235,7 @@ def rover(result, figures: dict, path: Path) -> None:
             stall = figures.get("stall_towing_force")
             if stall is not None:
                 ax.axhline(stall, color="k", ls=":", lw=0.8, label=f"stalls at {stall:.2f} N")
-            ax.set_xlabel("traction slip [1]")
+            ax.set_xlabel("slip (braking: skid) [1]")
             ax.set_ylabel("pull [N]")
         else:
             ax.plot(np.degrees(result.inputs["slope"][::stride]),
@@ -261,7 +261,7 @@ def rover(result, figures: dict, path: Path) -> None:
             if figures.get("stall_cause"):
                 ax.set_title(f"ended by: {figures['stall_cause']}", fontsize=9)
             ax.set_xlabel("slope [deg]")
-            ax.set_ylabel("traction slip [1]")
+            ax.set_ylabel("slip (braking: skid) [1]")
         ax.legend(loc="best", fontsize=8)
         ax.grid(True, alpha=0.3)
     axes[0].set_title(f"rover '{scenario}' ({figures['gravity']}), {figures['engine']}")
@@ -314,7 +314,7 @@ def _tool_against_python(ax, x: str, run: dict, marks: tuple[dict, dict], title:
     other.plot(py[x], 1e3 * np.asarray(py["sinkage"]), "-", color="C1", label="sinkage, Python")
     other.plot(tool_x, 1e3 * np.asarray(tool["sinkage"]), label=f"sinkage, {run['name']}",
                **marks[1])
-    ax.set_xlabel({"slip": "traction slip", "time": "time [s]"}[x])
+    ax.set_xlabel({"slip": "slip (braking: skid)", "time": "time [s]"}[x])
     ax.set_ylabel("drawbar pull [N]", color="C0")
     other.set_ylabel("sinkage [mm]", color="C1")
     ax.set_title(title)

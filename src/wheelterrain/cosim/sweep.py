@@ -5,7 +5,8 @@ Each worker extracts the FMU once and instantiates it once. Every grid point the
 tunable parameters and inputs, takes one tiny communication step (so the FMU checks the
 operating point and refuses an infeasible one with fmi2Discard), and reads the outputs. A
 refused point is recorded with ``status`` "infeasible" and NaN outputs, never with stale
-numbers. The FMU's traction slip output is the column ``slip_traction``; ``slip`` is the grid's.
+numbers. The FMU's slip output (the model's: traction driving, skid braking) is the column
+``slip_traction``; ``slip`` is the grid's, in the definition the sweep was given.
 
 Grid syntax (``parse_axis``): ``a:b:n`` (n points from a to b inclusive), ``a,b,c`` (a list),
 or a single value; angles accept ``deg`` (``soil.phi=25deg:45deg:5``).
@@ -24,7 +25,7 @@ import numpy as np
 from wheelterrain.errors import ParameterError, UsageError
 from wheelterrain.fmu.instance import Instance, read_description
 from wheelterrain.fmu.variables import TERRAIN_OUTPUTS
-from wheelterrain.model.slip import DEFAULT_DEFINITION, reference_radius, traction_from_paper
+from wheelterrain.model.slip import DEFAULT_DEFINITION, reference_radius, to_unified
 from wheelterrain.parameters import BY_NAME, DEG, TABLE
 
 OUTPUTS = TERRAIN_OUTPUTS  # every output WheelTerrain.fmu computes, one column each
@@ -73,10 +74,7 @@ def check_axes(axes: dict[str, list[float]], slip_definition: str) -> None:
     for name, values in axes.items():
         if name == "slip":
             for v in values:
-                i = traction_from_paper(v) if slip_definition == "paper" else v
-                if not -1.0 <= i <= 1.0 or not math.isfinite(i):
-                    raise ParameterError("slip", v, "is out of range; valid range: traction "
-                                         "[-1, 1], paper [-0.5, inf)")
+                to_unified(v, slip_definition)  # an InputError naming the range
         elif name == "load":
             for v in values:
                 if not v >= 0 or not math.isfinite(v):
@@ -123,11 +121,13 @@ def run_points(fmu: str, base: dict[str, float], points: list[dict[str, float]],
     for point in points:
         values = {**base, **{k: v for k, v in point.items() if k not in ("slip", "load")}}
         try:
-            slip = point.get("slip", 0.0)
-            i = traction_from_paper(slip) if slip_definition == "paper" else slip
+            sigma = to_unified(point.get("slip", 0.0), slip_definition)
             r_ref = reference_radius(values)
-            inst.set({**values, "wheel_speed": WHEEL_SPEED,
-                      "carriage_speed": WHEEL_SPEED * r_ref * (1 - i),
+            # the faster of rim and carriage at WHEEL_SPEED*R_ref: down to a locked wheel
+            fast = WHEEL_SPEED * r_ref
+            rim, carriage = (fast, fast * (1 - sigma)) if sigma >= 0 else (fast * (1 + sigma),
+                                                                         fast)
+            inst.set({**values, "wheel_speed": rim / r_ref, "carriage_speed": carriage,
                       "load": point.get("load", 62.0)})
             inst.fmu.doStep(_WORKER["time"], 1e-6)  # refuses (fmi2Discard) an infeasible point
             _WORKER["time"] += 1e-6

@@ -932,14 +932,14 @@ def preset_form(ps: ParameterSet) -> Form:
 
 def preset_interval(ps: ParameterSet, load: float, slip: float,
                     shipped: Sequence[Dataset]) -> dict[str, list[float]]:
-    """A 90 % interval for ``ps``'s steady pull and sinkage at (load, traction slip): its soil
+    """A 90 % interval for ``ps``'s steady pull and sinkage at (load, the model's slip): its soil
     values' default spreads through the exact Jacobian, and the discrepancy of its model form
     on the shipped data sets (each with its own soil values; nothing fitted)."""
     form = preset_form(ps)
     discrepancy = Discrepancy.learn(form, [({}, ds) for ds in shipped])
     point = Point("steady", "steady", {k: ps[k] for k in ps}, {}, load, slip, math.nan,
                   math.nan)
-    out = model.steady_state(ps, load, slip)
+    out = model.steady_state(ps, load, slip, "unified")
     sigma = soil_sigma(Form("preset", "", {}), point, {}, out)
     half = discrepancy.half_widths(sigma, load)
     return {k: [out[k] - h, out[k] + h] for k, h in half.items()}

@@ -13,7 +13,7 @@ WheelTerrain
     TERRAIN_OUTPUTS (without wheel_angle and plastic_sinkage, the wrapper's states); ``guess``
     the sinkage [m] the solve starts Newton from (``warm_start``: the last contact_sinkage
     output), 0 for a cold solve (``model_functions.build().steady_from``). ``status``: STATUS_OK,
-    STATUS_SLIP (traction slip outside [-1, 1], or the wheel or the carriage moving backward;
+    STATUS_SLIP (the wheel or the carriage moving backward, or the slip outside [-1, 1];
     ``info`` is the slip), STATUS_LOAD (load beyond the capacity; ``info`` is the capacity),
     STATUS_UNCONVERGED (the solve's convergence check failed), STATUS_BURIED (dynamic mode:
     sinkage beyond full burial, R_c; ``info`` is R_c), STATUS_NONFINITE (an output is NaN or
@@ -66,11 +66,10 @@ FINITE_LIMIT = 1e300  # |y| at or above this (or NaN) is not a finite output
 # UNCONVERGED load; BURIED sinkage, full-burial depth; NONFINITE sinkage, wheel_speed,
 # carriage_speed, load.
 STATUS_MESSAGES = {
-    STATUS_SLIP: ("wheel speed %g rad/s with carriage speed %g m/s gives traction slip %g, "
-                  "outside the model's domain: the model covers forward rolling (wheel and "
-                  "carriage speeds >= 0) with traction slip i = (omega*R_ref - V)/(omega*R_ref) "
-                  "in [-1, 1], from a rim turning at half the carriage speed (-1) to spinning "
-                  "in place (1)"),
+    STATUS_SLIP: ("wheel speed %g rad/s with carriage speed %g m/s gives slip %g, outside "
+                  "the model's domain: the model covers forward rolling (wheel and carriage "
+                  "speeds >= 0), its slip (omega*R_ref - V)/max(omega*R_ref, V) in [-1, 1], "
+                  "from a locked wheel (-1) to spinning in place (1)"),
     STATUS_LOAD: ("load %g N exceeds what the wheel can carry fully buried (%.6g N); valid range "
                   "[0, %.6g] N"),
     STATUS_UNCONVERGED: "sinkage solve did not converge for load %g N",
@@ -109,25 +108,23 @@ def _finite(y, names):
 
 
 def slips(wheel_speed, carriage_speed, slip_radius):
-    """(traction slip, paper's slip, forward) from the wheel's and the carriage's speeds.
+    """(the model's slip, the paper's slip, forward) from the wheel's and the carriage's speeds.
 
-    Traction slip i = (omega*R - V)/(omega*R), exactly the slip the contact model takes
-    (:mod:`wheelterrain.model.slip`), so the forces are those of the true kinematics V/omega =
-    (1 - i)*R. Its domain [-1, 1] runs from a rim turning at half the carriage speed (braking,
-    -1) to spinning in place (1); a slower rim (down to a locked wheel, i -> -inf) is outside
-    it. A rim speed below SPEED_FLOOR counts as SPEED_FLOOR, so a locked wheel under a moving
-    carriage gives a large negative slip, not a division by zero; both at rest give 0.
-    ``forward`` is false when the wheel or the carriage moves backward (beyond SPEED_FLOOR):
-    the model covers forward rolling only. The paper's s = (omega*R - V)/V: NaN with the
-    carriage at rest and the wheel turning (:func:`paper_slip`).
+    The model's slip sigma = (omega*R - V)/max(omega*R, V) (:mod:`wheelterrain.model.slip`):
+    the traction slip driving, the skid braking, so the forces are those of the true kinematics
+    on either side, from a locked wheel (omega = 0: -1) to spinning in place (V = 0: 1); both
+    at rest (below SPEED_FLOOR) give 0. ``forward`` is false when the wheel or the carriage
+    moves backward (beyond SPEED_FLOOR): the model covers forward rolling only. The paper's
+    s = (omega*R - V)/V: NaN with the carriage at rest and the wheel turning
+    (:func:`paper_slip`).
     """
     rim = wheel_speed * slip_radius
     difference = rim - carriage_speed
     at_rest = ca.fmax(ca.fabs(rim), ca.fabs(carriage_speed)) < SPEED_FLOOR
-    rim_safe = ca.if_else(ca.fabs(rim) < SPEED_FLOOR, SPEED_FLOOR, rim)
-    traction = ca.if_else(at_rest, 0, difference / rim_safe)
+    faster = ca.fmax(ca.fmax(rim, carriage_speed), SPEED_FLOOR)
+    unified = ca.if_else(at_rest, 0, difference / faster)
     forward = ca.logic_and(rim > -SPEED_FLOOR, carriage_speed > -SPEED_FLOOR)
-    return traction, paper_slip(wheel_speed, carriage_speed, slip_radius), forward
+    return unified, paper_slip(wheel_speed, carriage_speed, slip_radius), forward
 
 
 def paper_slip(wheel_speed, carriage_speed, slip_radius):
@@ -162,6 +159,13 @@ def with_rut_met(p, rut_met):
     return ca.vertcat(p[:k], ca.fmax(p[k], rut_met), p[k + 1:])
 
 
+def with_grouser_phase(p, phase):
+    """The parameter vector ``p`` (table order) with ``phase`` [rad] added to its
+    ripple.phase: a rover wheel's own grouser phase (rover.grouser_phase.<wheel>)."""
+    k = INDEX["ripple.phase"]
+    return ca.vertcat(p[:k], p[k] + phase, p[k + 1:])
+
+
 @lru_cache(maxsize=2)
 def terrain_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
     """(terrain_dynamic, terrain_quasi_static, terrain_memory): see the module's docstring.
@@ -177,21 +181,21 @@ def terrain_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
     sinkage, rate, omega, speed, load = (named[n] for n in (
         "sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "load"))
     p = with_rut_met(given, named["rut_met"])  # the rut met: the parameter's or the input's
-    traction, paper, forward = slips(omega, speed, slip_radius(p))
-    slip_bad = ca.logic_or(ca.logic_not(forward), ca.logic_or(traction < -1, traction > 1))
-    safe_slip = ca.fmin(ca.fmax(traction, -1), 1)  # only used when the status is OK
+    unified, paper, forward = slips(omega, speed, slip_radius(p))
+    slip_bad = ca.logic_or(ca.logic_not(forward), ca.logic_or(unified < -1, unified > 1))
+    safe_slip = ca.fmin(ca.fmax(unified, -1), 1)  # only used when the status is OK
 
     out = dict(zip((*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS),
                    fns.contact_memory(sinkage, rate, safe_slip, angle, plastic, speed, p),
                    strict=True))
-    out.update(contact_sinkage=sinkage, slip=traction, slip_paper=paper)
+    out.update(contact_sinkage=sinkage, slip=unified, slip_paper=paper)
     y = ca.vertcat(*(out[k] for k in TERRAIN_OUTPUTS))
     # sinkage R_c below the surface the contact begins at (a rut's): the soil at the axle
     full_burial = contact.radii(soil.Params(p))[0] + soil.rut_surface(soil.Params(p))
     status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(
         sinkage > full_burial, STATUS_BURIED, ca.if_else(
             _finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE)))
-    info = ca.if_else(slip_bad, traction, full_burial)
+    info = ca.if_else(slip_bad, unified, full_burial)
     dynamic = ca.Function("terrain_dynamic", [u, angle, plastic, given],
                           [y, status, info, out["plastic_rate"]],
                           ["u", "angle", "plastic", "p"], ["y", "status", "info", "plastic_rate"])
@@ -203,7 +207,7 @@ def terrain_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
     guess = ca.MX.sym("guess")
     steady = dict(zip(solve.STEADY_OUTPUTS, fns.steady_from(load, safe_slip, p, guess),
                       strict=True))
-    steady.update(contact_sinkage=steady["sinkage"], slip=traction, slip_paper=paper,
+    steady.update(contact_sinkage=steady["sinkage"], slip=unified, slip_paper=paper,
                   ripple_amplitude=0)
     y = ca.vertcat(*(steady[k] for k in TERRAIN_OUTPUTS))
     too_heavy = load > steady["capacity"]
@@ -211,7 +215,7 @@ def terrain_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
     status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(
         too_heavy, STATUS_LOAD, ca.if_else(converged, ca.if_else(
             _finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE), STATUS_UNCONVERGED)))
-    info = ca.if_else(slip_bad, traction, steady["capacity"])
+    info = ca.if_else(slip_bad, unified, steady["capacity"])
     quasi = ca.Function("terrain_quasi_static", [u, given, guess], [y, status, info],
                         ["u", "p", "guess"], ["y", "status", "info"])
     return dynamic, quasi, memory
@@ -230,14 +234,14 @@ RIG_MESSAGES = {
 }
 
 
-def _contact_with_damper(z, z_rate, traction, angle, plastic, speed, p) -> dict:
+def _contact_with_damper(z, z_rate, unified, angle, plastic, speed, p) -> dict:
     """``contact_memory``'s outputs by name, and ``damper_force``: the contact damper's share
     of the normal force (the normal force less its value at zero sinkage rate)."""
     fns = model_functions.build()
     names = (*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS)
-    out = dict(zip(names, fns.contact_memory(z, z_rate, traction, angle, plastic, speed, p),
+    out = dict(zip(names, fns.contact_memory(z, z_rate, unified, angle, plastic, speed, p),
                    strict=True))
-    still = fns.contact_memory(z, 0, traction, angle, plastic, speed, p)
+    still = fns.contact_memory(z, 0, unified, angle, plastic, speed, p)
     out["damper_force"] = out["normal_force"] - still[names.index("normal_force")]
     return out
 
@@ -261,8 +265,8 @@ def rig_on_contact(p, rig_values, sinkage_start: float) -> dict:
     x = ca.SX.sym("x", len(rig.RIG_STATES))
     angle, plastic = ca.SX.sym("wheel_angle"), ca.SX.sym("plastic_sinkage")
     omega_ref, speed = rig.references(rp)
-    traction = slips(x[2], speed, rp["rig.slip_radius"])[0]
-    values = _contact_with_damper(x[0], x[1], traction, angle, plastic, speed, p)
+    unified = slips(x[2], speed, rp["rig.slip_radius"])[0]
+    values = _contact_with_damper(x[0], x[1], unified, angle, plastic, speed, p)
     u = [*(values[k] for k in rig.FORCE_INPUTS), 0, 0]
     rates = rig.rates(x, u, rp)
     values.update(motor_torque=rig.motor_torque(x, u, rp), carriage_speed=speed)
@@ -279,39 +283,51 @@ def _soil_from_map(p, position, g: dict):
     return ca.vertcat(p[:first], *ground.soil_at(position, g), p[last + 1:])
 
 
-def rover_on_contact(p, r, g: dict | None = None, heave_start: float = 0.0) -> dict:
+def rover_on_contact(p, r, g: dict | None = None, heave_start: float = 0.0, slope=0.0,
+                     met=None) -> dict:
     """The rover in continuous time on four contacts with the soil's memory: the RoverChassis
     FMU's model-exchange rates (:func:`wheelterrain.model.rover.rates`) with each wheel's
-    WheelTerrain (``contact_memory``, its wheel angle and plastic sinkage states), no rut
-    record along the track (model exchange records none), every wheel on the soil of ``p``
-    (the table's parameter vector), or where a terrain map ``g`` (ground.NAMES by name) is
-    given on its soil at the wheel's position, and the rover's parameters ``r`` (by name).
+    WheelTerrain (``contact_memory``, its wheel angle and plastic sinkage states), every wheel
+    on the soil of ``p`` (the table's parameter vector), or where a terrain map ``g``
+    (ground.NAMES by name) is given on its soil at the wheel's position, and the rover's
+    parameters ``r`` (by name), on the slope ``slope`` [rad]. Without ``met`` no rut profile
+    along the tracks (model exchange records none); with it (per wheel a table of the
+    profile, :func:`wheelterrain.model.ground.met_in_table`, side by side, numbers or a
+    symbol) each wheel meets the rut the table gives at its position, as the Terrain FMU
+    serves it.
     Returns ``state`` and ``rate`` (SX: rover.STATES, the four wheel angles, the four plastic
     sinkages), ``start`` (rover.initial_state ``heave_start`` m in the soil, no memory yet),
     ``x`` (the chassis' states by name), ``u`` (the chassis' inputs by name: the
     forces as SX of the state) and ``wheels`` (per wheel: every contact output,
-    ``damper_force``, ``sinkage``, ``sinkage_rate``, ``wheel_speed``)."""
+    ``damper_force``, ``sinkage``, ``sinkage_rate``, ``wheel_speed``, ``axle_speed``)."""
     radius = slip_radius(p)
     x = ca.SX.sym("x", len(rover.STATES))
     angles, plastics = ca.SX.sym("angle", len(rover.WHEELS)), ca.SX.sym(
         "plastic", len(rover.WHEELS))
     xs = tuple(x[k] for k in range(len(rover.STATES)))
-    speed = xs[rover.STATES.index("speed")]
-    u = {"slope": 0.0, "towing_force": 0.0}
+    u = {"slope": slope, "towing_force": 0.0}
     extra, wheels = [], {}
     for k, wheel in enumerate(rover.WHEELS):
         z, z_rate = rover.wheel_kinematics(xs, r, wheel)
+        speed = rover.axle_speed(xs, r, wheel)
         omega = xs[rover.STATES.index(f"{wheel}.wheel_speed")]
-        traction = slips(omega, speed, radius)[0]
-        pk = p if g is None else _soil_from_map(
-            p, rover.wheel_position(r, xs[rover.STATES.index("position")], wheel), g)
-        out = _contact_with_damper(z, z_rate, traction, angles[k], plastics[k], speed, pk)
+        unified = slips(omega, speed, radius)[0]
+        where = rover.wheel_position(r, xs[rover.STATES.index("position")], wheel)
+        pk = p if g is None else _soil_from_map(p, where, g)
+        pk = with_grouser_phase(pk, rover.grouser_phase(r, wheel))
+        if met is not None:  # the rut the Terrain serves this wheel
+            size = len(met) // len(rover.WHEELS) if isinstance(met, (list, tuple)) \
+                else met.numel() // len(rover.WHEELS)
+            table = met[k * size:(k + 1) * size]
+            pk = with_rut_met(pk, ground.met_in_table(where, g or ground.defaults(), table))
+        out = _contact_with_damper(z, z_rate, unified, angles[k], plastics[k], speed, pk)
         for name in rover.WHEEL_FORCES:
             u[f"{wheel}.{name}"] = out[name]
         u[f"{wheel}.wheel_speed_command"] = 0.0
         u[f"{wheel}.motor_torque_command"] = 0.0
         extra.append(out["plastic_rate"])
-        wheels[wheel] = {**out, "sinkage": z, "sinkage_rate": z_rate, "wheel_speed": omega}
+        wheels[wheel] = {**out, "sinkage": z, "sinkage_rate": z_rate, "wheel_speed": omega,
+                         "axle_speed": speed}
     omegas = [wheels[w]["wheel_speed"] for w in rover.WHEELS]
     return {"state": ca.vertcat(x, angles, plastics),
             "rate": ca.vertcat(*rover.rates(xs, u, r), *omegas, *extra),
@@ -408,7 +424,8 @@ def rover_outputs(x, u, p, motor_torques):
         z, rate = rover.wheel_kinematics(x, p, w)
         out.update({f"{w}.sinkage": z, f"{w}.sinkage_rate": rate,
                     f"{w}.wheel_speed": state[f"{w}.wheel_speed"],
-                    f"{w}.carriage_speed": state["speed"], f"{w}.motor_torque": motor_torques[k],
+                    f"{w}.carriage_speed": rover.axle_speed(x, p, w),
+                    f"{w}.motor_torque": motor_torques[k],
                     f"{w}.speed_error_integral": state[f"{w}.speed_error_integral"],
                     f"{w}.position": rover.wheel_position(p, state["position"], w)})
     return tuple(out[name] for name in ROVER_OUTPUTS)

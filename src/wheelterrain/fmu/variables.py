@@ -135,9 +135,9 @@ TERRAIN_IO: tuple[Var, ...] = (
             "normal stress", "N", "Force"),
         Var("contact_sinkage", "output", "Sinkage the forces were evaluated at: the input in "
             "dynamic mode, the solved one in quasi-static mode", "m", "Length", "mm"),
-        Var("slip", "output", "Traction slip i = (omega*R_ref - V)/(omega*R_ref) used by the "
-            "model, braking included (domain [-1, 1]: a rim at half the carriage speed to "
-            "spinning)", "1"),
+        Var("slip", "output", "The model's slip (omega*R_ref - V)/max(omega*R_ref, V): the "
+            "traction slip driving, the skid (the paper's s) braking; -1 a locked wheel, 1 "
+            "spinning in place", "1"),
         Var("slip_paper", "output", "Slip in the paper's definition s = (omega*R_ref - V)/V: 0 "
             "with wheel and carriage at rest; undefined (NaN, with a warning) with the "
             "carriage at rest and the wheel turning", "1"),

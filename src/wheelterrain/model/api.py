@@ -21,10 +21,9 @@ from wheelterrain.model import functions as _functions
 from wheelterrain.model import solve as _solve
 from wheelterrain.model.slip import (
     DEFAULT_DEFINITION,
-    PAPER_RANGE,
-    TRACTION_RANGE,
-    paper_from_traction,
-    to_traction,
+    RANGES,
+    paper_from_unified,
+    to_unified,
 )
 from wheelterrain.model.solve import RESIDUAL_TOLERANCE, STEP_TOLERANCE  # noqa: F401 (public)
 from wheelterrain.parameters import ParameterSet
@@ -70,7 +69,7 @@ def contact_forces(params: Mapping[str, float] | ParameterSet, sinkage: float, s
     z = _finite("sinkage", sinkage, hi=contact_radius(ps))
     rate = _finite("sinkage_rate", sinkage_rate)
     angle = _finite("wheel_angle", wheel_angle)
-    i = to_traction(slip, slip_definition)
+    i = to_unified(slip, slip_definition)
     fns = _functions.build()
     out = fns.contact(z, rate, i, angle, ps.vector())
     return _named(out, _contact.CONTACT_OUTPUTS)
@@ -80,7 +79,7 @@ def capacity(params: Mapping[str, float] | ParameterSet, slip: float,
              slip_definition: str = DEFAULT_DEFINITION) -> float:
     """Static normal force [N] with the wheel buried to its contact radius: the largest load."""
     ps = _params(params)
-    i = to_traction(slip, slip_definition)
+    i = to_unified(slip, slip_definition)
     return float(_functions.build().capacity(i, ps.vector()))
 
 
@@ -90,21 +89,22 @@ def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: 
 
     load [N] >= 0 (0 gives zero sinkage and zero forces). The result is the grouser-period mean
     (ripple-free, zero sinkage rate) and holds every ``solve.STEADY_OUTPUTS`` plus ``load``,
-    ``slip`` (traction) and ``slip_paper``.
+    ``slip`` (the model's sigma: the traction slip driving, the skid braking,
+    :mod:`wheelterrain.model.slip`) and ``slip_paper``.
 
     Raises LoadTooLargeError if the wheel cannot carry the load fully buried, SolveError if the
     solve did not reach RESIDUAL_TOLERANCE (never observed; it is checked, not assumed).
     """
     ps = _params(params)
     w = _finite("load", load, lo=0.0)
-    i = to_traction(slip, slip_definition)
+    i = to_unified(slip, slip_definition)
     out = _named(_functions.build().steady(w, i, ps.vector()), _solve.STEADY_OUTPUTS)
     if w > out["capacity"]:
         raise LoadTooLargeError(w, out["capacity"], contact_radius(ps))
     if not _converged(out["residual"], out["last_step"]):
         raise SolveError(f"sinkage solve did not converge for load {w:g} N, slip {i:g}: "
                          + _unconverged(out["residual"], out["last_step"]))
-    out.update(load=w, slip=i, slip_paper=paper_from_traction(i))
+    out.update(load=w, slip=i, slip_paper=paper_from_unified(i))
     return out
 
 
@@ -120,7 +120,8 @@ def steady_jacobian(params: Mapping[str, float] | ParameterSet, load: float, sli
                     state: dict[str, float] | None = None) -> dict[str, np.ndarray]:
     """Exact derivatives of (sinkage, normal_force, drawbar_pull, torque) at the steady state.
 
-    ``d_inputs`` is 4x2 (by load [N], traction slip), ``d_params`` 4 x len(TABLE) in table order.
+    ``d_inputs`` is 4x2 (by load [N], the model's slip sigma), ``d_params`` 4 x len(TABLE)
+    in table order.
     ``state``: the :func:`steady_state` result at the same point, if the caller has it (saves
     solving again).
     """
@@ -131,15 +132,19 @@ def steady_jacobian(params: Mapping[str, float] | ParameterSet, load: float, sli
     return {"d_inputs": np.array(jac[0]), "d_params": np.array(jac[1])}
 
 
-def _traction_array(name: str, values, definition: str) -> np.ndarray:
-    """Validated traction slips from an array in either definition (as :func:`to_traction`)."""
-    to_traction(0.0, definition)  # checks the definition's name
+def _unified_array(name: str, values, definition: str) -> np.ndarray:
+    """The model's slips sigma from an array in any definition (as :func:`to_unified`)."""
+    to_unified(0.0, definition)  # checks the definition's name
     values = _as_floats(name, values)
-    lo, hi = TRACTION_RANGE if definition == "traction" else PAPER_RANGE
+    lo, hi = RANGES[definition]
     ok = np.isfinite(values) & (values >= lo) & (values <= hi)
     if not np.all(ok):  # the scalar check words the message (name, range)
-        to_traction(float(values.flat[np.flatnonzero(~ok)[0]]), definition)
-    return values if definition == "traction" else values / (1.0 + values)
+        to_unified(float(values.flat[np.flatnonzero(~ok)[0]]), definition)
+    if definition == "traction":  # braking: the skid i/(1 - i)
+        return np.where(values >= 0, values, values / (1.0 - np.minimum(values, 0.0)))
+    if definition == "paper":
+        return np.where(values < 0, values, values / (1.0 + np.maximum(values, 0.0)))
+    return values
 
 
 def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,
@@ -147,7 +152,7 @@ def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,
                   over_capacity: str = "raise") -> dict[str, np.ndarray]:
     """:func:`steady_state` at many points at once: ``load`` and ``slip`` are arrays of one
     length (or scalars, shared). Returns one array per ``solve.STEADY_OUTPUTS`` key plus
-    ``load``, ``slip`` (traction) and ``slip_paper``.
+    ``load``, ``slip`` (the model's sigma) and ``slip_paper``.
 
     Runs the lane-parallel C of :mod:`wheelterrain.model.lanes` (compiled on first use, about
     80 s, then cached; ~12 us a point cold on one core), or CasADi's virtual machine where it
@@ -165,7 +170,7 @@ def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,
     if over_capacity not in ("raise", "nan"):
         raise InputError("over_capacity", over_capacity, "must be 'raise' or 'nan'")
     load = _finite_array("load", load, lo=0.0)
-    i = _traction_array("slip", slip, slip_definition)
+    i = _unified_array("slip", slip, slip_definition)
     guess = _as_floats("guess", np.nan if guess is None else guess)  # NaN, <= 0: none
     load, i, guess = _one_length(load=load, slip=i, guess=guess)
     return _solve_points(ps, load, i, guess, (np.nan, np.nan), over_capacity)
@@ -208,8 +213,8 @@ def _solve_points(ps: ParameterSet, load: np.ndarray, i: np.ndarray, guess, ends
                          + _unconverged(out[row["residual"], k], out[row["last_step"], k]))
     np.add(out, 0.0, out=out)  # no -0.0
     result = {name: out[k] for name, k in row.items()}
-    with np.errstate(divide="ignore"):
-        result.update(load=load, slip=i, slip_paper=np.where(i == 1.0, np.inf, i / (1.0 - i)))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        result.update(load=load, slip=i, slip_paper=np.where(i < 0, i, i / (1.0 - i)))
     return result
 
 
@@ -258,7 +263,7 @@ def contact_forces_many(params: Mapping[str, float] | ParameterSet, sinkage, sli
     z = _finite_array("sinkage", sinkage, hi=contact_radius(ps))
     rate = _finite_array("sinkage_rate", sinkage_rate)
     angle = _finite_array("wheel_angle", wheel_angle)
-    i = _traction_array("slip", slip, slip_definition)
+    i = _unified_array("slip", slip, slip_definition)
     columns = _one_length(sinkage=z, sinkage_rate=rate, slip=i, wheel_angle=angle)
     out = _contact_many()(*columns, ps.vector())
     return {name: out[k] + 0.0 for k, name in enumerate(_contact.CONTACT_OUTPUTS)}
@@ -310,7 +315,7 @@ def steady_map(params: Mapping[str, float] | ParameterSet, loads, slips, *,
     at once (:func:`steady_states` with ``guess``)."""
     ps = _params(params)
     loads = _finite_array("loads", loads, lo=0.0).reshape(-1)
-    slips = _traction_array("slips", slips, slip_definition).reshape(-1)
+    slips = _unified_array("slips", slips, slip_definition).reshape(-1)
     for name, axis in (("loads", loads), ("slips", slips)):
         if axis.size == 0:
             raise InputError(name, [], "must hold at least one value")

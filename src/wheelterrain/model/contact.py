@@ -9,8 +9,10 @@ Conventions
   travel. Entry angle theta_f = arccos(1 - z/R_c) > 0; exit angle
   theta_r = -arccos(1 - lambda*z/R_c) <= 0 (lambda = ``model.exit_ratio``; 0 gives the Wong-Reece
   theta_r = 0).
-- ``slip`` is the traction slip i = (omega*R_ref - V)/(omega*R_ref) (see
-  :mod:`wheelterrain.model.slip` for the paper's s = i/(1 - i)). Positive when driving.
+- ``slip`` is the model's slip sigma = (omega*R_ref - V)/max(omega*R_ref, V)
+  (:mod:`wheelterrain.model.slip`): the traction slip i when driving (0 to 1, spinning), the
+  skid s = (omega*R_ref - V)/V when braking (0 to -1, a locked wheel). Written i below where
+  the driving formula is the familiar one.
 - Forces are those of the soil on the wheel: normal force up, drawbar pull forward, torque the
   resistive torque the motor has to supply.
 
@@ -18,13 +20,14 @@ Equations (Wong & Reece 1967; Wong, *Theory of Ground Vehicles*; Ishigami et al.
 2011; Irani et al. 2011)::
 
     R_c = R + f_c*h_g,  R_s = R + f_s*h_g,  R_ref = R + f_ref*h_g       (radii; all R when f = 0)
-    n    = n0 + n1*|i|                                                   (Ding et al. 2011)
+    n    = n0 + n1*max(i, 0)                                             (Ding et al. 2011)
     k_eq = (c*k_c' + gamma*b*k_phi') * (R_c/b)**n                        (Reece 1965)
     theta_m = (a0 + a1*i)*theta_f                                        (Wong & Reece 1967)
     sigma(theta) = k_eq*(cos(theta) - cos(theta_f))**n                   theta_m <= theta <= theta_f
     sigma(theta) = k_eq*(cos(theta*) - cos(theta_f))**n,                 theta_r <= theta < theta_m
         theta* = theta_f - (theta - theta_r)/(theta_m - theta_r)*(theta_f - theta_m)
-    j(theta) = R_s*(theta_f - theta) - (1 - i)*R_ref*(sin(theta_f) - sin(theta))  (wheel element)
+    j(theta) = R_s*(theta_f - theta) - (1 - i)*R_ref*(sin(theta_f) - sin(theta))  (wheel element;
+               braking: (1 + i)*R_s*(theta_f - theta) - R_ref*(sin(theta_f) - sin(theta)))
     j(theta) = R_c*[R_s/((1 - i)*R_ref)*(sin(theta_f) - sin(theta))                  (soil element,
                - (theta_f - theta)/2 - (sin(2*theta_f) - sin(2*theta))/4]           SCM; see below)
     tau = (c' + sigma*tan(phi')) * g(j),  g = 1 - exp(-j/K')  (Janosi)  or Wong's hump form
@@ -64,7 +67,10 @@ non-smooth operation; it is only active with the ripple on.
 Choices where the equations are silent, each documented:
 - The shear law is made odd in j, g(-j) = -g(j), so a braked wheel (negative j) gets a bounded,
   opposite shear instead of the exponential blow-up of the literal formula; identical for j >= 0.
-- The slip-sinkage exponent uses |i| (skid also digs in); the paper only covers i >= 0.
+- The slip-sinkage exponent is held at n0 in skid (:func:`wheelterrain.model.soil.reece`):
+  the slip-sinkage law was fitted on driven wheels, and no source here gives one for skid.
+- Braking runs to the locked wheel: the wheel element's shear displacement is then counted per
+  distance travelled (the skid form, :func:`_kinematics`), finite at omega = 0.
 - The damping term C_f*dz/dt acts only in contact (z > 0), and the total normal force is kept >= 0
   (the soil cannot pull the wheel down). Both are inactive in the quasi-static solve.
 - cos(theta) - cos(theta_f) and sin(theta_f) - sin(theta) are formed from half angles, exactly
@@ -185,7 +191,7 @@ def _reversal_offset(theta_f, theta_r, d_front, d_rear, displacement) -> ca.SX:
     so that a panel edge sits on the kink of the odd shear law; 1 when j keeps its sign.
 
     ``displacement`` is the :class:`_Displacement` of the arc. With x = theta_f - theta, under
-    either kinematics j'(x) has the sign of R_s - v*cos(theta), v = (1 - i)*R_ref: j rises from 0
+    either kinematics j'(x) has the sign of R_s - v*cos(theta), v = V/omega: j rises from 0
     at the entry while v*cos(theta) < R_s, peaks where cos(theta) = R_s/v (theta = theta_c), and
     falls while |theta| < theta_c: a braked wheel (v > R_s) has its reversal on that falling
     stretch, found by Newton safeguarded by bisection. A second reversal beyond -theta_c needs an
@@ -208,14 +214,30 @@ def _reversal_offset(theta_f, theta_r, d_front, d_rear, displacement) -> ca.SX:
     return ca.if_else(crossing, ca.fmin(ca.fmax(offset, 0), 1), 1)
 
 
-SPIN_FLOOR = 1e-9  # soil-element kinematics: 1 - i is floored here (j -> inf as i -> 1)
+SPIN_FLOOR = 1e-9  # soil-element kinematics: 1 - sigma is floored here (j -> inf as sigma -> 1)
 
 
-def _speed_ratios(slip, Rs, Rref):
-    """(v, R_s/v): v = (1 - i)*R_ref, the carriage speed per wheel rad/s, and the shearing
-    radius over it with 1 - i floored at SPIN_FLOOR (the soil element's kinematics; j -> inf as
-    i -> 1). Both contact forms count their shear displacement from these."""
-    return (1 - slip) * Rref, Rs / (ca.fmax(1 - slip, SPIN_FLOOR) * Rref)
+def _kinematics(slip, Rs, Rref):
+    """(a, v, R_s/v) of the model's slip sigma (:mod:`wheelterrain.model.slip`), the factors
+    both contact forms count their shear displacement with:
+
+    - the wheel element's displacement j = a*R_s*x - v*(sin(theta_f) - sin(theta)): driving,
+      a = 1 and v = (1 - sigma)*R_ref = V/omega (time counted by the wheel's turning,
+      dt = dtheta/omega, Wong & Reece 1967); braking, a = 1 + sigma and v = R_ref: the same
+      displacement counted per distance the wheel travels (dt = R_ref*dtheta/V, the driving
+      expression times omega*R_ref/V = 1 + sigma), the skid form, which stays finite down to
+      the locked wheel (sigma = -1, omega = 0): there j = -R_ref*(sin(theta_f) - sin(theta)),
+      the rim sliding over the soil by the distance travelled;
+    - R_s/v = R_s*omega/V, the soil element's ratio: R_s/((1 - sigma)*R_ref) driving, with
+      1 - sigma floored at SPIN_FLOOR (j -> inf as sigma -> 1), R_s*(1 + sigma)/R_ref braking
+      (0 locked).
+    The two branches meet at sigma = 0 with equal values and slopes."""
+    braking = slip < 0
+    a = ca.if_else(braking, 1 + slip, 1)
+    v = ca.if_else(braking, Rref, (1 - slip) * Rref)
+    ratio = ca.if_else(braking, Rs * (1 + slip) / Rref,
+                       Rs / (ca.fmax(1 - slip, SPIN_FLOOR) * Rref))
+    return a, v, ratio
 
 
 class _Displacement:
@@ -224,7 +246,9 @@ class _Displacement:
 
     0, the wheel element (Wong & Reece 1967): the slip accumulated by the wheel-surface element
       now at theta since it entered the soil, dt = dtheta/omega:
-      j = int (omega*R_s - V*cos(t)) dt = R_s*x - v*(sin(theta_f) - sin(theta)), v = V/omega.
+      j = int (omega*R_s - V*cos(t)) dt = R_s*x - v*(sin(theta_f) - sin(theta)), v = V/omega;
+      braking, counted per distance travelled instead (:func:`_kinematics`: a*R_s*x - R_ref*(...),
+      a = 1 + sigma), which holds down to the locked wheel.
     1, the soil element: the slip accumulated over the soil element now at theta since the wheel
       reached it. The element stays put while the axle advances at V, so it moves along the
       contact circle with dt = R_c*cos(t)*dtheta/V:
@@ -232,21 +256,22 @@ class _Displacement:
         = R_c*[(R_s/v)*(sin(theta_f) - sin(theta)) - x/2 - sin(x)*cos(theta_f + theta)/2].
       This is how the Soil Contact Model accumulates the Janosi displacement per soil node
       (Krenn & Hirzinger 2009; Project Chrono's SCMTerrain, ``kshear``). R_s/v = (R_s/R_ref)*
-      (1 + s) is linear in the paper's slip s; j grows without bound as i -> 1 (the soil under a
-      spinning wheel is sheared for ever), so 1 - i is floored at SPIN_FLOOR, where the shear is
-      fully mobilised to machine precision except within ~1e-9*R of the entry.
+      (1 + s) is linear in the paper's slip s, 0 for a locked wheel; j grows without bound as
+      sigma -> 1 (the soil under a spinning wheel is sheared for ever), so 1 - sigma is floored
+      at SPIN_FLOOR, where the shear is fully mobilised to machine precision except within
+      ~1e-9*R of the entry.
     Both vanish at the entry and are identical in sign pattern (same peak theta_c).
     """
 
     def __init__(self, theta_f, slip, P, Rc, Rs, Rref) -> None:
         self.theta_f, self.Rc, self.Rs = theta_f, Rc, Rs
-        self.v_ratio, self.ratio = _speed_ratios(slip, Rs, Rref)
+        self.a, self.v, self.ratio = _kinematics(slip, Rs, Rref)
         self.soil = P["model.shear_kinematics"]
         self.cos_f, self.sin_f = ca.cos(theta_f), ca.sin(theta_f)  # once, not per node
 
     def at(self, o: dict) -> ca.SX:
         """j at the nodes of an :func:`_offset_trig` dict."""
-        wheel = self.Rs * o["x"] - self.v_ratio * o["sin_drop"]
+        wheel = self.a * self.Rs * o["x"] - self.v * o["sin_drop"]
         cos_sum = self.cos_f * o["cos"] - self.sin_f * o["sin"]  # cos(theta_f + theta)
         soil = self.Rc * (self.ratio * o["sin_drop"] - o["x"] / 2 - o["sin_x"] * cos_sum / 2)
         return (1 - self.soil) * wheel + self.soil * soil
@@ -257,7 +282,7 @@ class _Displacement:
     def slope(self, x: ca.SX) -> ca.SX:
         """dj/dx."""
         cos_t = ca.cos(self.theta_f - x)
-        wheel = self.Rs - self.v_ratio * cos_t
+        wheel = self.a * self.Rs - self.v * cos_t
         soil = self.Rc * cos_t * (self.ratio - cos_t)
         return (1 - self.soil) * wheel + self.soil * soil
 
@@ -297,7 +322,8 @@ def rut_left(theta_f: ca.SX, ground: Rut, P: Params) -> ca.SX:
 
 
 def _max_stress_ratio(slip: ca.SX, P: Params) -> ca.SX:
-    """theta_m/theta_f = a0 + a1*i (Wong & Reece 1967)."""
+    """theta_m/theta_f = a0 + a1*sigma (Wong & Reece 1967), in [a0 - a1, a0 + a1]: >= 0 down to
+    the locked wheel within the parameters' ranges (model.a0 >= model.a1's largest value)."""
     return P["model.a0"] + P["model.a1"] * slip
 
 
@@ -535,7 +561,7 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, ripp
 
         z = R_c*(1 - cos(theta_f)),   theta_r as in the arc form (lambda = model.exit_ratio)
         l = R_c*(sin(theta_f) - sin(theta_r))   (lambda = 1: the chord 2*sqrt(2*R_c*z - z**2))
-        p = (c*k_c' + gamma*b*k_phi')*(z/b)**n,  n = n0 + n1*|i|          (Reece 1965)
+        p = (c*k_c' + gamma*b*k_phi')*(z/b)**n,  n = n0 + n1*max(i, 0)    (Reece 1965)
         Fz = b*l*max(p + A*sin(n_g*wheel_angle + Phi), 0)                 (ripple as the arc's)
         H  = (c*b*l + Fz*tan(phi))*m(x*l/K)                               (Bekker 1960)
         R_comp = b*int_0^z p dz' = b*p*z/(n + 1)                          (Bekker 1956)
@@ -543,8 +569,9 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, ripp
 
     m is :func:`patch_shear_mean`. x is the slip of the shearing surface (radius R_s) that the
     shear displacement j = x*(distance from the patch front) counts, by
-    ``model.shear_kinematics``: 0, the wheel element's i_s = 1 - v/R_s (v = (1 - i)*R_ref, the
-    carriage speed per wheel rad/s; with R_s = R_ref this is the traction slip); 1, the soil
+    ``model.shear_kinematics``: 0, the wheel element's a - v/R_s (:func:`_kinematics`: driving
+    1 - v/R_s, v = (1 - i)*R_ref the carriage speed per wheel rad/s; braking, per distance
+    travelled, (1 + sigma) - R_ref/R_s; with R_s = R_ref the model's slip sigma); 1, the soil
     element's s_s = R_s/v - 1, the slip velocity over the time the patch takes to pass a soil
     element (with R_s = R_ref the paper's slip s). Choices, documented: the compaction
     resistance is the ripple-free rut work; the shear acts horizontally, so it adds nothing to
@@ -577,9 +604,9 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, ripp
         normal = b * length * ca.fmax(pressure + amplitude * ca.sin(phase), 0)
     else:
         normal = normal_static
-    v, soil_ratio = _speed_ratios(slip, Rs, Rref)
+    a, v, soil_ratio = _kinematics(slip, Rs, Rref)
     kinematics = P["model.shear_kinematics"]
-    x = (1 - kinematics) * (1 - v / Rs) + kinematics * (soil_ratio - 1)
+    x = (1 - kinematics) * (a - v / Rs) + kinematics * (soil_ratio - 1)
     K = effective_shear_modulus(length, P)
     mobilised = patch_shear_mean(x * length / K, P)
     # model.rut_shear: the rut's maker, at this slip, left j0 = x*(its contact length)

@@ -107,12 +107,18 @@ def shear_peak(P: Params) -> ca.SX:
 
 
 def reece(slip: ca.SX, P: Params) -> tuple[ca.SX, ca.SX]:
-    """Reece's pressure-sinkage law: the exponent n = n0 + n1*|i| (Ding et al. 2011) and the
-    modulus (c*k_c' + gamma*b*k_phi')*(2R/D_ref)**m (p = modulus*(z/b)**n), shared by both
-    contact forms. The diameter factor, m = ``model.diameter_exponent`` and D_ref =
+    """Reece's pressure-sinkage law: the exponent n = n0 + n1*max(sigma, 0) (Ding et al. 2011;
+    sigma the model's slip, :mod:`wheelterrain.model.slip`) and the modulus
+    (c*k_c' + gamma*b*k_phi')*(2R/D_ref)**m (p = modulus*(z/b)**n), shared by both contact
+    forms. The diameter factor, m = ``model.diameter_exponent`` and D_ref =
     DIAMETER_REFERENCE, is the small-wheel correction in the form of Meirion-Griffith & Spenko
-    2011 (a power of the diameter); m = 0 is the flat-plate law exactly."""
-    n = P["soil.n0"] + P["soil.n1"] * ca.fabs(slip)
+    2011 (a power of the diameter); m = 0 is the flat-plate law exactly.
+
+    In skid (sigma < 0) the exponent is held at n0, its value at the edge of the data the law
+    was fitted on: Ding et al. measured driven wheels (i = 0 to 0.6), and no source here gives
+    a skid-sinkage law (this project's assumption; it had used |i|, a skid digging in as much as
+    the same driving slip, without a source either)."""
+    n = P["soil.n0"] + P["soil.n1"] * ca.fmax(slip, 0)
     diameter = (2 * P["wheel.radius"] / DIAMETER_REFERENCE) ** P["model.diameter_exponent"]
     modulus = (P["soil.cohesion"] * P["soil.k_c"]
                + P["soil.gamma"] * P["wheel.width"] * P["soil.k_phi"]) * diameter
@@ -171,7 +177,7 @@ def in_rut(P: Params) -> ca.SX:
 
 
 def rut(slip: ca.SX, P: Params) -> Rut:
-    """The :class:`Rut` under the wheel at traction slip ``slip``."""
+    """The :class:`Rut` under the wheel at the model's slip ``slip`` (sigma)."""
     n, modulus = reece(slip, P)
     b = P["wheel.width"]
     on = in_rut(P)

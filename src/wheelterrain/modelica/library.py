@@ -45,7 +45,7 @@ import casadi as ca
 import numpy as np
 
 from wheelterrain import __version__, presets
-from wheelterrain.model import contact, ground, rover, slip
+from wheelterrain.model import contact, ground, rover
 from wheelterrain.modelica import external, reference, translate
 from wheelterrain.modelica.translate import Port
 from wheelterrain.parameters import NAMES, RIG_TABLE, TABLE, Parameter
@@ -139,7 +139,8 @@ def _doc(text: str) -> str:
 INPUT_DOC = {
     "sinkage": "sinkage of the contact circle below the undisturbed surface [m]",
     "sinkage_rate": "d(sinkage)/dt [m/s]",
-    "slip": "traction slip i = (omega*R_ref - V)/(omega*R_ref) [1]",
+    "slip": "the model's slip (omega*R_ref - V)/max(omega*R_ref, V): traction driving, skid "
+            "braking [1]",
     "wheel_angle": "wheel angle, the grouser ripple's phase [rad]",
     "plastic_sinkage": "the deepest the wheel has pressed the soil under it (its memory) [m]",
     "carriage_speed": "the axle's forward speed V [m/s]",
@@ -220,26 +221,28 @@ def exported() -> tuple[Exported, ...]:
     wheel_speed, carriage_speed, p = ca.SX.sym("wheel_speed"), ca.SX.sym(
         "carriage_speed"), ca.SX.sym("p", len(NAMES))
     # the paper's slip is left out: it is NaN with the axle at rest, and Modelica has no NaN
-    traction, _, _ = fmu_functions.slips(wheel_speed, carriage_speed,
-                                         fmu_functions.slip_radius(p))
-    f = ca.Function("tractionSlip", [wheel_speed, carriage_speed, p], [traction], {"cse": True})
+    sigma, _, _ = fmu_functions.slips(wheel_speed, carriage_speed,
+                                      fmu_functions.slip_radius(p))
+    f = ca.Function("slipFromSpeeds", [wheel_speed, carriage_speed, p], [sigma], {"cse": True})
     names = ("wheel_speed", "carriage_speed", "p")
-    out.append(Exported("tractionSlip", f, names, (Port("slip", description="[1]"),),
-                        "Traction slip i from the wheel's and the axle's speeds (0 with both at "
-                        "rest; a rim slower than 1e-9 m/s counts as that)",
+    out.append(Exported("slipFromSpeeds", f, names, (Port("slip", description="[1]"),),
+                        "The model's slip from the wheel's and the axle's speeds: "
+                        "(omega*R_ref - V)/max(omega*R_ref, V), the traction slip driving, the "
+                        "skid braking, -1 a locked wheel (0 with both at rest)",
                         _derivative(f, names)))
     s = ca.SX.sym("slip_paper")
-    f = ca.Function("tractionFromPaper", [s], [slip.traction_from_paper(s)], {"cse": True})
-    out.append(Exported("tractionFromPaper", f, ("slip_paper",),
-                        (Port("slip", description="traction slip i = s/(1 + s) [1]"),),
-                        "Traction slip from the paper's slip", _derivative(f, ("slip_paper",))))
+    f = ca.Function("slipFromPaper", [s], [ca.if_else(s < 0, s, s / (1 + s))], {"cse": True})
+    out.append(Exported("slipFromPaper", f, ("slip_paper",),
+                        (Port("slip", description="the model's slip: s/(1 + s) driving, s "
+                              "braking [1]"),),
+                        "The model's slip from the paper's slip", _derivative(f, ("slip_paper",))))
     out += _rover_functions()
     return tuple(out)
 
 
 def _rover_functions() -> list[Exported]:
-    """The RoverChassis FMU's chassis (its model-exchange rates and each wheel's sinkage and
-    sinkage rate) and the Terrain FMU's soil map."""
+    """The RoverChassis FMU's chassis (its model-exchange rates and each wheel's sinkage, sinkage
+    rate and axle speed) and the Terrain FMU's soil map."""
     sizes = _sizes()
     x, u, r = (ca.SX.sym(n, sizes[n]) for n in ("x", "u", "r"))
     xs = tuple(x[k] for k in range(sizes["x"]))
@@ -249,7 +252,8 @@ def _rover_functions() -> list[Exported]:
                         {"cse": True})
     kinematics = []
     for wheel in rover.WHEELS:
-        kinematics += rover.wheel_kinematics(xs, named, wheel)
+        kinematics += [*rover.wheel_kinematics(xs, named, wheel),
+                       rover.axle_speed(xs, named, wheel)]
     wheels = ca.Function("roverWheels", [x, r], [ca.vertcat(*kinematics)], {"cse": True})
     position, g = ca.SX.sym("position"), ca.SX.sym("g", sizes["g"])
     soil = ground.soil_at(position, {n: g[k] for k, n in enumerate(ground.NAMES)})
@@ -260,9 +264,11 @@ def _rover_functions() -> list[Exported]:
                  "The chassis' state derivative (the RoverChassis FMU's model exchange)",
                  _derivative(rates, ("x", "u", "r"))),
         Exported("roverWheels", wheels, ("x", "r"),
-                 (Port("y", 2 * len(rover.WHEELS), description=(
-                     "each wheel's sinkage and sinkage rate, Index.rover_wheels order")),),
-                 "Each wheel's sinkage and sinkage rate from the chassis' state",
+                 (Port("y", 3 * len(rover.WHEELS), description=(
+                     "each wheel's sinkage, sinkage rate and axle speed, Index.RoverWheel "
+                     "order")),),
+                 "Each wheel's sinkage, sinkage rate and axle speed (the chassis' speed less "
+                 "the pitch rate's share) from the chassis' state",
                  _derivative(wheels, ("x", "r"))),
         Exported("soilAt", soil_at, ("position", "g"),
                  (Port("soil", len(ground.SOIL_NAMES), description=(
@@ -438,7 +444,8 @@ def _index(lib: Library, where: str) -> None:
     for package, names, what in (("RoverState", rover.STATES, "roverRates' x and dx"),
                                  ("RoverInput", rover.INPUTS, "roverRates' u"),
                                  ("RoverWheel", [f"{w}.{q}" for w in rover.WHEELS
-                                                 for q in ("sinkage", "sinkage_rate")],
+                                                 for q in ("sinkage", "sinkage_rate",
+                                                           "axle_speed")],
                                   "roverWheels' y")):
         lines.append(f'  package {package} "Positions in {what}"')
         for k, name in enumerate(names):
@@ -617,7 +624,8 @@ def _rover_chassis() -> str:
         u.append(f"{quantity}[{rover.WHEELS.index(wheel) + 1}]" if wheel else quantity)
     kinematics = []
     for k in range(n):
-        kinematics += [f"sinkage[{k + 1}]", f"sinkage_rate[{k + 1}]"]
+        kinematics += [f"sinkage[{k + 1}]", f"sinkage_rate[{k + 1}]",
+                       f"carriage_speed[{k + 1}]"]
     lines = [
         'block RoverChassis "The RoverChassis FMU\'s chassis (its model exchange): a rigid body '
         'in the plane of travel on four driven wheels (no Modelica Standard Library needed)"',
@@ -632,6 +640,8 @@ def _rover_chassis() -> str:
     lines += [
         f'  output Real sinkage[{n}](each unit="m") "per wheel";',
         f'  output Real sinkage_rate[{n}](each unit="m/s") "per wheel";',
+        f'  output Real carriage_speed[{n}](each unit="m/s") "per wheel: its axle\'s speed '
+        'along the terrain";',
         f'  output Real wheel_speed[{n}](each unit="rad/s") "per wheel";',
         '  output Real speed(unit="m/s") "the chassis\' speed along the terrain";',
         '  output Real position(unit="m") "the chassis\' reference point along the path";',
@@ -681,8 +691,14 @@ def _rover_example(name: str = "Rover") -> str:
                      '"the terrain map (Data.terrain with the soft patch)";')
     lines += [f"  {LIBRARY}.Components.RoverChassis chassis(r=r, slope=0, towing_force=0,",
               f"    wheel_speed_command=zeros({n}), motor_torque_command=zeros({n}));"]
-    lines += [f"  {LIBRARY}.Components.MapWheel {w}(p=p, g=g);" if mapped else
-              f"  {LIBRARY}.Components.Wheel {w}(p=p);" for w in rover.WHEELS]
+    k, size = NAMES.index("ripple.phase") + 1, len(NAMES)
+    for w in rover.WHEELS:  # each wheel's grouser phase added to its ripple.phase
+        j = rover.ROVER_NAMES.index(f"rover.grouser_phase.{w}") + 1
+        lines += translate.wrap(f"  parameter Real p_{w}[{size}] = cat(1, p[1:{k - 1}], "
+                                f"{{p[{k}] + r[{j}]}}, p[{k + 1}:{size}]) "
+                                f'"{w}: p with its grouser phase";')
+    lines += [f"  {LIBRARY}.Components.MapWheel {w}(p=p_{w}, g=g);" if mapped else
+              f"  {LIBRARY}.Components.Wheel {w}(p=p_{w});" for w in rover.WHEELS]
     lines += ['  Real speed(unit="m/s") = chassis.speed;',
               '  Real pitch(unit="rad") = chassis.pitch;', "equation"]
     half = f"r[{rover.ROVER_NAMES.index('rover.wheelbase') + 1}]/2"
@@ -690,7 +706,7 @@ def _rover_example(name: str = "Rover") -> str:
         lines += [f"  {w}.sinkage = chassis.sinkage[{k}];",
                   f"  {w}.sinkage_rate = chassis.sinkage_rate[{k}];",
                   f"  {w}.wheel_speed = chassis.wheel_speed[{k}];",
-                  f"  {w}.carriage_speed = chassis.speed;"]
+                  f"  {w}.carriage_speed = chassis.carriage_speed[{k}];"]
         if mapped:  # rover.wheel_position: the axle ahead of or behind the reference point
             lines.append(f"  {w}.position = chassis.position "
                          f"{'+' if w in rover.FRONT else '-'} {half};")

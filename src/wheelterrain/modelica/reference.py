@@ -25,12 +25,13 @@ import numpy as np
 from wheelterrain import presets
 from wheelterrain.fmu import functions as fmu_functions
 from wheelterrain.model import api, ground, rig, rover
-from wheelterrain.model.slip import traction_from_paper
+from wheelterrain.model.slip import unified_from_paper
 
 STEADY_LOAD = 62.0
 """N: the rig's load in the paper's C1-C4 (Table III), the steady examples' load."""
 RAMP = (-0.5, 1.3)
-"""SlipRamp's traction slip: RAMP[0] + RAMP[1]*time, time in [0, 1] s."""
+"""SlipRamp's slip (the model's: skid braking, traction driving): RAMP[0] + RAMP[1]*time,
+time in [0, 1] s."""
 RAMP_TIMES = tuple(round(0.05 * k, 2) for k in range(21))
 RIG_CASES = {"C1": 0.0, "C2": 0.25, "C3": 0.5, "C4": 0.75}
 """The paper's rig cases and their slips s (Abubakar et al., Table III)."""
@@ -40,11 +41,11 @@ RIG_COLUMNS = ("time", *fmu_functions.RIG_LOOP_STATES, *rig.FORCE_INPUTS)
 
 
 def steady_rows(slips: Sequence[float], times: Sequence[float] | None = None) -> list[dict]:
-    """The steady state of the default preset at STEADY_LOAD and each traction slip."""
+    """The steady state of the default preset at STEADY_LOAD and each of the model's slips."""
     params = presets.load()
     rows = []
     for k, slip in enumerate(slips):
-        s = api.steady_state(params, STEADY_LOAD, float(slip))
+        s = api.steady_state(params, STEADY_LOAD, float(slip), "unified")
         row = {"time": times[k]} if times is not None else {}
         row.update(slip=float(slip), sinkage=s["sinkage"], drawbar_pull=s["drawbar_pull"],
                    torque=s["torque"])
@@ -196,7 +197,7 @@ def one_root(msl: Path, library_root: Path, folder: Path) -> Path:
 def files() -> dict[str, str]:
     """Resources/Reference/<Example>.csv -> text, for every example."""
     out = {}
-    c2 = steady_rows([traction_from_paper(0.25)])
+    c2 = steady_rows([unified_from_paper(0.25)])
     out["SteadyC2.csv"] = _csv(("slip", "sinkage", "drawbar_pull", "torque"),
                                [[r[k] for k in ("slip", "sinkage", "drawbar_pull", "torque")]
                                 for r in c2])

@@ -16,7 +16,7 @@ model Contact "The wheel-soil contact between a wheel's hub, its axle and the gr
   SI.Velocity sinkage_rate;
   SI.AngularVelocity wheel_speed;
   SI.Velocity carriage_speed;
-  Real slip(unit="1") "traction slip";
+  Real slip(unit="1") "the model's slip: traction driving, skid braking (-1 locked)";
   SI.Length plastic_sinkage(start=plastic_sinkage_start, fixed=true) "the deepest the wheel has pressed the soil under it";
   SI.Force normal_force "the soil's force on the wheel, up";
   SI.Force drawbar_pull "the soil's net force on the wheel, forward";
@@ -28,8 +28,8 @@ equation
   sinkage_rate = der(sinkage);
   wheel_speed = der(hub.phi);
   carriage_speed = der(axle.s);
-  slip = WheelTerrain.Functions.tractionSlip(wheel_speed, carriage_speed, p);
-  assert(slip >= -1 and slip <= 1, "Contact: the traction slip left the model's range [-1, 1]");
+  slip = WheelTerrain.Functions.slipFromSpeeds(wheel_speed, carriage_speed, p);
+  assert(slip >= -1 and slip <= 1, "Contact: the slip left the model's range [-1, 1] (a wheel or axle moving backward)");
   y = contactFunction(sinkage, sinkage_rate, slip, hub.phi, plastic_sinkage, carriage_speed, p);
   der(plastic_sinkage) = y[WheelTerrain.Functions.Index.plastic_rate];
   normal_force = y[WheelTerrain.Functions.Index.normal_force];

@@ -10,15 +10,15 @@ partial block PartialWheel "The WheelTerrain FMU's contact as a block (its model
   output Real normal_force(unit="N") "the soil's force on the wheel, up";
   output Real drawbar_pull(unit="N") "the soil's net force on the wheel, forward";
   output Real torque(unit="N.m") "the torque the soil resists the wheel's turning with";
-  output Real slip(unit="1") "traction slip";
+  output Real slip(unit="1") "the model's slip: traction driving, skid braking (-1 locked)";
   output Real rut_left(unit="m") "the rut the wheel leaves";
   Real wheel_angle(unit="rad", start=0, fixed=true) "the grouser ripple's phase";
   Real plastic_sinkage(unit="m", start=0, fixed=true) "the deepest the wheel has pressed the soil under it";
   output Real y[${CONTACT_ROWS}] "every output of Functions.contact, Functions.Index order";
 equation
   der(wheel_angle) = wheel_speed;
-  slip = WheelTerrain.Functions.tractionSlip(wheel_speed, carriage_speed, pk);
-  assert(slip >= -1 and slip <= 1, "Wheel: the traction slip left the model's range [-1, 1]");
+  slip = WheelTerrain.Functions.slipFromSpeeds(wheel_speed, carriage_speed, pk);
+  assert(slip >= -1 and slip <= 1, "Wheel: the slip left the model's range [-1, 1] (a wheel or axle moving backward)");
   y = contactFunction(sinkage, sinkage_rate, slip, wheel_angle, plastic_sinkage, carriage_speed, pk);
   der(plastic_sinkage) = y[WheelTerrain.Functions.Index.plastic_rate];
   normal_force = y[WheelTerrain.Functions.Index.normal_force];

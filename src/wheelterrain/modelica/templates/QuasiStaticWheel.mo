@@ -7,7 +7,7 @@ block QuasiStaticWheel "A wheel at steady state on the soil: the sinkage at whic
     constrainedby WheelTerrain.Functions.Interfaces.QuasiStatic
     "the contact: Functions.quasiStatic (generated, the default) or Functions.External.quasiStatic (CasADi's C)";
   input Real load(unit="N") "the vertical load on the wheel";
-  input Real slip(unit="1") "traction slip i";
+  input Real slip(unit="1") "the model's slip: traction i driving, skid s braking (-1 locked)";
   output Real sinkage(unit="m", start=sinkage_start, fixed=false)
     "the steady sinkage: the static normal force equals the load";
   output Real drawbar_pull(unit="N") "the net forward force of the soil on the wheel";

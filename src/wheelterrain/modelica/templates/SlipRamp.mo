@@ -1,4 +1,4 @@
-model SlipRamp "The quasi-static wheel at ${steady_load} N as its traction slip ramps from ${ramp_start} by ${ramp_rate} per second (no Modelica Standard Library needed)"
+model SlipRamp "The quasi-static wheel at ${steady_load} N as its slip ramps from ${ramp_start} by ${ramp_rate} per second (no Modelica Standard Library needed)"
   WheelTerrain.Components.QuasiStaticWheel wheel(load=${steady_load}, slip=${ramp_start} + ${ramp_rate}*time);
   Real sinkage(unit="m") = wheel.sinkage;
   Real drawbar_pull(unit="N") = wheel.drawbar_pull;

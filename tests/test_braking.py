@@ -1,0 +1,105 @@
+"""Braking down to the locked wheel: the model's slip runs from -1 (omega = 0) to 1, every face
+takes it, and the braking force behaves as a soil's can."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from classical_reference import Classical
+from conftest import classical_set
+from test_classical import SOILS
+from wheelterrain import compiled, model, presets
+from wheelterrain.cli import main
+
+LOCKED_TRACTION = -1e12  # the reference takes traction slip: a locked wheel is i -> -inf
+
+
+@pytest.mark.parametrize("row", SOILS, ids=[s[0] for s in SOILS])
+@pytest.mark.parametrize("kinematics", ["wheel", "soil"])
+def test_a_locked_wheel_is_the_classical_references_limit(row, kinematics):
+    """At the lock (the paper's slip -1) the classical model gives the independent reference's
+    forces in the limit of traction slip -> -inf, at several sinkages, both kinematics."""
+    _, R, b, c, phi, kc, kphi, n, gamma, K, a0, a1 = row
+    ref = Classical(R=R, b=b, c=c, phi=math.radians(phi), kc=kc, kphi=kphi, n=n, gamma=gamma,
+                    K=K, a0=a0, a1=a1, kinematics=kinematics)
+    ps = classical_set(R, b, c, phi, kc, kphi, n, gamma, K, a0, a1).with_values(
+        {"model.shear_kinematics": int(kinematics == "soil")})
+    for frac in (0.05, 0.3, 0.8):
+        want = ref.forces(frac * R, LOCKED_TRACTION)
+        got = model.contact_forces(ps, frac * R, -1.0, slip_definition="paper")
+        for key, value in want.items():
+            scale = abs(want["normal_force"]) * (R if key == "torque" else 1.0)
+            assert abs(got[key] - value) <= 1e-6 * max(abs(value), scale), (key, frac)
+
+
+CASES = [(name, kin) for name in presets.available() for kin in (0, 1)]
+
+
+@pytest.mark.parametrize(("preset", "kinematics"), CASES, ids=[f"{p}-{k}" for p, k in CASES])
+@pytest.mark.parametrize("load", [24.5, 62.0])
+def test_the_braking_force_is_continuous_and_grows_to_the_lock_within_coulomb(preset, kinematics,
+                                                                             load):
+    """Steady states from free rolling to the locked wheel: the drawbar pull is continuous
+    through slip 0 (both sides within 1e-6 of the load), the braking force (-pull) does not
+    fall as the skid grows to -1, and the shear part of it (the gross thrust) stays within the
+    soil's Coulomb limit at the contact, c*b*l + W*tan(phi)."""
+    ps = presets.load(preset).with_values({"model.shear_kinematics": kinematics})
+    slips = np.linspace(-1.0, 0.0, 41)
+    out = model.steady_states(ps, load, slips, slip_definition="unified")
+    braking = -out["drawbar_pull"]
+    assert np.all(np.diff(braking) <= 1e-9 * load), braking  # slips rise: braking falls
+    near = model.steady_states(ps, load, [-1e-9, 0.0, 1e-9], slip_definition="unified")
+    assert np.ptp(near["drawbar_pull"]) <= 1e-6 * load
+    limit = (ps["soil.cohesion"] * ps["wheel.width"] * out["contact_length"]
+             + load * math.tan(ps["soil.phi"]))
+    assert np.all(np.abs(out["gross_thrust"]) <= limit)
+    assert braking[0] > braking[-1]  # the lock brakes harder than free rolling
+
+
+def test_steady_and_sweep_take_a_locked_wheel_in_every_definition(tmp_path):
+    """`steady` takes the lock as the paper's -1 or the unified -1 (the same point), the
+    traction definition refuses it with the way to say it; its JSON says slip -1."""
+    runner = CliRunner()
+    got = []
+    for definition in ("paper", "unified"):
+        run = runner.invoke(main, ["steady", "--slip", "-1", "--slip-definition", definition,
+                                   "--load", "24.5", "--json"])
+        assert run.exit_code == 0, run.output
+        got.append(json.loads(run.stdout))
+    assert got[0] == got[1]
+    assert got[0]["slip"] == -1.0
+    assert got[0]["slip_paper"] == -1.0
+    assert got[0]["drawbar_pull"] < 0
+    refused = runner.invoke(main, ["steady", "--slip", "-inf", "--load", "24.5"])
+    assert refused.exit_code == 2
+    assert "a locked wheel is traction slip -inf: give it as --slip-definition paper -1" \
+        in refused.output
+
+
+@pytest.mark.skipif(compiled.compiler() is None, reason="no C compiler")
+@pytest.mark.parametrize("path", ["native/WheelTerrain.fmu", "native/fmi3/WheelTerrain.fmu",
+                                  "pythonfmu/WheelTerrain.fmu"])
+@pytest.mark.parametrize("kind", ["CoSimulation", "ModelExchange"])
+def test_every_fmu_serves_a_locked_wheel(built_root, path, kind):
+    """A wheel that does not turn under a moving axle: slip -1 and the contact model's forces,
+    in co-simulation and model exchange, FMI 2 and 3, both flavours."""
+    from fmpy import read_model_description, simulate_fmu
+
+    fmu = str(built_root / path)
+    if kind == "ModelExchange" and read_model_description(fmu).modelExchange is None:
+        pytest.skip("the pythonfmu flavour is co-simulation only")
+    inputs = {"sinkage": 0.015, "wheel_speed": 0.0, "carriage_speed": 0.02}
+    names = ["slip", "slip_paper", "normal_force", "drawbar_pull", "torque"]
+    run = simulate_fmu(fmu, fmi_type=kind, stop_time=0.1, output_interval=1e-2,
+                       start_values=inputs, output=names)
+    want = model.contact_forces(presets.load(presets.DEFAULT_PRESET), 0.015, -1.0,
+                                slip_definition="unified")
+    assert np.all(run["slip"] == -1.0)
+    assert np.all(run["slip_paper"] == -1.0)
+    for key in ("normal_force", "drawbar_pull", "torque"):
+        assert run[key] == pytest.approx(want[key], rel=1e-9), key
