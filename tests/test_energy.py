@@ -6,11 +6,10 @@ pressing of the soil, to 1e-6 of the motor's work, for every preset at C1 and C4
 with memory and the elastic one, with bulldozing on; each loss has its physical sign; leaving
 any term out breaks the balance far beyond the tolerance (the test can fail).
 
-The rover: the same per wheel, with gravity and the chassis' kinetic energy, closing to 1e-9
-with the chassis model's neglect of the pitch rate's share of the axle speeds counted (its
-``pitch`` term). That term stays below 1e-6 of the motor's work on level ground on Earth, so
-the physical balance (without it) closes to 1e-6 there; on the Moon it is 1.5e-6 over the same
-10 s, and 8e-4 on a 10 deg climb: the chassis model's approximation, reported, not asserted."""
+The rover: the same per wheel, each with its own axle's speed (exact rigid-body kinematics),
+with gravity and the chassis' kinetic energy (its centre of mass'), closing to 1e-9 on level
+ground, a 10 deg climb and a 10 deg descent, on Earth and the Moon, with the rut profiles:
+the rear wheels in the front wheels' ruts, as the rover is simulated."""
 
 from __future__ import annotations
 
@@ -83,26 +82,66 @@ def test_the_cli_prints_the_ledger_and_writes_json(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("gravity", [9.81, 1.62])
-def test_the_rover_ledger_closes_on_level_ground(gravity):
-    ledger = energy.rover_ledger(presets.load(), {"rover.gravity": gravity}, stop=10.0)
+def test_the_rover_ledger_closes_on_level_ground_with_the_ruts(gravity):
+    """20 s from rest: the rear wheels reach the front wheels' ruts (at about 13 s)."""
+    ledger = energy.rover_ledger(presets.load(), {"rover.gravity": gravity})
+    assert ledger["ruts"] is True
+    assert ledger["stop"] == 20.0
     assert abs(ledger["residual"]) <= 1e-9 * ledger["motor"], ledger
-    if gravity == 9.81:  # measured 8.4e-7; on the Moon 1.5e-6 (the settling bounce is slower)
-        assert abs(ledger["pitch"]) <= BALANCE * ledger["motor"], ledger
     for wheel in ledger["wheels"].values():
         for loss in ("slip", "compaction", "damping"):
             assert wheel[loss] >= 0, (loss, wheel)
     assert ledger["towing"] == 0
     # the weight's work as the chassis sinks in: m*g times the sinking, J
     assert 0 < ledger["gravity"] < 10.0 * gravity * 0.02
+    met = ledger["rut_met"]
+    assert met["front_left"] == met["front_right"] == 0.0
+    assert met["rear_left"] > 1e-3  # in the front wheel's rut
 
 
-def test_the_rover_ledger_closes_on_a_slope_with_the_pitch_term_counted():
-    """Climbing (the chassis' input profile ramps the slope to 10 deg), the pitch rate grows
-    and the chassis model's approximation costs more: the ledger still closes with it."""
+@pytest.mark.parametrize("gravity", [9.81, 1.62])
+@pytest.mark.parametrize("slope", [10.0, -10.0], ids=["climb", "descent"])
+def test_the_rover_ledger_closes_climbing_and_descending(gravity, slope):
+    """From the steady motion on the slope (the rear wheels in the front wheels' steady
+    ruts): climbing, the motors lift the rover; descending, gravity drives it and the motors
+    brake (their work negative: the braking shear and the compaction take the energy)."""
     import math
 
-    ramp = {"rover.ramp_time": 3.0, "rover.slope_rate_after": math.radians(2.0),
-            "rover.slope_bound": math.radians(10.0)}
-    ledger = energy.rover_ledger(presets.load(), ramp, stop=10.0)
-    assert abs(ledger["residual"]) <= 1e-9 * ledger["motor"], ledger
-    assert ledger["gravity"] < 0  # climbing: the motors lift the rover
+    ledger = energy.rover_ledger(presets.load(), {"rover.gravity": gravity}, stop=10.0,
+                                 slope=math.radians(slope))
+    assert ledger["start"] == "steady motion"
+    assert abs(ledger["residual"]) <= 1e-9 * abs(ledger["motor"]), ledger
+    assert ledger["rut_met"]["rear_left"] > 1e-3
+    if slope > 0:
+        assert ledger["gravity"] < 0 < ledger["motor"]
+    else:
+        assert ledger["motor"] < 0 < ledger["gravity"]
+    assert ledger["slip"] > 0  # the slip always costs, driving or braking
+    assert ledger["compaction"] > 0
+
+
+def test_a_slope_without_a_steady_motion_is_refused_with_the_way_out():
+    import math
+
+    from wheelterrain.errors import WheelTerrainError
+
+    with pytest.raises(WheelTerrainError, match="no steady motion on a 40 deg slope"):
+        energy.rover_ledger(presets.load(), {}, stop=1.0, slope=math.radians(40.0))
+
+
+def test_the_cli_runs_the_rovers_ledger_on_a_slope_with_its_ruts(tmp_path, capsys):
+    target = tmp_path / "rover.json"
+    with pytest.raises(SystemExit) as done:
+        main(["energy", "--system", "rover", "--slope", "-10", "--stop", "2", "--json",
+              str(target)], standalone_mode=True)
+    assert done.value.code == 0
+    (row,) = json.loads(target.read_text())["runs"]
+    assert row["case"] == "-10 deg, earth"
+    assert row["ruts"] is True
+    assert row["slope_deg"] == pytest.approx(-10.0)
+    assert set(energy.ROVER_TERMS) <= set(row)
+    assert "pitch" not in row  # exact kinematics: no approximation left to count
+    with pytest.raises(SystemExit) as done:
+        main(["energy", "--slope", "5"], standalone_mode=True)
+    assert done.value.code == 2
+    assert "--slope is the rover's" in capsys.readouterr().err

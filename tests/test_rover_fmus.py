@@ -143,13 +143,19 @@ def test_a_soil_map_runs_through_terrain_fmus_as_in_process(built, terrain, in_p
 def test_a_soil_map_in_rover_ssp_gives_the_same_means_in_other_engines(built, terrain,
                                                                        in_process, engine):
     """Rover.ssp with four Terrain.fmu (the soil map's query points) runs unchanged in libcosim,
-    ecos and OMSimulator, with the in-process means within 1e-3 (libcosim and ecos see the
-    soil two steps late)."""
+    ecos and OMSimulator, with the in-process means within 1e-3. libcosim and ecos see the soil
+    two steps late and hand the forces over one step late: where the front wheels drop into
+    the patch, the rear wheels' load swings 16.6-32.4 N in libcosim at 1 ms against 23.1-26.7 N
+    in process, and the rear soil remembers the peak (rear sinkage 4.8e-3 off, measured
+    2026-11-28, since the chassis counts the pitch rate in its axle and centre-of-mass
+    velocities); at 0.5 ms 26.9 N at most, as in process. So they run at 0.5 ms here, both
+    sides (docs/rover.md, engines)."""
     _skip_unless_installed(engine)
     soil = _patched(terrain, in_process)
-    _assert_same_means(rover_system.simulate(soil, {}, STOP),
+    step = 1e-3 if engine == "omsimulator" else 5e-4
+    _assert_same_means(rover_system.simulate(soil, {}, STOP, step=step, block=round(0.1 / step)),
                        rover_fmus.simulate_ssp(engine, built / "native", "soft-patch", soil,
-                                               {}, STOP))
+                                               {}, STOP, step=step))
 
 
 @pytest.mark.parametrize("engine", ["libcosim", "ecos"])
@@ -175,29 +181,33 @@ def test_halving_the_step_shrinks_what_a_one_step_late_engine_differs_by(built, 
 @pytest.mark.parametrize("engine", ["libcosim", "ecos", "omsimulator"])
 def test_an_engine_s_run_ends_where_a_wheel_leaves_the_model_s_domain(built, terrain, engine,
                                                                       tmp_path):
-    """A steep descent the wheels cannot brake: a wheel's slip passes -1 at 2.86 s and its
-    WheelTerrain refuses the step (fmi2Discard). libcosim then stepped again from the same time,
-    which the FMUs that had stepped refused, at every step to the end (a slope run logged
-    84 MB of errors); now the run ends there. ecos and OMSimulator go on with the refusing
-    FMU's outputs frozen; the record is cut there. Every engine's record ends within a few
-    steps of the in-process one's, with the reason."""
+    """A climb steeper than the wheels can take: the rover stops and rolls back, its axles move
+    backward at 5.84 s and the WheelTerrains refuse the step (fmi2Discard). libcosim then
+    stepped again from the same time, which the FMUs that had stepped refused, at every step
+    to the end (a slope run logged 84 MB of errors); now the run ends there. ecos and
+    OMSimulator go on with the refusing FMU's outputs frozen; the record is cut there. Every
+    engine's record ends within a few steps of the in-process one's, with the reason: 10 ms
+    (measured 2026-11-28: ecos 6 ms after in process; the axles start backward slowly, so the
+    one-step-late engines' small differences move that moment by steps, where a slip passing
+    1 moved it by less than 5 ms)."""
     _skip_unless_installed(engine)
-    values = {"rover.ramp_time": 1.0, "rover.slope_rate_after": np.radians(-5.0),
-              "rover.slope_bound": np.radians(20.0)}
+    values = {"rover.ramp_time": 1.0, "rover.slope_rate_after": np.radians(5.0),
+              "rover.slope_bound": np.radians(40.0)}
     soil = rover_system.Soil(terrain)
-    ours = rover_system.simulate(soil, values, 6.0)
-    theirs = rover_fmus.simulate_ssp(engine, built / "native", "ramp", soil, values, 6.0)
+    ours = rover_system.simulate(soil, values, 8.0)
+    theirs = rover_fmus.simulate_ssp(engine, built / "native", "ramp", soil, values, 8.0)
     assert ours.left_domain
+    assert "the rover moves backward" in ours.left_domain
     assert theirs.left_domain
-    assert 2.0 < ours.time[-1] < 4.0
-    assert abs(theirs.time[-1] - ours.time[-1]) <= 5e-3, (theirs.time[-1], ours.time[-1])
+    assert 5.0 < ours.time[-1] < 7.0
+    assert abs(theirs.time[-1] - ours.time[-1]) <= 1e-2, (theirs.time[-1], ours.time[-1])
     for w in rover.WHEELS:
         assert np.all(np.abs(theirs.wheels[w]["slip"]) <= 1.0)
-    if engine == "libcosim":  # the engine itself stops (before, it ran on to 6 s)
+    if engine == "libcosim":  # the engine itself stops (before, it ran on to the end)
         path = rover_fmus.write_ssp(tmp_path / "Rover.ssp", built / "native", "ramp", soil,
-                                    values, 6.0)
-        raw = ssp.simulate_with_libcosim(path, 6.0, 1e-3, ("front_left.slip",))
-        assert raw["time"][-1] < 3.0
+                                    values, 8.0)
+        raw = ssp.simulate_with_libcosim(path, 8.0, 1e-3, ("front_left.slip",))
+        assert raw["time"][-1] < 7.0
     if engine == "ecos":  # stopped where it is asked to (it would go on to 6 s)
         path = rover_fmus.write_ssp(tmp_path / "Rover.ssp", built / "native", "ramp", soil,
                                     values, 6.0)
@@ -290,7 +300,10 @@ def test_model_exchange_agrees_with_co_simulation(built):
     path = str(built / "native" / "RoverChassis.fmu")
     me = simulate_fmu(path, fmi_type="ModelExchange", stop_time=1.0, output_interval=1e-3,
                       start_values=forces, output=out, relative_tolerance=1e-10)
-    at = 0.9  # s, a time on both grids
+    # s, a time on both grids. These forces do not balance the chassis: it tips over (pitch
+    # -0.2 rad at 0.3 s, -5 rad at 0.9 s, where the heave of the axle line passes through 0 and
+    # no relative error means anything)
+    at = 0.3
 
     def value(r, n):
         return float(np.interp(at, r["time"], r[n]))

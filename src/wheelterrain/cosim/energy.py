@@ -20,17 +20,20 @@ The rig (its carriage kinematic, its load W on the moving mass m, the wheel's in
     motor + load = kinetic + pull + slip + compaction + bulldozing + damping + pressing
     motor = int M*omega dt,  load = W*(z1 - z0),  pull = int DP*V dt (the work on the carriage)
 
-The rover (chassis speed u, heave rate w, pitch rate q, the motors' torques M_k reacting on
-the chassis)::
+The rover (the centre of mass' velocity v = (v_x, v_z) along and into the terrain, pitch rate
+q, the motors' torques M_k reacting on the chassis, each wheel's axle moving at its own speed
+u_k = u - l_k*sin(theta)*q, exact rigid-body kinematics, :mod:`wheelterrain.model.rover`)::
 
-    motor + gravity = kinetic + towing + sum over wheels (slip + ... + pressing) + pitch
-    motor = int sum M_k*(omega_k - q) dt, gravity = int m*g*(w*cos(slope) - u*sin(slope)) dt,
-    towing = int F*u dt
+    motor + gravity = kinetic + towing + sum over wheels (slip + ... + pressing)
+    motor = int sum M_k*(omega_k - q) dt, gravity = int m*g*(v_z*cos(slope) - v_x*sin(slope)) dt,
+    towing = int F*v_x dt, kinetic = m*|v|**2/2 + I*q**2/2 + J*sum omega_k**2/2 (gained)
 
-``pitch`` is the chassis model's own approximation: each wheel's contact sees its axle move
-forward at u and sink at w + l_k*cos(theta)*q, while the chassis applies the wheel's forces at
-the axle's offset r_k (rover.py neglects the pitch rate's share d*q of the axle's speed), so
-pitch = int q*sum((l_k*sin(theta) + d*cos(theta))*P_k - d*sin(theta)*N_k) dt.
+each wheel's soil terms with its own axle speed u_k. With ``ruts`` (the default) the rover runs
+with the rut profile, as it is simulated: each wheel meets the rut the tracks' profiles hold
+where it is (the rear wheels the front wheels' ruts), the profiles replayed from the ruts the
+wheels left after every RUT_SEGMENT s of the integration, as the in-process engine does
+between its blocks of steps (:mod:`wheelterrain.cosim.ruts`); no term is added for it, the
+ruts being laid behind the wheels.
 
 Both ledgers hold exactly for the continuous equations; ``residual`` is what the integration
 leaves (CVODES at 1e-10: ~1e-11 of the motor's work), and a force applied with the wrong sign
@@ -52,7 +55,7 @@ SOIL_TERMS = ("slip", "compaction", "bulldozing", "damping", "pressing")
 """Where a wheel's contact takes the energy, per wheel [J]."""
 TERMS = ("motor", "load", "kinetic", "pull", *SOIL_TERMS)
 """The rig ledger's terms [J], supplied first."""
-ROVER_TERMS = ("motor", "gravity", "kinetic", "towing", *SOIL_TERMS, "pitch")
+ROVER_TERMS = ("motor", "gravity", "kinetic", "towing", *SOIL_TERMS)
 """The rover ledger's terms [J], supplied first (the soil terms summed over the wheels)."""
 SUPPLIED = ("motor", "load", "gravity")
 SINKAGE_START = 0.01
@@ -62,6 +65,10 @@ STOP = 4.0
 TOLERANCE = 1e-10
 """CVODES' relative tolerance for the states and the works."""
 INTERVAL = 0.01
+RUT_SEGMENT = 0.1
+"""s: the rover's integration with ruts, in segments of this length (the in-process engine's
+block), the rut profiles replayed between them from the ruts left every RUT_SAMPLE s."""
+RUT_SAMPLE = 1e-3
 
 
 def soil_powers(wheel: dict, speed, omega, z_rate) -> dict:
@@ -124,40 +131,63 @@ def rig_ledger(params: ParameterSet, slip_paper: float, stop: float = STOP,
 
 
 def rover_ledger(params: ParameterSet, rover_values: Mapping[str, float] | None = None,
-                 stop: float = 10.0, heave_start: float = 1e-3) -> dict:
-    """The energy ledger of the rover over ``stop`` s from its start (the table's defaults and
-    ``rover_values``; the chassis ``heave_start`` in the soil, every wheel on ``params``' soil,
-    no rut profile: model exchange): each of ROVER_TERMS [J], ``wheels`` (per wheel its
-    SOIL_TERMS), ``residual`` and ``relative_residual``."""
+                 stop: float = 20.0, heave_start: float = 1e-3, slope: float = 0.0,
+                 ruts: bool = True) -> dict:
+    """The energy ledger of the rover over ``stop`` s (the table's defaults and
+    ``rover_values``, every wheel on ``params``' soil) on the slope ``slope`` [rad] (uphill
+    > 0), with the rut profiles (``ruts``; without: no wheel meets a rut, model exchange):
+    each of ROVER_TERMS [J], ``wheels`` (per wheel its SOIL_TERMS), ``residual``,
+    ``relative_residual``, ``ruts``, ``slope_deg``, ``start`` and ``rut_met`` (per wheel the
+    rut it meets at the end [m]). On level ground the rover
+    starts at rest with the chassis ``heave_start`` in the soil; on a slope in its steady
+    motion there (:func:`wheelterrain.cosim.rover_limits.steady_slip`, each rear wheel in its
+    front wheel's steady rut): a rover started at rest on a slope slides back before its
+    wheels have sunk in. A slope without a steady motion is a WheelTerrainError."""
+    from wheelterrain.cosim import ruts as rut_profile
+    from wheelterrain.model import ground
+
     r = {**rover.defaults(), **(rover_values or {})}
-    loop = rover_on_contact(ca.DM(params.vector()), r, heave_start=heave_start)
+    met = ca.SX.sym("met", rut_profile.N_MET) if ruts else None
+    loop = rover_on_contact(ca.DM(params.vector()), r, heave_start=heave_start, slope=slope,
+                            met=met)
+    profiles = None
+    if slope != 0:
+        loop["start"], profiles = _steady_start(params, r, slope, ground.defaults())
     x, u = loop["x"], loop["u"]
     xs = tuple(x.values())
-    slope, towing = rover.effective_inputs(xs, u, r)
-    m, g, d = r["rover.mass"], r["rover.gravity"], r["rover.cg_height"]
-    sin_t, cos_t = ca.sin(x["pitch"]), ca.cos(x["pitch"])
+    effective_slope, towing = rover.effective_inputs(xs, u, r)
+    m, g = r["rover.mass"], r["rover.gravity"]
     q = x["pitch_rate"]
+    vx, vz = rover.centre_of_mass_velocity(xs, r)
     powers = {"motor": sum(rover.motor_torque(xs, u, r, w)
                            * (x[f"{w}.wheel_speed"] - q) for w in rover.WHEELS),
-              "gravity": m * g * (x["heave_rate"] * ca.cos(slope)
-                                  - x["speed"] * ca.sin(slope)),
-              "towing": towing * x["speed"], "pitch": 0}
+              "gravity": m * g * (vz * ca.cos(effective_slope) - vx * ca.sin(effective_slope)),
+              "towing": towing * vx}
     for w in rover.WHEELS:
         wheel = loop["wheels"][w]
-        lk = rover.lever(r, w)
-        powers["pitch"] += q * ((lk * sin_t + d * cos_t) * wheel["drawbar_pull"]
-                                - d * sin_t * wheel["normal_force"])
-        for term, power in soil_powers(wheel, x["speed"], wheel["wheel_speed"],
+        for term, power in soil_powers(wheel, wheel["axle_speed"], wheel["wheel_speed"],
                                        wheel["sinkage_rate"]).items():
             powers[f"{w}.{term}"] = power
-    _, path = _integrate(loop["state"], loop["rate"], powers, loop["start"], stop)
     n = len(loop["start"])
-    first, end = path[:, 0], path[:, -1]
+    met_at_end = dict.fromkeys(rover.WHEELS, 0.0)
+    if ruts:
+        g = ground.defaults()
+        end, profiles = _with_ruts(loop, powers, met, r, g, stop, profiles)
+        first = np.array([*loop["start"], *([0.0] * len(powers))])
+        at = float(end[rover.STATES.index("position")])
+        met_at_end = {w: float(ground.met(profiles[rover.TRACK_OF[w]],
+                                          rover.wheel_position(r, at, w), g))
+                      for w in rover.WHEELS}
+    else:
+        _, path = _integrate(loop["state"], loop["rate"], powers, loop["start"], stop)
+        first, end = path[:, 0], path[:, -1]
     out = dict(zip(powers, (float(w) for w in end[n:]), strict=True))
+    speed_of_mass = ca.Function("com", [loop["state"]], [vx, vz])
 
     def kinetic(column) -> float:
         s = dict(zip(rover.STATES, column[:len(rover.STATES)], strict=True))
-        return (m * (s["speed"] ** 2 + s["heave_rate"] ** 2) / 2
+        cx, cz = (float(v) for v in speed_of_mass(column[:n]))
+        return (m * (cx**2 + cz**2) / 2
                 + r["rover.pitch_inertia"] * s["pitch_rate"] ** 2 / 2
                 + sum(r["rover.wheel_inertia"] * s[f"{w}.wheel_speed"] ** 2 / 2
                       for w in rover.WHEELS))
@@ -167,5 +197,65 @@ def rover_ledger(params: ParameterSet, rover_values: Mapping[str, float] | None 
     for t in SOIL_TERMS:
         out[t] = sum(wheels[w][t] for w in rover.WHEELS)
     result = {k: out[k] for k in ROVER_TERMS}
-    result.update(_close(out, ROVER_TERMS), wheels=wheels, stop=float(stop))
+    result.update(_close(out, ROVER_TERMS), wheels=wheels, stop=float(stop), ruts=bool(ruts),
+                  slope_deg=float(np.degrees(slope)),
+                  start="steady motion" if slope != 0 else "rest", rut_met=met_at_end)
     return result
+
+
+def _steady_start(params: ParameterSet, r: Mapping[str, float], slope: float,
+                  g: Mapping[str, float]) -> tuple[list[float], dict]:
+    """The rover's steady motion on ``slope``, ripple-free (rover_limits): its state (with the
+    wheel angles 0 and each wheel's plastic sinkage at its sinkage) and the tracks' rut
+    profiles of it."""
+    from wheelterrain.cosim import ruts as rut_profile
+    from wheelterrain.cosim.rover_limits import steady_slip, steady_state_vector
+    from wheelterrain.errors import WheelTerrainError
+
+    quiet = {w: params.with_values({"ripple.k_g": 0.0, "ripple.k_0": 0.0})
+             for w in rover.WHEELS}
+    slip = steady_slip(quiet, r, slope)
+    if slip is None:
+        raise WheelTerrainError(
+            f"the rover has no steady motion on a {np.degrees(slope):g} deg slope (it stalls "
+            "or slides there: wheelterrain rover --scenario slope|descent); choose a gentler "
+            "one")
+    balance = rover.steady_balance(quiet, r, slope, slip)
+    x = steady_state_vector(balance, r)
+    plastics = [float(rover.wheel_kinematics(list(x), r, w)[0]) for w in rover.WHEELS]
+    start = [*x, *([0.0] * len(rover.WHEELS)), *plastics]
+    return start, rut_profile.steady_ruts(balance, r, x, g)
+
+
+def _with_ruts(loop: dict, powers: dict, met, r: Mapping[str, float], g: Mapping[str, float],
+               stop: float, profiles: dict | None = None) -> tuple[np.ndarray, dict]:
+    """The rover's state and the works at ``stop``, integrated in RUT_SEGMENT pieces, each with
+    the rut profiles' tables (``met``, its parameter) at its start, the ruts the wheels left
+    (sampled every RUT_SAMPLE s) replayed into the profiles after it; and the profiles."""
+    from wheelterrain.cosim import ruts as rut_profile
+    from wheelterrain.model import ground
+
+    state, n = loop["state"], len(loop["start"])
+    work = ca.SX.sym("work", len(powers))
+    problem = {"x": ca.vertcat(state, work), "p": met,
+               "ode": ca.vertcat(loop["rate"], *powers.values())}
+    samples = round(RUT_SEGMENT / RUT_SAMPLE)
+    grid = np.linspace(0.0, RUT_SEGMENT, samples + 1)
+    integrator = ca.integrator("ledger_ruts", "cvodes", problem, 0.0, grid[1:].tolist(),
+                               {"abstol": 1e-14, "reltol": TOLERANCE, "max_num_steps": 10**7})
+    position = rover.STATES.index("position")
+    left = ca.Function("left", [state, met], [ca.vertcat(
+        *(loop["wheels"][w]["rut_left"] for w in rover.WHEELS))])
+    profiles = ({track: ground.no_ruts() for track in rover.TRACKS} if profiles is None
+                else {track: list(p) for track, p in profiles.items()})
+    column = np.array([*loop["start"], *([0.0] * len(powers))])
+    for _ in range(max(1, round(stop / RUT_SEGMENT))):
+        at = {w: rover.wheel_position(r, column[position], w) for w in rover.WHEELS}
+        table = rut_profile.met_table(profiles, at, g)
+        path = np.column_stack([column, np.array(integrator(x0=column, p=table)["xf"])])
+        steps = path[:, :-1]  # the state at the start of each sample step
+        lefts = np.array(left.map(samples)(steps[:n], ca.repmat(ca.DM(table), 1, samples)))
+        rut_profile.remember(profiles, steps[position],
+                             {w: lefts[k] for k, w in enumerate(rover.WHEELS)}, table, r, g)
+        column = path[:, -1]
+    return column, profiles

@@ -32,6 +32,7 @@ import numpy as np
 
 from wheelterrain import compiled
 from wheelterrain.cosim import ruts
+from wheelterrain.errors import WheelTerrainError
 from wheelterrain.fmu import functions
 from wheelterrain.model import contact, ground, rover
 from wheelterrain.model import functions as model_functions
@@ -57,26 +58,27 @@ def coupled_forces(xs: list, p: dict, pt: ca.MX, angles, plastics=None) -> tuple
     column of ``pt``, its angle from ``angles``, its plastic sinkage from ``plastics`` (None:
     the contact without the wheel's own memory, the grouser-period mean of a steady motion).
     The slip is evaluated inside the contact model's domain (a state outside it ends a run:
-    :func:`simulate`). Also returns per wheel (traction slip, sinkage, contact outputs by
-    name)."""
+    :func:`simulate`). Also returns per wheel (slip, sinkage, contact outputs by
+    name; the slip the model's, :mod:`wheelterrain.model.slip`)."""
     fns = model_functions.build()
     s = dict(zip(rover.STATES, xs, strict=True))
     u, wheels = {}, []
     for k, w in enumerate(rover.WHEELS):
         z, rate = rover.wheel_kinematics(xs, p, w)
-        traction, _, _ = functions.slips(s[f"{w}.wheel_speed"], s["speed"],
-                                         p["rover.slip_radius"])
-        slip = ca.fmin(ca.fmax(traction, -1), 1)
+        speed = rover.axle_speed(xs, p, w)
+        unified, _, _ = functions.slips(s[f"{w}.wheel_speed"], speed, p["rover.slip_radius"])
+        slip = ca.fmin(ca.fmax(unified, -1), 1)
         if plastics is None:
             out = dict(zip(contact.CONTACT_OUTPUTS,
                            fns.contact(z, rate, slip, angles[k], pt[:, k]), strict=True))
         else:
             out = dict(zip((*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS),
-                           fns.contact_memory(z, rate, slip, angles[k], plastics[k], s["speed"],
+                           fns.contact_memory(z, rate, slip, angles[k], plastics[k], speed,
                                               pt[:, k]), strict=True))
+        out["axle_speed"] = speed
         u.update({f"{w}.{n}": out[n] for n in rover.WHEEL_FORCES})
         u.update({f"{w}.{n}": 0.0 for n in rover.WHEEL_COMMANDS})
-        wheels.append((traction, z, out))
+        wheels.append((unified, z, out))
     return u, wheels
 
 
@@ -91,14 +93,9 @@ def _wheel_soils(xs: list, p: dict, pw: ca.MX, pg: ca.MX, met: ca.MX) -> ca.MX:
     for j, w in enumerate(rover.WHEELS):
         where = rover.wheel_position(p, xs[0], w)
         soil = dict(zip(ground.SOIL_NAMES, ground.soil_at(where, g), strict=True))
-        number, share = ground.met_cells(where, g)
-        first = met[j * (ruts.NEAR + 1)]
-        near = far = 0
-        for k in range(ruts.NEAR):
-            near = near + ca.if_else(number == first + k, met[j * (ruts.NEAR + 1) + 1 + k], 0)
-            far = far + ca.if_else(number + 1 == first + k, met[j * (ruts.NEAR + 1) + 1 + k], 0)
-        rut = ground.between(near, far, share)
+        rut = ground.met_in_table(where, g, met[j * (ruts.NEAR + 1):(j + 1) * (ruts.NEAR + 1)])
         column = ca.vertcat(*(soil.get(name, pw[k]) for k, name in enumerate(NAMES)))
+        column = functions.with_grouser_phase(column, rover.grouser_phase(p, w))
         columns.append(functions.with_rut_met(column, rut))
     return ca.horzcat(*columns)
 
@@ -132,14 +129,14 @@ def _system_step() -> ca.Function:
     u.update(slope=slope, towing_force=tow)
     u.update({f"{w}.{n}": cmd[k] for k, (w, n) in enumerate(
         (w, n) for w in rover.WHEELS for n in rover.WHEEL_COMMANDS)})
-    rec = [(traction, z, out["normal_force"], out["drawbar_pull"], out["torque"],
+    rec = [(unified, z, out["normal_force"], out["drawbar_pull"], out["torque"],
             rover.motor_torque(xs, u, p, w), s[f"{w}.wheel_speed"], out["rut_left"])
-           for w, (traction, z, out) in zip(rover.WHEELS, wheels, strict=True)]
+           for w, (unified, z, out) in zip(rover.WHEELS, wheels, strict=True)]
     nxt, _ = rover.step(tuple(xs), u, p, h)
     new_angles = [angles[k] + h * s[f"{w}.wheel_speed"] for k, w in enumerate(rover.WHEELS)]
     fns = model_functions.build()
-    new_plastics = [fns.plastic_step(z, plastics[k], s["speed"], soils[:, k], h)
-                    for k, (_, z, _) in enumerate(wheels)]
+    new_plastics = [fns.plastic_step(z, plastics[k], out["axle_speed"], soils[:, k], h)
+                    for k, (_, z, out) in enumerate(wheels)]
     s["effective_slope"], s["effective_towing_force"] = rover.effective_inputs(xs, u, p)
     record = [v for wheel in rec for v in wheel] + [s[n] for n in CHASSIS_RECORD]
     return ca.Function("rover_system", [x, pw, pg, pr, slope, tow, cmd, h, met],
@@ -264,8 +261,12 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
         if stop_when is not None and stop_when(last_values(rec[:, -1])):
             break  # the run ends here: no later step meets the ruts of this block
         wheels, chassis = named_record(rec)
-        ruts.remember(profiles, chassis["position"],
-                      {w: wheels[w]["rut_left"] for w in rover.WHEELS}, met, p, g)
+        try:
+            ruts.remember(profiles, chassis["position"],
+                          {w: wheels[w]["rut_left"] for w in rover.WHEELS}, met, p, g)
+        except WheelTerrainError as err:  # the run ends here, with the reason
+            left = f"at t = {t + block * step:.3f} s {err}"
+            break
         if progress is not None:
             progress((b + 1) * block * step)
     wall = time.perf_counter() - t0
@@ -310,9 +311,9 @@ def outside(rec: np.ndarray) -> tuple[int, str] | None:
     if np.all(np.isfinite(worst)) and np.any(np.abs(worst) > 1):
         w = rover.WHEELS[int(np.argmax(np.abs(worst)))]
         return k, (f"{w}'s slip reached {worst.flat[np.argmax(np.abs(worst))]:.3f}, outside "
-                   "the contact model's domain [-1, 1]" + (" (the wheels cannot brake the "
-                                                          "rover: it slides)"
-                                                          if worst.min() < -1 else ""))
+                   "the contact model's domain [-1, 1] (from a locked wheel to spinning): "
+                   + ("the wheel turns backward while the rover moves forward"
+                      if worst.min() < -1 else "the rover moves backward"))
     return k, "a value became non-finite"
 
 

@@ -30,6 +30,7 @@ late (chassis -> track -> wheel): at the rover's speed, 0.1 mm of travel.
 from __future__ import annotations
 
 import contextlib
+import math
 import tempfile
 import time
 import zipfile
@@ -91,9 +92,19 @@ def connections(with_map: bool = False) -> list[tuple[str, str, str, str]]:
     return out
 
 
-def terrain_values(ps: ParameterSet, with_map: bool = False) -> dict:
+PHASE_ROW = next(p for p in TABLE if p.name == "ripple.phase")
+
+
+def terrain_values(ps: ParameterSet, with_map: bool = False,
+                   phase: float = 0.0) -> dict:
+    """A wheel's WheelTerrain values: ``ps``'s, its ripple.phase advanced by the wheel's own
+    grouser ``phase``, wrapped by whole turns only where the sum leaves the row's range (so
+    that within it the FMU adds what the in-process rover adds, to the bit)."""
+    total = ps["ripple.phase"] + phase
+    if not PHASE_ROW.min <= total <= PHASE_ROW.max:
+        total = math.remainder(total, 2 * math.pi)
     return {**{p.name: ps[p.name] for p in TABLE}, "quasi_static": False,
-            "soil_from_inputs": with_map}
+            "soil_from_inputs": with_map, "ripple.phase": total}
 
 
 def chassis_values(values: Mapping[str, float]) -> dict:
@@ -128,8 +139,10 @@ class RoverFMUs:
                 self.instances[t] = Instance(paths["Terrain"], self._unzip[1], name=t,
                                              log=True)
             self.instances[CHASSIS].start(chassis_values(values), stop)
+            rover_p = chassis_values(values)
             for w in rover.WHEELS:
-                self.instances[w].start(terrain_values(soil.base, self.with_map), stop)
+                self.instances[w].start(terrain_values(
+                    soil.base, self.with_map, rover.grouser_phase(rover_p, w)), stop)
             for t in tracks:
                 self.instances[t].start(soil.map_values(), stop)
         except BaseException:
@@ -419,10 +432,14 @@ def system_description(scenario: str, soil: Soil, values: Mapping[str, float],
     ground_rows = {p.name: p for p in (*TABLE, *GROUND_TABLE)}
     terrain_map = {name: ssp.binding(ground_rows[name], value)
                    for name, value in soil.map_values().items()}
+    rover_p = chassis_values(values)
     for w in rover.WHEELS:
+        own = dict(wheel)  # the wheel's grouser phase: added to its ripple.phase
+        own["ripple.phase"] = ssp.binding(PHASE_ROW, terrain_values(
+            soil.base, with_map, rover.grouser_phase(rover_p, w))["ripple.phase"])
         ssp.component(elements, w, "resources/WheelTerrain.fmu",
                        (*TO_TERRAIN, "rut_met", *(GROUND if with_map else ())),
-                       (*TO_CHASSIS, *(v for v in recorded[w] if v not in TO_CHASSIS)), wheel,
+                       (*TO_CHASSIS, *(v for v in recorded[w] if v not in TO_CHASSIS)), own,
                        scenario)
     for track in rover.TRACKS:
         ins = [f"{q}.{n}" for q in QUERY_POINTS for n in ("position", "rut_left")]

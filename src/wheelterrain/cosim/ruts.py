@@ -17,11 +17,13 @@ import numpy as np
 from wheelterrain.errors import ParameterError, WheelTerrainError
 from wheelterrain.model import ground, rover
 
-NEAR = 5
+NEAR = 12
 """Cells of the rut profile a wheel may meet within one block of steps, from the one before the
 first of the two it meets between at the block's start (:func:`met_table`): the profile is
 replayed between blocks (:func:`replay`), exactly as Terrain.fmu keeps it step by step,
-where a wheel moves less than two cells a block."""
+where a wheel moves less than NEAR - 3 cells a block (9 cells of 5 mm in 0.1 s: 0.45 m/s, 15
+times the default rim speed; a rover sliding downhill on braked or locked wheels moves
+faster than its rims)."""
 N_MET = len(rover.WHEELS) * (NEAR + 1)
 
 
@@ -76,15 +78,15 @@ def remember(profiles: dict, position: np.ndarray, left: Mapping[str, np.ndarray
              p: Mapping[str, float], g: Mapping[str, float]) -> None:
     """After a block of steps: the ruts its steps left (``left``: per wheel, the rut left at
     each step; ``position``: the chassis' at each step), into the tracks' profiles
-    (:func:`replay`); refused where a wheel met a cell outside the block's NEAR (it moved two
-    cells or more)."""
+    (:func:`replay`); refused where a wheel met a cell outside the block's NEAR (it moved
+    NEAR - 3 cells or more)."""
     positions = {w: rover.wheel_position(p, position, w) for w in rover.WHEELS}
     for j, w in enumerate(rover.WHEELS):
         numbers = ground.met_cells(positions[w], g)[0]  # and the cell after each
         first = met[j * (NEAR + 1)]
         if np.any(numbers < first) or np.any(numbers + 1 > first + NEAR - 1):
             raise WheelTerrainError(
-                f"{w} moved more than two cells of the rut profile (terrain.cell = "
+                f"{w} moved more than {NEAR - 3} cells of the rut profile (terrain.cell = "
                 f"{g['terrain.cell']:g} m) in one block of {len(position)} steps: make "
                 "terrain.cell larger or the block shorter")
     replay(profiles, positions, left, g)

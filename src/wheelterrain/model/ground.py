@@ -207,6 +207,22 @@ def met(x, position, p):
     return between(rut_in_cell(x, first), rut_in_cell(x, first + 1), share)
 
 
+def met_in_table(position, p, table):
+    """:func:`met` from a table of the rut profile instead of the profile: ``table`` is the
+    number of a cell, then the ruts of the cells from it on (a few: the cells a wheel meets
+    within a short stretch), any sequence or CasADi vector. The rut a wheel at ``position``
+    meets, linear between the two cells' middles, as :func:`met` reads it; 0 for a cell the
+    table does not hold. On CasADi symbols it is a switch over the table's cells, so SX
+    expressions take it (the in-process rover's blocks, the rover's energy ledger)."""
+    first, share = met_cells(position, p)
+    start = table[0]
+    near = far = 0
+    for k in range(1, table.shape[0] if hasattr(table, "shape") else len(table)):
+        near = near + pick(first == start + k - 1, table[k], 0)
+        far = far + pick(first + 1 == start + k - 1, table[k], 0)
+    return between(near, far, share)
+
+
 def outputs(x, u, p) -> tuple:
     """Every query point's outputs, QUERY order: the map's soil at its position
     (:func:`soil_at`), then the rut it meets (:func:`met`). A wheel's contact takes the deeper

@@ -8,9 +8,9 @@ Frame: the terrain's. x runs along the slope (forward, uphill for a positive slo
 normal to it, positive *into* the soil (as sinkage). The slope angle is an input; gravity is
 ``rover.gravity``. The chassis has three degrees of freedom and their rates:
 
-- x, u: position and speed along the terrain;
-- z, w: the sinkage of the chassis' reference point (the point of the axle line below the centre
-  of mass) and its rate;
+- x, u: position and speed along the terrain of the chassis' reference point (the point of
+  the axle line below the centre of mass);
+- z, w: that point's sinkage and its rate;
 - theta, q: pitch, positive nose down, and its rate;
 - the elapsed time, a state (rate 1) so that the chassis' input profile (a slope or towing
   ramp, :func:`effective_inputs`) runs in any engine, model exchange included.
@@ -19,10 +19,10 @@ Wheels: four, on two axles (front_left, front_right at l_f = wheelbase/2 - cg_fo
 the centre of mass; rear_left, rear_right at l_r = -wheelbase/2 - cg_forward), rigidly mounted
 (no suspension: the soil is the spring and its damper C_f the damper; documented choice). In
 the vertical plane the left and right wheel of an axle sink alike; their soils, and so their
-forces, may differ. Wheel k's sinkage z_k = z + l_k*sin(theta) and its rate
-w + l_k*cos(theta)*q; its axle moves along the terrain at u (the pitch rate's share of it,
-d*q with d the axle's depth below the centre of mass, is neglected: |q| stays below 1e-3 rad/s
-in the scenarios).
+forces, may differ. Wheel k's axle sits at l_k along the axle line from the reference point:
+its sinkage z_k = z + l_k*sin(theta), its rate w + l_k*cos(theta)*q, and it moves along the
+terrain at u_k = u - l_k*sin(theta)*q (:func:`wheel_kinematics`, :func:`axle_speed`): the
+speed each wheel's contact is given, exactly.
 
 Forces of the soil on wheel k (from its WheelTerrain): N_k up (normal_force), P_k forward
 (drawbar_pull), T_k the resistive torque about its axle. The axle passes N_k and P_k to the
@@ -30,15 +30,18 @@ chassis; the motor applies M_k to the wheel and -M_k to the chassis. With d = ``
 (the centre of mass above the axle line), r_k = (l_k*cos(theta) - d*sin(theta), l_k*sin(theta) +
 d*cos(theta)) the axle's offset from the centre of mass (forward, down)::
 
-    m*du/dt  = sum P_k - m*g*sin(slope) - F_tow
-    m*dw/dt  = m*g*cos(slope) - sum N_k
     I*dq/dt  = sum_k [-r_k,x*N_k - r_k,z*P_k - M_k]          (nose down positive)
+    m*(du/dt + d*cos(theta)*dq/dt - d*sin(theta)*q**2) = sum P_k - m*g*sin(slope) - F_tow
+    m*(dw/dt + d*sin(theta)*dq/dt + d*cos(theta)*q**2) = m*g*cos(slope) - sum N_k
     J*domega_k/dt = M_k - T_k
 
 (an upward force ahead of the centre of mass lifts the nose; a forward force below it, and the
-reaction of a driving motor, lift it too). Each motor is the rig's speed loop (PI, both poles at
--``rover.speed_bandwidth``), or the input speed or torque command (``rover.drive``), its torque
-limited to +-``rover.motor_torque_limit`` (the loop's integrator stops while saturated).
+reaction of a driving motor, lift it too). The brackets on the left are the centre of mass'
+acceleration, (u + d*cos(theta)*q, w + d*sin(theta)*q) its velocity: the reference point lies
+d below it along the body. Gravity and the towing force act at the centre of mass. Each
+motor is the rig's speed loop (PI, both poles at -``rover.speed_bandwidth``), or the input
+speed or torque command (``rover.drive``), its torque limited to +-``rover.motor_torque_limit``
+(the loop's integrator stops while saturated).
 
 Integration over a communication step h with the soil's forces held: semi-implicit Euler for
 the chassis (rates first, then positions), implicit Euler for the unsaturated speed loops (the
@@ -88,6 +91,21 @@ def named(p) -> dict:
     return {name: p[k] for k, name in enumerate(ROVER_NAMES)}
 
 
+def ground_speed(slip: float, rim_speed: float) -> float:
+    """The ground speed V [m/s] of a wheel at the model's ``slip`` with rim speed omega*R_ref
+    ``rim_speed``: (1 - slip)*rim driving, rim/(1 + slip) braking (inf for a locked wheel
+    turning: no finite speed gives it)."""
+    if slip >= 0:
+        return (1 - slip) * rim_speed
+    return math.inf if slip <= -1 else rim_speed / (1 + slip)
+
+
+def grouser_phase(p, wheel: str):
+    """``wheel``'s grouser phase [rad] (``rover.grouser_phase.<wheel>``): added to its
+    WheelTerrain's ``ripple.phase``."""
+    return p[f"rover.grouser_phase.{wheel}"]
+
+
 def lever(p, wheel: str):
     """l_k: the wheel's axle ahead of the centre of mass [m] (negative behind)."""
     half = p["rover.wheelbase"] / 2
@@ -106,6 +124,23 @@ def wheel_kinematics(x, p, wheel: str) -> tuple:
     sin_t, cos_t = _trig(s["pitch"])
     lk = lever(p, wheel)
     return s["heave"] + lk * sin_t, s["heave_rate"] + lk * cos_t * s["pitch_rate"]
+
+
+def axle_speed(x, p, wheel: str):
+    """The speed [m/s] along the terrain of ``wheel``'s axle in the chassis state ``x``: the
+    reference point's, less the pitch rate's share, u - l_k*sin(theta)*q."""
+    s = dict(zip(STATES, x, strict=True))
+    sin_t, _ = _trig(s["pitch"])
+    return s["speed"] - lever(p, wheel) * sin_t * s["pitch_rate"]
+
+
+def centre_of_mass_velocity(x, p) -> tuple:
+    """(along the terrain, into it) [m/s]: the centre of mass' velocity in the chassis state
+    ``x`` (d above the reference point along the body)."""
+    s = dict(zip(STATES, x, strict=True))
+    sin_t, cos_t = _trig(s["pitch"])
+    d, q = p["rover.cg_height"], s["pitch_rate"]
+    return s["speed"] + d * cos_t * q, s["heave_rate"] + d * sin_t * q
 
 
 def gains(p) -> tuple:
@@ -175,9 +210,13 @@ def chassis_accelerations(x, u, p, motor: dict) -> tuple:
         lk = lever(p, w)
         rx, rz = lk * cos_t - d * sin_t, lk * sin_t + d * cos_t
         moment = moment - rx * u[f"{w}.normal_force"] - rz * u[f"{w}.drawbar_pull"] - motor[w]
-    return ((pull - m * g * sin_s - towing) / m,
-            (m * g * cos_s - normal) / m,
-            moment / p["rover.pitch_inertia"])
+    dq = moment / p["rover.pitch_inertia"]
+    q = s["pitch_rate"]
+    # the reference point's accelerations: the centre of mass' less its offset's (d along
+    # the body above it)
+    return ((pull - m * g * sin_s - towing) / m - d * (cos_t * dq - sin_t * q * q),
+            (m * g * cos_s - normal) / m - d * (sin_t * dq + cos_t * q * q),
+            dq)
 
 
 def rates(x, u, p) -> tuple:
@@ -291,7 +330,8 @@ def defaults() -> dict[str, float]:
 
 def steady_balance(terrain: Mapping, p: Mapping, slope: float, slip: float,
                    towing: float = 0.0) -> dict:
-    """The rover in steady motion at traction ``slip`` (all four wheels alike, as one speed
+    """The rover in steady motion at ``slip`` (the model's slip, :mod:`wheelterrain.model.slip`:
+    traction driving, skid braking, -1 locked; all four wheels alike, as one speed
     loop reference gives them) on ``slope``: the wheel loads that satisfy the chassis' moment
     balance (load transfer by the centre of mass' height, the pulls below it and the motors'
     reactions, the pitch from the axles' sinkages), from the single-wheel steady states of
@@ -313,10 +353,10 @@ def steady_balance(terrain: Mapping, p: Mapping, slope: float, slip: float,
 
     def state(front_load: float) -> tuple[float, dict]:
         loads = {w: (front_load if w in FRONT else weight_n / 2 - front_load) for w in WHEELS}
-        out = {w: api.steady_state(terrain[w], loads[w], slip) for w in FRONT}
+        out = {w: api.steady_state(terrain[w], loads[w], slip, "unified") for w in FRONT}
         for w, ahead in LEADING.items():  # in the rut the wheel ahead leaves (soil memory)
             out[w] = api.steady_state(in_rut(terrain[w], out[ahead]["rut_left"]), loads[w],
-                                      slip)
+                                      slip, "unified")
         zf = (out["front_left"]["sinkage"] + out["front_right"]["sinkage"]) / 2
         zr = (out["rear_left"]["sinkage"] + out["rear_right"]["sinkage"]) / 2
         sin_t = (zf - zr) / base
