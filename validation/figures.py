@@ -191,6 +191,10 @@ FIGURES: dict[str, Figure] = {
     **{f"rover.{g}.descent.predicted_deg": Figure(
         f"rover-descent-{g}", lambda d: abs(d["predicted_descent_limit_deg"]), "{:.1f}°")
        for g in ("earth", "moon")},
+    **{f"rover.{g}.descent.locked_deg": Figure(
+        f"rover-descent-{g}", lambda d: abs(d["locked_limit_deg"])
+        if d.get("locked_limit_deg") is not None else None, "{:.1f}°")
+       for g in ("earth", "moon")},
     **{f"rover.{g}.descent.predicted_limit": Figure(
         f"rover-descent-{g}", lambda d: d["predicted_descent_limit"], "{}")
        for g in ("earth", "moon")},

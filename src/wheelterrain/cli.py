@@ -167,9 +167,10 @@ def slip_definition_option(what: str):
     return click.option(
         "--slip-definition", type=click.Choice(slips.DEFINITIONS),
         default=slips.DEFAULT_DEFINITION, show_default=True,
-        help=f"Which slip {what} is in. traction: i = (wR - V)/(wR), the model's own. paper: "
-        "s = (wR - V)/V as in the source paper (C1-C4 are s = 0, 0.25, 0.5, 0.75); "
-        "i = s/(1 + s).")
+        help=f"Which slip {what} is in. traction: i = (wR - V)/(wR), up to 1 (spinning); "
+        "braking below 0, a locked wheel at -inf. paper: s = (wR - V)/V as in the source "
+        "paper (C1-C4 are s = 0, 0.25, 0.5, 0.75), from -1 (a locked wheel); i = s/(1 + s). "
+        "unified: the model's own, (wR - V)/max(wR, V), i driving and s braking, in [-1, 1].")
 
 
 def _check_out_dir(out: str, option: str = "--out") -> None:
@@ -340,7 +341,7 @@ def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definiti
             from wheelterrain.fit import crosswheel, datasets
 
             result["interval"] = crosswheel.preset_interval(ps, load, result["slip"],
-                                                            datasets.shipped())
+                                                            datasets.shipped())  # unified
     except WheelTerrainError as err:
         _fail(err)
     result = {"preset": preset, **result}
@@ -353,7 +354,8 @@ def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definiti
              "compaction_resistance", "entry_angle", "exit_angle", "max_stress_angle",
              "contact_length", "mean_pressure", "load", "slip", "slip_paper", "capacity")
     table = {**variable_units(), "capacity": "N"}  # units of the FMU variables' table
-    notes = {"slip": " (traction)", "slip_paper": " (paper)"}
+    notes = {"slip": " (the model's: traction driving, skid braking)",
+             "slip_paper": " (paper)"}
     for key in shown:
         value, unit = result[key], table[key] + notes.get(key, "")
         extra = f"   ({value / DEG:.3f} deg)" if unit == "rad" else ""
@@ -427,8 +429,8 @@ def multipass(preset: str, assignments: tuple[str, ...], slip_text: str, slip_de
         runs = []
         for s in slips_given:
             rows = mp.run(params, load, s, passes, slip_definition)
-            traction = slips.to_traction(s, slip_definition)
-            runs.append({"slip": traction, "slip_paper": slips.paper_from_traction(traction),
+            sigma = slips.to_unified(s, slip_definition)
+            runs.append({"slip": sigma, "slip_paper": slips.paper_from_unified(sigma),
                          "passes": rows})
         return runs
 
@@ -463,7 +465,7 @@ def multipass(preset: str, assignments: tuple[str, ...], slip_text: str, slip_de
 
 def _multipass_table(runs: list[dict]) -> None:
     for run in runs:
-        click.echo(f"slip {run['slip']:g} (traction; paper {run['slip_paper']:.4g})")
+        click.echo(f"slip {run['slip']:g} (the model's; paper {run['slip_paper']:.4g})")
         click.echo(f"  {'pass':>4}  {'pull/load':>9}  {'pull [N]':>8}  {'sinkage [mm]':>12}  "
                    f"{'increment [mm]':>14}  {'rut left [mm]':>13}  {'torque [N.m]':>12}")
         for r in run["passes"]:
@@ -477,18 +479,24 @@ def _multipass_table(runs: list[dict]) -> None:
 @preset_option
 @set_option
 @click.option("--system", type=click.Choice(["rig", "rover"]), default="rig", show_default=True,
-              help="The paper's single-wheel rig (at --cases), or the rover on level ground.")
+              help="The paper's single-wheel rig (at --cases), or the rover (on --slope), its "
+                   "rear wheels in the front wheels' ruts.")
 @click.option("--cases", default="C1,C2,C3,C4", show_default=True, metavar="C1[,C2...]",
               help="The rig's cases (the paper's Table III: its slip 0, 0.25, 0.5, 0.75).")
 @click.option("--gravity", type=click.Choice(["earth", "moon"]), default="earth",
               show_default=True, help="The rover's gravity.")
+@click.option("--slope", default=0.0, show_default=True, type=click.FloatRange(-45.0, 45.0),
+              metavar="DEG",
+              help="The rover's slope [deg]: a steady climb (> 0) or descent (< 0), started in "
+                   "its steady motion there; 0: level ground, from rest.")
 @click.option("--stop", default=None, type=click.FloatRange(0.5, 120.0),
               help="Seconds of the run (default: 4 for the rig, from rest in the soil at "
-                   "10 mm; 10 for the rover, from 1 mm in the soil).")
+                   "10 mm; 20 for the rover, from 1 mm in the soil on level ground: its rear "
+                   "wheels reach the front wheels' ruts at about 13 s).")
 @json_option('One object {"system", "preset", "set", "stop", "runs": [{"case" (rig), "motor", '
              '..., "residual", "relative_residual"}], "units"}')
 def energy(preset: str, assignments: tuple[str, ...], system: str, cases: str, gravity: str,
-           stop: float | None, json_target: str | None) -> None:
+           slope: float, stop: float | None, json_target: str | None) -> None:
     """Where the motor's energy goes: the work of every power term over a run, the system in
     continuous time on the contact with the soil's memory (its FMUs' model exchange, CVODES).
 
@@ -499,9 +507,10 @@ def energy(preset: str, assignments: tuple[str, ...], system: str, cases: str, g
               does on the carriage) or towing (against the rover's holding force); slip (the
               shear stresses' work against the slip); compaction and bulldozing (the
               resistances times the travel); damping (the contact damper); pressing (the soil
-              pressed vertically); pitch (rover: the chassis model's neglect of the pitch
-              rate's share of the axle speeds, an error, not a loss)
-    The two sides agree to the integration's tolerance; `residual` says by how much.
+              pressed vertically)
+    The two sides agree to the integration's tolerance; `residual` says by how much. The
+    rover runs with the rut profiles, as it is simulated (its JSON says "ruts": true); each
+    wheel's soil terms count its own axle's speed (the chassis' and its pitch rate's share).
     """
     from wheelterrain.cosim import energy as ledger
     from wheelterrain.cosim import master
@@ -513,6 +522,8 @@ def energy(preset: str, assignments: tuple[str, ...], system: str, cases: str, g
     unknown = [c for c in chosen if c not in slips_of]
     if system == "rig" and (not chosen or unknown):
         _usage_error(f"--cases {cases!r}: choose among {', '.join(slips_of)}")
+    if system == "rig" and slope != 0:
+        _usage_error("--slope is the rover's (--system rover): the rig runs on level ground")
     ps = _load(preset, assignments)
     rows = []
     try:
@@ -522,9 +533,12 @@ def energy(preset: str, assignments: tuple[str, ...], system: str, cases: str, g
                 rows.append({"case": case, **ledger.rig_ledger(ps, slips_of[case], stop)})
             terms = ledger.TERMS
         else:
-            stop = 10.0 if stop is None else stop
-            rows.append({"case": f"level, {gravity}", **ledger.rover_ledger(
-                ps, {"rover.gravity": GRAVITY[gravity]}, stop)})
+            import math
+
+            stop = 20.0 if stop is None else stop
+            where = "level" if slope == 0 else f"{slope:g} deg"
+            rows.append({"case": f"{where}, {gravity}", **ledger.rover_ledger(
+                ps, {"rover.gravity": GRAVITY[gravity]}, stop, slope=math.radians(slope))})
             terms = ledger.ROVER_TERMS
     except WheelTerrainError as err:
         _fail(err)
@@ -533,7 +547,8 @@ def energy(preset: str, assignments: tuple[str, ...], system: str, cases: str, g
                    err=True)
         sys.exit(EXIT_NUMERICAL)
     units = {k: "J" for k in terms} | {"residual": "J", "relative_residual": "1", "stop": "s",
-                                       "final_sinkage": "m", "mean_drawbar_pull": "N"}
+                                       "final_sinkage": "m", "mean_drawbar_pull": "N",
+                                       "slope_deg": "deg", "rut_met": "m"}
     document = {"system": system, "preset": preset, "set": list(assignments), "stop": stop,
                 "runs": rows, "units": units}
     if _emit_json(json_target, document):
@@ -1128,7 +1143,7 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
                    f"{w['mean_motor_power']:10.4f} {1e3 * w['rut_depth']:9.3f} {peak}")
     for key in ("stall_slope_deg", "predicted_stall_slope_deg", "predicted_stall_limit",
                 "slide_slope_deg", "predicted_descent_limit_deg", "predicted_descent_limit",
-                "stall_cause",
+                "locked_limit_deg", "stall_cause",
                 "stall_towing_force", "pull_curve_max_error_n", "slip_reference", "slip_rms",
                 "speed_reference", "speed_rms_relative", "solve_time_median_s",
                 "failed_solves"):

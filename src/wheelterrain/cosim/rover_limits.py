@@ -59,7 +59,8 @@ def steady_state_vector(balance: dict, p: Mapping[str, float]) -> np.ndarray:
     lf, lr = rover.lever(p, "front_left"), rover.lever(p, "rear_left")
     sin_t = (zf - zr) / (lf - lr)
     s = dict.fromkeys(rover.STATES, 0.0)
-    s.update(speed=(1 - balance["slip"]) * p["rover.rim_speed"], heave=zf - lf * sin_t,
+    s.update(speed=rover.ground_speed(balance["slip"], p["rover.rim_speed"]),
+             heave=zf - lf * sin_t,
              pitch=math.asin(sin_t))
     for w in rover.WHEELS:
         s[f"{w}.wheel_speed"] = omega
@@ -96,18 +97,39 @@ def growth_rate(terrain: Mapping, p: Mapping[str, float], slope: float, slip: fl
 
 
 def steady_slip(terrain: Mapping, p: Mapping[str, float], slope: float) -> float | None:
-    """The slip of steady motion on ``slope`` in [-0.999, STALL_SLIP], or None (none there:
-    the wheels cannot hold the rover)."""
+    """The slip of steady motion on ``slope`` in [SLIDE_SLIP, STALL_SLIP] (the model's slip),
+    or None (none there: the wheels cannot hold the rover; downhill, the rover slides: its
+    brakes do not hold it below ten times its wheels' rim speed, :func:`locked_limit` says
+    whether locked wheels would)."""
     from scipy.optimize import brentq
 
     def surplus(i: float) -> float:
         return rover.steady_balance(terrain, p, slope, i)["surplus"]
 
-    lo, hi = -0.999, STALL_SLIP
+    lo, hi = SLIDE_SLIP, STALL_SLIP
     try:
         if surplus(lo) > 0 or surplus(hi) < 0:
             return None
         return brentq(surplus, lo, hi, xtol=1e-12)
+    except WheelTerrainError:
+        return None
+
+
+def locked_limit(terrain: Mapping, p: Mapping[str, float]) -> float | None:
+    """The steepest downhill slope [rad, < 0] on which the rover's four wheels, locked
+    (slip LOCKED), hold it: the slope where their braking (the steady force balance at the
+    locked slip) equals the weight's part along it. None where locked wheels hold it on every
+    slope to 60 deg."""
+    from scipy.optimize import brentq
+
+    def surplus(slope: float) -> float:
+        return rover.steady_balance(terrain, p, slope, LOCKED)["surplus"]
+
+    steep = -math.radians(60)
+    try:
+        if surplus(steep) <= 0:
+            return None
+        return brentq(surplus, steep, 0.0, xtol=1e-9)
     except WheelTerrainError:
         return None
 
@@ -159,7 +181,7 @@ def statically_stable(terrain: Mapping, p: Mapping[str, float], slope: float,
     than the thrust (``soil.n1``, bulldozing), the surplus can fall with slip: the steady
     motion is then statically unstable and the slip runs away (``slip_sinkage``)."""
     h = 1e-4
-    lo, hi = max(slip - h, -0.999), min(slip + h, 0.999)
+    lo, hi = max(slip - h, LOCKED), min(slip + h, 0.999)
     return (rover.steady_balance(terrain, p, slope, hi)["surplus"]
             > rover.steady_balance(terrain, p, slope, lo)["surplus"])
 
@@ -171,8 +193,8 @@ STALL_CAUSES = ("traction", "slip_sinkage", "stability", "motor_torque", "domain
 def steady_cause(terrain: Mapping, p: Mapping[str, float], slope: float,
                  slip: float | None = None) -> str | None:
     """Which steady condition fails on ``slope``, or None: no steady slip in
-    [-0.999, STALL_SLIP] (``traction``: the wheels cannot hold the rover; downhill, cannot
-    brake it), the force balance falls with slip there (``slip_sinkage``), or the motors
+    [SLIDE_SLIP, STALL_SLIP] (``traction``: the wheels cannot hold the rover; downhill, it
+    slides), the force balance falls with slip there (``slip_sinkage``), or the motors
     cannot give its torque (``motor_torque``, rover.motor_torque_limit). ``slip``: the
     slope's steady slip where the caller has it (:func:`steady_slip`)."""
     i = steady_slip(terrain, p, slope) if slip is None else slip
@@ -203,8 +225,8 @@ def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
                 tolerance: float = 1e-4,
                 trials: Callable[[int, int], None] | None = None) -> dict:
     """The steepest slope [rad] (uphill for ``direction`` 1, downhill for -1) on which the rover
-    has a steady motion that it also holds: a steady slip exists in [-0.999, STALL_SLIP] (else
-    ``traction``: the wheels cannot hold the rover, downhill their braking), more slip gives
+    has a steady motion that it also holds: a steady slip exists in [SLIDE_SLIP, STALL_SLIP]
+    (else ``traction``: the wheels cannot hold the rover, downhill it slides), more slip gives
     more net force there (else ``slip_sinkage``, :func:`statically_stable`), and a disturbance
     dies out (else ``stability``): on a soil without memory the linearisation about the steady
     motion has no eigenvalue with a positive real part; on a soil with memory, which has none,
@@ -258,3 +280,8 @@ def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
 
 STALL_SLIP = 0.95
 """Slip at which the rover counts as stalled: it moves at 5 % of its wheels' rim speed."""
+LOCKED = -1.0
+"""The model's slip of a locked wheel: the most a wheel can brake."""
+SLIDE_SLIP = -0.9
+"""Slip at which a descending rover counts as sliding: it moves at ten times its wheels' rim
+speed, its brakes no longer governing its speed (the mirror of STALL_SLIP)."""

@@ -17,11 +17,13 @@ import numpy as np
 from wheelterrain.cosim import ruts
 from wheelterrain.cosim.rover import STEP, RoverResult, Soil, simulate
 from wheelterrain.cosim.rover_limits import (
+    SLIDE_SLIP,
     STALL_SLIP,
     growth_rate,
     has_memory,
     holds,
     limit_slope,
+    locked_limit,
     run_cause,
     steady_slip,
 )
@@ -149,8 +151,13 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
     knee = max(math.degrees(pred["slope"]) - KNEE_MARGIN, 0.0) if name == "slope" else 15.0
     sc = scenarios(gravity, knee, p["rover.mass"] * p["rover.gravity"])[name]
     step = sc.step if step is None else step
-    stalled = (lambda last: last["front_left.slip"] >= STALL_SLIP) \
-        if name in STALL_SCENARIOS else None
+    stalled = None
+    if name in STALL_SCENARIOS:
+        def stalled(last: dict) -> bool:
+            return last["front_left.slip"] >= STALL_SLIP
+    elif name == "descent":
+        def stalled(last: dict) -> bool:
+            return min(last[f"{w}.slip"] for w in rover.WHEELS) <= SLIDE_SLIP
     run = engine or (lambda *a, **k: simulate(*a, **k))
     simulated = ((lambda t: progress(f"simulating {name}", t, sc.stop))
                  if progress is not None else None)
@@ -194,10 +201,13 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
     if name == "descent":
         out["predicted_descent_limit_deg"] = math.degrees(pred["slope"])
         out["predicted_descent_limit"] = pred["limit"]
-        out["slide_slope_deg"] = (math.degrees(res.inputs["slope"][-1])
-                                  if res.left_domain else None)
+        locked = locked_limit(quiet, p)  # the soil's own braking limit, whatever the drive
+        out["locked_limit_deg"] = None if locked is None else math.degrees(locked)
+        slid = min(float(v["slip"][-1]) for v in res.wheels.values()) <= SLIDE_SLIP
+        ended = slid or res.left_domain
+        out["slide_slope_deg"] = math.degrees(res.inputs["slope"][-1]) if ended else None
         out["stall_cause"] = (run_cause(res, quiet, p, float(res.inputs["slope"][-1]))
-                              if res.left_domain else None)
+                              if ended else None)
         out["slip_vs_slope"] = slip_vs_slope(res)
     return {"figures": out, "result": res, "values": {**values, **sc.profile},
             "stop": sc.stop, "step": step}
@@ -220,7 +230,7 @@ def steady_level_motion(soil: Soil, p: Mapping[str, float]) -> tuple[float, floa
     if slip is None:
         raise WheelTerrainError("the rover has no steady motion on level ground with this "
                                 "soil")
-    return slip, (1.0 - slip) * p["rover.rim_speed"]
+    return slip, rover.ground_speed(slip, p["rover.rim_speed"])
 
 
 def tracking(res: RoverResult, soil: Soil, p: Mapping[str, float]) -> dict:
