@@ -229,10 +229,14 @@ def test_an_engine_s_run_ends_where_a_wheel_leaves_the_model_s_domain(built, ter
 @pytest.mark.parametrize("engine", ["libcosim", "ecos"])
 def test_a_whole_moon_stall_scenario_agrees_in_the_one_step_late_engines(built, terrain,
                                                                         engine):
-    """A whole stall scenario at its own step: the Moon's descent (the braking motion lost at
-    5.8 deg, 16 s, 0.25 ms). Its Rover-descent.ssp in libcosim and ecos gives the in-process
-    means within 1e-3 over the whole run (at 1 ms: 7.5e-4 and 1.2e-3) and the slide within
-    0.01 deg."""
+    """A whole stall scenario at its own step: the Moon's descent (the braking speed loops
+    let the rover slide at 15.1 deg, 25 s, 0.25 ms). Its Rover-descent.ssp in libcosim and ecos
+    gives the in-process means within 1e-3 over the whole run and the slide within 0.025 deg:
+    the slide is a runaway of the slip past -0.9 on a 1 deg/s ramp, which the one step late
+    handover brings 18 ms sooner (measured 2026-11-28: 15.082 against 15.100 deg in both
+    engines), and the in-process slide itself moves by 0.012 deg when the step halves, so a
+    tighter bound would be below the reference's own discretisation. In ecos the gap closes
+    as the step halves (0.125 ms: 0.0055 deg)."""
     _skip_unless_installed(engine)
     ref = rover_scenarios.run_scenario("descent", terrain, "moon")
     run = rover_scenarios.run_scenario("descent", terrain, "moon",
@@ -243,8 +247,14 @@ def test_a_whole_moon_stall_scenario_agrees_in_the_one_step_late_engines(built, 
                                 rover_scenarios.scenarios("moon")["descent"].settle)
     assert d["window"][1] > 15.0  # compared up to the slide
     assert d["worst"] <= 1e-3, d
-    assert run["figures"]["slide_slope_deg"] == pytest.approx(
-        ref["figures"]["slide_slope_deg"], abs=0.01)
+    gap = run["figures"]["slide_slope_deg"] - ref["figures"]["slide_slope_deg"]
+    assert abs(gap) <= 0.025, gap
+    if engine == "ecos":
+        half = rover_scenarios.FINE_STEP / 2
+        finer = [rover_scenarios.run_scenario(
+            "descent", terrain, "moon", step=half, engine=e)["figures"]["slide_slope_deg"]
+            for e in (None, rover_fmus.runner(engine, built / "native", "descent"))]
+        assert abs(finer[1] - finer[0]) <= 0.5 * abs(gap), (finer, gap)
 
 
 @pytest.mark.slow

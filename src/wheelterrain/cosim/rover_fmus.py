@@ -281,10 +281,11 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
                  stop_when=None, progress: Callable[[float], None] | None = None
                  ) -> RoverResult:
     """The scenario's Rover.ssp in ``engine`` (one of SSP_ENGINES; fmpy-ssp: fmpy's own SSP
-    runner), to ``stop`` or to where a wheel leaves the model's domain (``stop_when`` is not an
-    SSP's and is not applied). ``progress(t)``: every simulated second where the engine steps
-    in chunks (libcosim, ecos), else at the end. Refused before the run where the engine
-    cannot run the scenario (:func:`refusal`)."""
+    runner), to ``stop`` or to where a wheel leaves the model's domain. ``stop_when`` is not an
+    SSP's: the engine runs on, and its record is cut at the first step ``stop_when`` holds, as
+    our masters stop there (a descent's slide). ``progress(t)``: every simulated second where
+    the engine steps in chunks (libcosim, ecos), else at the end. Refused before the run where
+    the engine cannot run the scenario (:func:`refusal`)."""
     reason = refusal(engine, scenario, soil)
     if reason is not None:
         raise UsageError(reason)
@@ -338,6 +339,12 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
             else:
                 raise ValueError(f"unknown engine {engine!r}")
     data = _chassis_slips(data, values)
+    stopped = False
+    if stop_when is not None:
+        for k in range(data.shape[1]):
+            if stop_when(rover_system.last_values(data[:, k])):
+                data, stopped = data[:, :k + 1], True
+                break
     # the records end where the model's domain ends, as in our masters (those engines go on
     # past a refused step, with the refusing FMU's outputs frozen: not results)
     problem = rover_system.outside(data)
@@ -345,7 +352,7 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
     if problem is not None:
         k, why = problem
         data, left = data[:, :k], f"at t = {k * step:.3f} s {why}"
-    elif data.shape[1] < round(stop / step):  # the engine stopped at a refused step
+    elif not stopped and data.shape[1] < round(stop / step):  # it stopped at a refused step
         left = (f"at t = {data.shape[1] * step:.3f} s an FMU refused the step ({engine} "
                 "stops there)")
     return from_records(data, step, wall, engine, left)
@@ -380,7 +387,8 @@ def runner(engine: str, fmu_dir: Path, scenario: str) -> Callable | None:
         return lambda soil, values, stop, step, stop_when, progress=None: simulate(
             fmu_dir, soil, values, stop, step, stop_when, progress)
     return lambda soil, values, stop, step, stop_when, progress=None: simulate_ssp(
-        engine, fmu_dir, scenario, soil, values, stop, step, progress=progress)
+        engine, fmu_dir, scenario, soil, values, stop, step, stop_when=stop_when,
+        progress=progress)
 
 
 def _chassis_slips(data: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
