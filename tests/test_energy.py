@@ -120,13 +120,19 @@ def test_the_rover_ledger_closes_climbing_and_descending(gravity, slope):
     assert ledger["compaction"] > 0
 
 
-def test_a_slope_without_a_steady_motion_is_refused_with_the_way_out():
+def test_a_slope_without_a_steady_motion_is_refused_with_the_way_out(capsys):
+    """A slope the rover cannot drive steadily is an input out of its range: one line naming
+    it and the way to find the limit, exit 2 (it exited 4, a numerical failure's code)."""
     import math
 
-    from wheelterrain.errors import WheelTerrainError
+    from wheelterrain.errors import InputError
 
-    with pytest.raises(WheelTerrainError, match="no steady motion on a 40 deg slope"):
+    with pytest.raises(InputError, match=r"slope \[deg\] = 40.0 leaves the rover no steady motion"):
         energy.rover_ledger(presets.load(), {}, stop=1.0, slope=math.radians(40.0))
+    with pytest.raises(SystemExit) as done:
+        main(["energy", "--system", "rover", "--slope", "40"], standalone_mode=True)
+    assert done.value.code == 2
+    assert "rover --scenario slope|descent" in capsys.readouterr().err
 
 
 def test_the_cli_runs_the_rovers_ledger_on_a_slope_with_its_ruts(tmp_path, capsys):

@@ -210,16 +210,16 @@ def _steady_start(params: ParameterSet, r: Mapping[str, float], slope: float,
     profiles of it."""
     from wheelterrain.cosim import ruts as rut_profile
     from wheelterrain.cosim.rover_limits import steady_slip, steady_state_vector
-    from wheelterrain.errors import WheelTerrainError
+    from wheelterrain.errors import InputError
 
     quiet = {w: params.with_values({"ripple.k_g": 0.0, "ripple.k_0": 0.0})
              for w in rover.WHEELS}
     slip = steady_slip(quiet, r, slope)
     if slip is None:
-        raise WheelTerrainError(
-            f"the rover has no steady motion on a {np.degrees(slope):g} deg slope (it stalls "
-            "or slides there: wheelterrain rover --scenario slope|descent); choose a gentler "
-            "one")
+        raise InputError(
+            "slope [deg]", float(np.degrees(slope)), "leaves the rover no steady motion (it "
+            "stalls or slides there: wheelterrain rover --scenario slope|descent finds where); "
+            "choose a gentler one")
     balance = rover.steady_balance(quiet, r, slope, slip)
     x = steady_state_vector(balance, r)
     plastics = [float(rover.wheel_kinematics(list(x), r, w)[0]) for w in rover.WHEELS]
