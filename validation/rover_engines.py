@@ -26,7 +26,7 @@ from pathlib import Path
 
 from wheelterrain import presets
 from wheelterrain.cosim import SSP_ENGINES, rover_fmus, rover_scenarios, ssp
-from wheelterrain.errors import CosimulationError
+from wheelterrain.errors import CosimulationError, UsageError
 from wheelterrain.parameters import GRAVITY
 
 ENGINES = ("in-process", "fmus", *SSP_ENGINES)
@@ -44,7 +44,7 @@ def compare(scenario: str, gravity: str, engines: tuple[str, ...], fmu_dir: Path
         try:
             run = rover_scenarios.run_scenario(scenario, terrain, gravity, step=step,
                                             engine=rover_fmus.runner(engine, fmu_dir, scenario))
-        except CosimulationError as err:
+        except (CosimulationError, UsageError) as err:  # refused before or during the run
             runs[engine] = {"refused": str(err)}
             print(" refused", file=sys.stderr)
             continue

@@ -289,7 +289,8 @@ def simulate_ssp(engine: str, fmu_dir: Path, scenario: str, soil: Soil,
     reason = refusal(engine, scenario, soil)
     if reason is not None:
         raise UsageError(reason)
-    names = _ssp_variables()
+    # the record, then each axle's speed (the chassis' <wheel>.carriage_speed): the slips
+    names = _ssp_variables() + [(CHASSIS, f"{w}.carriage_speed") for w in rover.WHEELS]
     dotted = tuple(f"{c}.{v}" for c, v in names)  # "component.variable", as engines name them
     with tempfile.TemporaryDirectory(prefix="wheelterrain_rover_") as tmp:
         path = write_ssp(Path(tmp) / "Rover.ssp", fmu_dir, scenario, soil, values, stop, step)
@@ -392,14 +393,17 @@ def runner(engine: str, fmu_dir: Path, scenario: str) -> Callable | None:
 
 
 def _chassis_slips(data: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
-    """The record rows with each wheel's slip from the chassis' own speeds (a terrain that
-    refused a step keeps its last outputs, its slip among them, in an engine that goes on
+    """The record rows of ``data`` (the rows that follow them are the four axles' speeds) with
+    each wheel's slip from the chassis' own speeds, the wheel's against its axle's (a terrain
+    that refused a step keeps its last outputs, its slip among them, in an engine that goes on
     past a refusal)."""
+    n_axles = len(rover.WHEELS)
+    data, axles = data[:-n_axles], data[-n_axles:]
     radius = chassis_values(values)["rover.slip_radius"]
-    wheels, chassis = rover_system.named_record(data)
+    wheels, _ = rover_system.named_record(data)
     for k, w in enumerate(rover.WHEELS):
-        traction, _, _ = functions.slips(wheels[w]["wheel_speed"], chassis["speed"], radius)
-        data[k * len(RECORD) + RECORD.index("slip")] = np.asarray(traction).ravel()
+        unified, _, _ = functions.slips(wheels[w]["wheel_speed"], axles[k], radius)
+        data[k * len(RECORD) + RECORD.index("slip")] = np.asarray(unified).ravel()
     return data
 
 
