@@ -203,10 +203,15 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
         out["predicted_descent_limit"] = pred["limit"]
         locked = locked_limit(quiet, p)  # the soil's own braking limit, whatever the drive
         out["locked_limit_deg"] = None if locked is None else math.degrees(locked)
-        slid = min(float(v["slip"][-1]) for v in res.wheels.values()) <= SLIDE_SLIP
-        ended = slid or res.left_domain
-        out["slide_slope_deg"] = math.degrees(res.inputs["slope"][-1]) if ended else None
-        out["stall_cause"] = (run_cause(res, quiet, p, float(res.inputs["slope"][-1]))
+        # the first step a wheel's slip passes SLIDE_SLIP (a run checks its stop condition
+        # once a block, in process, and may record some steps past it), else the run's end
+        # where it left the domain
+        lowest = np.min([v["slip"] for v in res.wheels.values()], axis=0)
+        hit = np.flatnonzero(lowest <= SLIDE_SLIP)
+        ended = bool(hit.size) or res.left_domain
+        k = int(hit[0]) if hit.size else len(res.time) - 1
+        out["slide_slope_deg"] = math.degrees(res.inputs["slope"][k]) if ended else None
+        out["stall_cause"] = (run_cause(res, quiet, p, float(res.inputs["slope"][k]))
                               if ended else None)
         out["slip_vs_slope"] = slip_vs_slope(res)
     return {"figures": out, "result": res, "values": {**values, **sc.profile},
