@@ -236,6 +236,24 @@ def test_locked_wheels_hold_the_rover_where_their_braking_meets_the_weight(quiet
     assert braking >= locked - 1e-6
 
 
+def test_the_earth_descent_is_the_soils_limit_over_every_unmeasured_value(quiet):
+    """limit_band: the Earth's descent at the default values and at each end of the unmeasured
+    values' bands (K_u over its plausible range, the grouser phases aligned, C_f halved and
+    doubled) ends in the soil's braking (`traction`) every time, the default inside the band,
+    the band under 1 deg wide (measured 2026-11-28: 19.40-19.87 deg), and short of the slope
+    four locked wheels hold on every variant."""
+    band = rover_scenarios.limit_band("descent", presets.load(presets.DEFAULT_PRESET))
+    runs = band["runs"]
+    assert [r["variant"] for r in runs] == ["default", *rover_scenarios.BAND_VARIANTS]
+    assert {r["cause"] for r in runs} == {"traction"}
+    assert band["without_limit"] == 0
+    assert band["low"] <= abs(runs[0]["limit_deg"]) <= band["high"]
+    assert band["high"] - band["low"] < 1.0
+    assert all(abs(r["limit_deg"]) <= abs(r["locked_limit_deg"]) for r in runs)
+    with pytest.raises(ValueError, match="limit_band runs slope, descent"):
+        rover_scenarios.limit_band("level", quiet)
+
+
 def test_halving_the_step_changes_the_level_means_little(quiet):
     a = rover_system.simulate(rover_system.Soil(quiet), {}, stop=10.0, step=2e-3)
     b = rover_system.simulate(rover_system.Soil(quiet), {}, stop=10.0, step=1e-3, block=100)

@@ -227,6 +227,52 @@ a wheel's contact model refuses (it leaves the model's domain)."""
 TRACKING_FROM = 2.0  # s: the rover has sunk in and settled (a controller may take over here)
 
 
+BAND_VARIANTS = {
+    "K_u 4e6": ({"soil.unloading_stiffness": 4e6}, {}),
+    "K_u 4e8": ({"soil.unloading_stiffness": 4e8}, {}),
+    "phases aligned": ({}, {f"rover.grouser_phase.{w}": 0.0 for w in rover.WHEELS}),
+    "C_f 400": ({"soil.damping": 400.0}, {}),
+    "C_f 1600": ({"soil.damping": 1600.0}, {}),
+}
+"""The unmeasured values a rover limit depends on, one at a time at each end of its band, as
+(terrain values, rover values): soil.unloading_stiffness K_u over its plausible range (4e6-4e8
+Pa/m: Chrono's SCM demos use 4e7-4e8, a decade softer for loose sand; not measured for this
+soil), the four grouser phases aligned against the default spread, soil.damping C_f at half and
+twice the paper's 800 N.s/m (one value without a source in the paper; the factor 2 is an
+assumption)."""
+BAND_EVENTS = {"slope": "stall_slope_deg", "descent": "slide_slope_deg"}
+
+
+def limit_band(name: str, terrain: ParameterSet, gravity: str = "earth",
+               rover_values: Mapping[str, float] | None = None,
+               progress: Callable[[str, float, float], None] | None = None) -> dict:
+    """Scenario ``name`` (slope or descent), in process, at ``terrain`` and at each of
+    BAND_VARIANTS: ``runs`` (per variant, default first: ``variant``, ``limit_deg``, the
+    scenario's ``cause``, ``predicted_deg``, ``predicted_limit``, ``locked_limit_deg`` on the
+    descent) and ``low`` / ``high``, the smallest and largest |limit| [deg] over the runs that
+    reached one (None where none did; ``without_limit`` counts those that did not)."""
+    if name not in BAND_EVENTS:
+        raise ValueError(f"limit_band runs {', '.join(BAND_EVENTS)}, not {name!r}")
+    variants = {"default": ({}, {}), **BAND_VARIANTS}
+    runs = []
+    for k, (variant, (soil_values, chassis_values)) in enumerate(variants.items()):
+        if progress is not None:
+            progress(f"the band's runs ({variant})", k, len(variants))
+        f = run_scenario(name, terrain.with_values(soil_values), gravity,
+                         {**(rover_values or {}), **chassis_values})["figures"]
+        runs.append({"variant": variant, "limit_deg": f[BAND_EVENTS[name]],
+                     "cause": f["stall_cause"],
+                     "predicted_deg": f.get("predicted_stall_slope_deg",
+                                            f.get("predicted_descent_limit_deg")),
+                     "predicted_limit": f.get("predicted_stall_limit",
+                                              f.get("predicted_descent_limit")),
+                     "locked_limit_deg": f.get("locked_limit_deg")})
+    reached = [abs(r["limit_deg"]) for r in runs if r["limit_deg"] is not None]
+    return {"scenario": name, "gravity": gravity, "runs": runs,
+            "low": min(reached) if reached else None, "high": max(reached) if reached else None,
+            "without_limit": len(runs) - len(reached)}
+
+
 def steady_level_motion(soil: Soil, p: Mapping[str, float]) -> tuple[float, float]:
     """(slip, speed [m/s]) of the rover's steady motion on level ground on ``soil``'s base
     soil, ripple-free (the self-propelled slip of the speed loops)."""
