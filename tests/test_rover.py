@@ -314,3 +314,32 @@ def test_cli_rover_json_contract(tmp_path):
                          capture_output=True, text=True, timeout=600)
     assert bad.returncode == 2
     assert bad.stderr.startswith("error: parameter rover.mass")
+
+
+def test_cli_rover_band_reports_the_descents_limit_over_its_unmeasured_values(tmp_path):
+    """`rover --scenario descent --band --json`: the figures gain limit_band, the run at the
+    defaults first and the same limit as the scenario's own run; --band where it cannot run
+    (a scenario without a limit, another engine, --step) is one line, exit 2, before any work."""
+    import json
+    import subprocess
+    import sys
+
+    run = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "rover", "--scenario",
+                          "descent", "--band", "--out", str(tmp_path), "--json"],
+                         capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr
+    out = json.loads(run.stdout)
+    band = out["limit_band"]
+    assert [r["variant"] for r in band["runs"]] == ["default", *rover_scenarios.BAND_VARIANTS]
+    assert band["runs"][0]["limit_deg"] == out["slide_slope_deg"]
+    assert band["low"] <= abs(out["slide_slope_deg"]) <= band["high"]
+    for args, named in ((["--scenario", "level"], "--scenario level"),
+                        (["--scenario", "slope", "--engine", "ecos"], "--engine ecos"),
+                        (["--scenario", "slope", "--step", "0.0005"], "--step")):
+        bad = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "rover", "--band",
+                              *args, "--out", str(tmp_path / "no")],
+                             capture_output=True, text=True, timeout=600)
+        assert bad.returncode == 2
+        assert bad.stderr.startswith("error: --band runs slope and descent")
+        assert named in bad.stderr
+        assert not (tmp_path / "no").exists()

@@ -1063,6 +1063,12 @@ def mpc(scenario: str, plant: str, preset: str, assignments: tuple[str, ...], so
               help="speed: the four speed loops to the common rim speed; mpc: from 2 s on, the "
               "slip NMPC (real-time iteration) per wheel commands its speed, holding the "
               "steady level slip and speed (level and soft-patch, in process).")
+@click.option("--band", is_flag=True,
+              help="slope and descent, in process: also run the scenario at each end of the "
+              "bands of the unmeasured values its limit depends on (soil.unloading_stiffness "
+              "4e6 and 4e8 Pa/m, the grouser phases aligned, soil.damping halved and "
+              "doubled), one at a time; the figures gain limit_band (six runs: minutes on "
+              "the Moon).")
 @click.option("--fmu-dir", default=None, type=click.Path(file_okay=False),
               help="Where the FMUs are (default: build/native if built, else build).")
 @click.option("--out", default="validation/output/rover", show_default=True,
@@ -1072,7 +1078,7 @@ def mpc(scenario: str, plant: str, preset: str, assignments: tuple[str, ...], so
              "wall_time_s, real_time_factor, wheels, and per scenario its predictions)")
 def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...],
           step: float | None,
-          engine: str, controller: str, fmu_dir: str | None, out: str,
+          engine: str, controller: str, band: bool, fmu_dir: str | None, out: str,
           json_target: str | None) -> None:
     """The Rashid rover on four wheels: one scenario, its figures, a plot and a CSV.
 
@@ -1109,7 +1115,8 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
     except WheelTerrainError as err:
         _fail(err)
     ps = _load(preset, tuple(a for a in assignments if a not in rover_items))
-    request = rover_run.Request(scenario, ps, gravity, chassis_values, step, engine, controller)
+    request = rover_run.Request(scenario, ps, gravity, chassis_values, step, engine, controller,
+                                band)
     try:
         with _progress_bars() as progress:
             outcome = rover_run.run(request, Path(out), None if fmu_dir is None else Path(fmu_dir),
@@ -1151,6 +1158,15 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
             value = figures[key]
             click.echo(f"  {key:30} {value:.4g}" if isinstance(value, float)
                        else f"  {key:30} {value}")
+    if figures.get("limit_band"):
+        b = figures["limit_band"]
+        span = "none" if b["low"] is None else f"{b['low']:.2f} .. {b['high']:.2f} deg"
+        click.echo(f"  limit band (unmeasured values, one at a time): {span}"
+                   + (f", {b['without_limit']} run(s) without a limit" if b["without_limit"]
+                      else ""))
+        for r in b["runs"]:
+            limit = "none" if r["limit_deg"] is None else f"{abs(r['limit_deg']):.2f} deg"
+            click.echo(f"    {r['variant']:15} {limit} ({r['cause']})")
     if figures.get("slip_vs_slope"):
         rows = figures["slip_vs_slope"]
         click.echo("  slip vs slope (four wheels' means over 1 s from each whole degree):")

@@ -45,6 +45,8 @@ class Request:
     step: float | None = None
     engine: str = "in-process"
     controller: str = "speed"
+    band: bool = False
+    """Also the limit over its unmeasured values' bands (rover_scenarios.limit_band)."""
 
 
 @dataclass(frozen=True)
@@ -163,6 +165,18 @@ def check(request: Request, fmu_dir: Path | None = None) -> tuple[Runner, Path, 
         raise UsageError(f"--set rover.gravity={request.chassis['rover.gravity']:g}: the gravity "
                          f"is --gravity's ({known} m/s2): each scenario's ramps, forces and "
                          "predictions are set for it")
+    if request.band:
+        wrong = [what for what, bad in (
+            (f"--scenario {request.scenario}",
+             request.scenario not in rover_scenarios.BAND_EVENTS),
+            (f"--engine {request.engine}", request.engine != "in-process"),
+            (f"--controller {request.controller}", request.controller != "speed"),
+            ("--step", request.step is not None)) if bad]
+        if wrong:
+            raise UsageError(
+                f"--band runs {' and '.join(rover_scenarios.BAND_EVENTS)} in process with the "
+                "speed loops at the scenario's own step (six runs of it); not with "
+                f"{', '.join(wrong)}")
     runner = runner_for(request.engine, request.controller)
     reason = runner.refusal(request)
     if reason is not None:
@@ -196,6 +210,10 @@ def run(request: Request, out: Path, fmu_dir: Path | None = None, preset: str = 
                                            engine=engine, progress=progress)
     figures = {**outcome["figures"], "preset": preset, "controller": request.controller,
                **control_figures}
+    if request.band:
+        figures["limit_band"] = rover_scenarios.limit_band(
+            request.scenario, request.terrain, request.gravity, dict(request.chassis),
+            progress=progress)
     result = outcome["result"]
     out = Path(out)
     stem = f"{request.scenario}-{request.gravity}" + (
