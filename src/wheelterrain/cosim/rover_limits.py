@@ -22,6 +22,7 @@ from wheelterrain.cosim import ruts
 from wheelterrain.cosim.rover import STEP, RoverResult, Soil, coupled_forces, simulate
 from wheelterrain.errors import WheelTerrainError
 from wheelterrain.model import rover
+from wheelterrain.model.slip import ground_speed
 from wheelterrain.parameters import NAMES
 
 MOVING = tuple(n for n in rover.STATES if n not in ("position", "elapsed"))
@@ -59,7 +60,7 @@ def steady_state_vector(balance: dict, p: Mapping[str, float]) -> np.ndarray:
     lf, lr = rover.lever(p, "front_left"), rover.lever(p, "rear_left")
     sin_t = (zf - zr) / (lf - lr)
     s = dict.fromkeys(rover.STATES, 0.0)
-    s.update(speed=rover.ground_speed(balance["slip"], p["rover.rim_speed"]),
+    s.update(speed=ground_speed(balance["slip"], p["rover.rim_speed"]),
              heave=zf - lf * sin_t,
              pitch=math.asin(sin_t))
     for w in rover.WHEELS:

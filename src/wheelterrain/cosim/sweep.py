@@ -25,7 +25,7 @@ import numpy as np
 from wheelterrain.errors import ParameterError, UsageError
 from wheelterrain.fmu.instance import Instance, read_description
 from wheelterrain.fmu.variables import TERRAIN_OUTPUTS
-from wheelterrain.model.slip import DEFAULT_DEFINITION, reference_radius, to_unified
+from wheelterrain.model.slip import DEFAULT_DEFINITION, reference_radius, speeds, to_unified
 from wheelterrain.parameters import BY_NAME, DEG, TABLE
 
 OUTPUTS = TERRAIN_OUTPUTS  # every output WheelTerrain.fmu computes, one column each
@@ -124,9 +124,7 @@ def run_points(fmu: str, base: dict[str, float], points: list[dict[str, float]],
             sigma = to_unified(point.get("slip", 0.0), slip_definition)
             r_ref = reference_radius(values)
             # the faster of rim and carriage at WHEEL_SPEED*R_ref: down to a locked wheel
-            fast = WHEEL_SPEED * r_ref
-            rim, carriage = (fast, fast * (1 - sigma)) if sigma >= 0 else (fast * (1 + sigma),
-                                                                         fast)
+            rim, carriage = speeds(sigma, WHEEL_SPEED * r_ref)
             inst.set({**values, "wheel_speed": rim / r_ref, "carriage_speed": carriage,
                       "load": point.get("load", 62.0)})
             inst.fmu.doStep(_WORKER["time"], 1e-6)  # refuses (fmi2Discard) an infeasible point

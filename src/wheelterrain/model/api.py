@@ -140,11 +140,7 @@ def _unified_array(name: str, values, definition: str) -> np.ndarray:
     ok = np.isfinite(values) & (values >= lo) & (values <= hi)
     if not np.all(ok):  # the scalar check words the message (name, range)
         to_unified(float(values.flat[np.flatnonzero(~ok)[0]]), definition)
-    if definition == "traction":  # braking: the skid i/(1 - i)
-        return np.where(values >= 0, values, values / (1.0 - np.minimum(values, 0.0)))
-    if definition == "paper":
-        return np.where(values < 0, values, values / (1.0 + np.maximum(values, 0.0)))
-    return values
+    return np.vectorize(lambda v: to_unified(v, definition), otypes=[float])(values)
 
 
 def steady_states(params: Mapping[str, float] | ParameterSet, load, slip, *,
@@ -213,8 +209,8 @@ def _solve_points(ps: ParameterSet, load: np.ndarray, i: np.ndarray, guess, ends
                          + _unconverged(out[row["residual"], k], out[row["last_step"], k]))
     np.add(out, 0.0, out=out)  # no -0.0
     result = {name: out[k] for name, k in row.items()}
-    with np.errstate(divide="ignore", invalid="ignore"):
-        result.update(load=load, slip=i, slip_paper=np.where(i < 0, i, i / (1.0 - i)))
+    result.update(load=load, slip=i,
+                  slip_paper=np.vectorize(paper_from_unified, otypes=[float])(i))
     return result
 
 

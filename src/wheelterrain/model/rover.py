@@ -91,15 +91,6 @@ def named(p) -> dict:
     return {name: p[k] for k, name in enumerate(ROVER_NAMES)}
 
 
-def ground_speed(slip: float, rim_speed: float) -> float:
-    """The ground speed V [m/s] of a wheel at the model's ``slip`` with rim speed omega*R_ref
-    ``rim_speed``: (1 - slip)*rim driving, rim/(1 + slip) braking (inf for a locked wheel
-    turning: no finite speed gives it)."""
-    if slip >= 0:
-        return (1 - slip) * rim_speed
-    return math.inf if slip <= -1 else rim_speed / (1 + slip)
-
-
 def grouser_phase(p, wheel: str):
     """``wheel``'s grouser phase [rad] (``rover.grouser_phase.<wheel>``): added to its
     WheelTerrain's ``ripple.phase``."""

@@ -75,6 +75,22 @@ def traction_from_unified(sigma: float) -> float:
     return sigma if sigma >= 0 else traction_from_paper(sigma)
 
 
+def ground_speed(sigma: float, rim_speed: float) -> float:
+    """The ground speed V [m/s] of a wheel at the model's slip ``sigma`` with its rim at
+    ``rim_speed`` (omega*R): (1 - sigma)*rim driving, rim/(1 + sigma) braking (inf for a
+    locked wheel's rim turning: no finite speed gives it)."""
+    if sigma >= 0:
+        return (1 - sigma) * rim_speed
+    return math.inf if sigma <= -1 else rim_speed / (1 + sigma)
+
+
+def speeds(sigma: float, faster: float) -> tuple[float, float]:
+    """(rim speed omega*R, ground speed V) at the model's slip ``sigma`` with the faster of the
+    two at ``faster``: the rim driving (V = (1 - sigma)*rim), the ground braking
+    (rim = (1 + sigma)*V, 0 for a locked wheel)."""
+    return (faster, (1 - sigma) * faster) if sigma >= 0 else ((1 + sigma) * faster, faster)
+
+
 _TO_UNIFIED = {"traction": unified_from_traction, "paper": unified_from_paper,
                "unified": lambda sigma: sigma}
 
