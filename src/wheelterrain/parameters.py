@@ -343,6 +343,9 @@ TABLE: tuple[Parameter, ...] = (
 # Same columns; ``fmu`` says which FMU carries the row. The CasADi terrain model's parameter
 # vector is TABLE (the terrain rows); the rig's is RIG_TABLE.
 STANDARD_GRAVITY = 9.80665  # m/s2: the rig's load as a mass (rig.mass = load/g)
+NO_RIPPLE = {"ripple.k_g": 0.0, "ripple.k_0": 0.0}
+"""The grouser ripple off: the contact's grouser-period mean (the data's means, the steady
+motion a rover limit is predicted from)."""
 GRAVITY = {"earth": 9.81, "moon": 1.62}
 """m/s2: the gravities a rover runs in (``wheelterrain rover --gravity``; the rover.gravity
 row's default is the Earth's) and the Earth's of the shipped wheel tests' soil weights."""

@@ -49,7 +49,7 @@ import numpy as np
 
 from wheelterrain.fmu.functions import rig_on_contact, rover_on_contact
 from wheelterrain.model import rig, rover
-from wheelterrain.parameters import ParameterSet
+from wheelterrain.parameters import NO_RIPPLE, ParameterSet
 
 SOIL_TERMS = ("slip", "compaction", "bulldozing", "damping", "pressing")
 """Where a wheel's contact takes the energy, per wheel [J]."""
@@ -150,9 +150,9 @@ def rover_ledger(params: ParameterSet, rover_values: Mapping[str, float] | None 
     met = ca.SX.sym("met", rut_profile.N_MET) if ruts else None
     loop = rover_on_contact(ca.DM(params.vector()), r, heave_start=heave_start, slope=slope,
                             met=met)
-    profiles = None
+    terrain_map, profiles = ground.defaults(), None  # no soil map: the ruts' cells only
     if slope != 0:
-        loop["start"], profiles = _steady_start(params, r, slope, ground.defaults())
+        loop["start"], profiles = _steady_start(params, r, slope, terrain_map)
     x, u = loop["x"], loop["u"]
     xs = tuple(x.values())
     effective_slope, towing = rover.effective_inputs(xs, u, r)
@@ -171,12 +171,11 @@ def rover_ledger(params: ParameterSet, rover_values: Mapping[str, float] | None 
     n = len(loop["start"])
     met_at_end = dict.fromkeys(rover.WHEELS, 0.0)
     if ruts:
-        g = ground.defaults()
-        end, profiles = _with_ruts(loop, powers, met, r, g, stop, profiles)
+        end, profiles = _with_ruts(loop, powers, met, r, terrain_map, stop, profiles)
         first = np.array([*loop["start"], *([0.0] * len(powers))])
         at = float(end[rover.STATES.index("position")])
         met_at_end = {w: float(ground.met(profiles[rover.TRACK_OF[w]],
-                                          rover.wheel_position(r, at, w), g))
+                                          rover.wheel_position(r, at, w), terrain_map))
                       for w in rover.WHEELS}
     else:
         _, path = _integrate(loop["state"], loop["rate"], powers, loop["start"], stop)
@@ -212,8 +211,7 @@ def _steady_start(params: ParameterSet, r: Mapping[str, float], slope: float,
     from wheelterrain.cosim.rover_limits import steady_slip, steady_state_vector
     from wheelterrain.errors import InputError
 
-    quiet = {w: params.with_values({"ripple.k_g": 0.0, "ripple.k_0": 0.0})
-             for w in rover.WHEELS}
+    quiet = {w: params.with_values(NO_RIPPLE) for w in rover.WHEELS}
     slip = steady_slip(quiet, r, slope)
     if slip is None:
         raise InputError(

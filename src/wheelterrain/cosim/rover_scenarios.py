@@ -29,7 +29,8 @@ from wheelterrain.cosim.rover_limits import (
 )
 from wheelterrain.errors import WheelTerrainError
 from wheelterrain.model import ground, rover
-from wheelterrain.parameters import GRAVITY, ParameterSet
+from wheelterrain.model.slip import ground_speed
+from wheelterrain.parameters import GRAVITY, NO_RIPPLE, ParameterSet
 
 FINE_STEP = 2.5e-4
 """s: the step of the Moon's stall runs (slope, pull-test, descent). Each ends where the
@@ -218,7 +219,6 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
             "stop": sc.stop, "step": step}
 
 
-NO_RIPPLE = {"ripple.k_g": 0.0, "ripple.k_0": 0.0}
 TRACKED_SCENARIOS = ("level", "soft-patch")
 """Scenarios on level ground, where the rover has a steady motion to hold (:func:`tracking`)."""
 LIMIT_SCENARIOS = ("slope", "descent", "pull-test")
@@ -281,7 +281,7 @@ def steady_level_motion(soil: Soil, p: Mapping[str, float]) -> tuple[float, floa
     if slip is None:
         raise WheelTerrainError("the rover has no steady motion on level ground with this "
                                 "soil")
-    return slip, rover.ground_speed(slip, p["rover.rim_speed"])
+    return slip, ground_speed(slip, p["rover.rim_speed"])
 
 
 def tracking(res: RoverResult, soil: Soil, p: Mapping[str, float]) -> dict:

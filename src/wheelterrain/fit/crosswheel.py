@@ -61,12 +61,11 @@ from scipy.optimize import least_squares
 from wheelterrain import model
 from wheelterrain.errors import WheelTerrainError
 from wheelterrain.fit.datasets import DEFAULT_SPREAD, Dataset, Point
-from wheelterrain.parameters import BY_NAME, INDEX, ParameterSet
+from wheelterrain.parameters import BY_NAME, INDEX, NO_RIPPLE, ParameterSet
 
 Z90 = 1.6448536269514722  # two-sided 90 % of a normal distribution
 COVERAGE = 0.9
 SCALES = {"drawbar_pull": 1.0, "sinkage": 1e-3}  # residual units: N and mm
-NO_RIPPLE = {"ripple.k_g": 0.0, "ripple.k_0": 0.0}  # the data are means over grouser periods
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,7 @@ import numpy as np
 from wheelterrain import data, model, presets
 from wheelterrain.errors import CalibrationError, WheelTerrainError
 from wheelterrain.fit import calibration, crosswheel, datasets
-from wheelterrain.parameters import DEG, GRAVITY, ParameterSet
+from wheelterrain.parameters import DEG, GRAVITY, NO_RIPPLE, ParameterSet
 
 CASES = ("C1", "C2", "C3", "C4")
 PAPER_FREE = ("soil.phi", "soil.n0")
@@ -83,7 +83,7 @@ def transfer_errors(ps: ParameterSet, wheel: str) -> dict:
     first = rows[0]
     values = {**ding_soil(first["wheel_width_m"]), "wheel.radius": first["wheel_radius_m"],
               "wheel.width": first["wheel_width_m"], "grouser.height": first["grouser_height_m"],
-              "grouser.count": first["grouser_count"], "ripple.k_g": 0.0, "ripple.k_0": 0.0}
+              "grouser.count": first["grouser_count"], **NO_RIPPLE}
     other = ps.with_values(values)
     err = {"drawbar_pull": [], "sinkage": [], "torque": []}
     for r in rows:

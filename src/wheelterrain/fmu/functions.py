@@ -291,10 +291,9 @@ def rover_on_contact(p, r, g: dict | None = None, heave_start: float = 0.0, slop
     on the soil of ``p`` (the table's parameter vector), or where a terrain map ``g``
     (ground.NAMES by name) is given on its soil at the wheel's position, and the rover's
     parameters ``r`` (by name), on the slope ``slope`` [rad]. Without ``met`` no rut profile
-    along the tracks (model exchange records none); with it (per wheel a table of the
-    profile, :func:`wheelterrain.model.ground.met_in_table`, side by side, numbers or a
-    symbol) each wheel meets the rut the table gives at its position, as the Terrain FMU
-    serves it.
+    along the tracks (model exchange records none); with it (a CasADi vector: per wheel a
+    table of the profile, :func:`wheelterrain.model.ground.met_in_table`, side by side) each
+    wheel meets the rut the table gives at its position, as the Terrain FMU serves it.
     Returns ``state`` and ``rate`` (SX: rover.STATES, the four wheel angles, the four plastic
     sinkages), ``start`` (rover.initial_state ``heave_start`` m in the soil, no memory yet),
     ``x`` (the chassis' states by name), ``u`` (the chassis' inputs by name: the
@@ -316,8 +315,7 @@ def rover_on_contact(p, r, g: dict | None = None, heave_start: float = 0.0, slop
         pk = p if g is None else _soil_from_map(p, where, g)
         pk = with_grouser_phase(pk, rover.grouser_phase(r, wheel))
         if met is not None:  # the rut the Terrain serves this wheel
-            size = len(met) // len(rover.WHEELS) if isinstance(met, (list, tuple)) \
-                else met.numel() // len(rover.WHEELS)
+            size = met.numel() // len(rover.WHEELS)
             table = met[k * size:(k + 1) * size]
             pk = with_rut_met(pk, ground.met_in_table(where, g or ground.defaults(), table))
         out = _contact_with_damper(z, z_rate, unified, angles[k], plastics[k], speed, pk)
