@@ -202,16 +202,16 @@ def test_the_patch_mean_after_a_sheared_rut_is_the_mean_of_the_shear_law(hump):
 
 @pytest.mark.parametrize("form", FORMS)
 def test_the_shear_a_rut_remembers_raises_the_thrust_in_a_rut_only(form):
-    """model.rut_shear (default 0): on virgin soil it changes nothing, bit for bit; in a rut,
+    """model.rut_shear (default 1): on virgin soil it changes nothing, bit for bit; in a rut,
     a wheel that counts its shear on from the rut maker's has more gross thrust at the same
     sinkage and slip, and (patch form, where the shear adds nothing to them) the same normal
     force and compaction resistance."""
     fns = model_functions.build()
     for z, rate, slip in ((0.004, 0.0, 0.2), (0.02, 0.01, 0.6)):
-        on, off = _vector(FORMS[form], model__rut_shear=1), _vector(FORMS[form])
+        on, off = _vector(FORMS[form]), _vector(FORMS[form], model__rut_shear=0)
         assert _memory(fns, z, rate, slip, z, on) == _memory(fns, z, rate, slip, z, off)
-        on, off = (_vector(FORMS[form], soil__rut_depth=0.008, model__rut_shear=1),
-                   _vector(FORMS[form], soil__rut_depth=0.008))
+        on, off = (_vector(FORMS[form], soil__rut_depth=0.008),
+                   _vector(FORMS[form], soil__rut_depth=0.008, model__rut_shear=0))
         a = _contact(fns, 0.008 + z, rate, slip, on)
         b = _contact(fns, 0.008 + z, rate, slip, off)
         assert a["gross_thrust"] > b["gross_thrust"] > 0
@@ -236,9 +236,9 @@ def test_a_rut_deeper_than_the_wheel_keeps_the_remembered_shear_finite(form):
 def test_multipass_traction_rises_with_the_shear_the_rut_remembers():
     """Rig, 62 N, slip 0.3: with the rut's shear remembered every later pass pulls more per
     newton than the first (the multi-pass effect Holm 1969 reports); without it, less."""
-    off = multipass.run(presets.load("rashid-patch"), 62.0, 0.3, passes=3)
-    on = multipass.run(presets.load("rashid-patch").with_values({"model.rut_shear": 1}),
-                       62.0, 0.3, passes=3)
+    off = multipass.run(presets.load("rashid-patch").with_values({"model.rut_shear": 0}),
+                        62.0, 0.3, passes=3)
+    on = multipass.run(presets.load("rashid-patch"), 62.0, 0.3, passes=3)
     assert on[0] == off[0]  # the first pass meets virgin soil
     assert all(r["traction_coefficient"] > on[0]["traction_coefficient"] for r in on[1:])
     assert all(r["traction_coefficient"] < off[0]["traction_coefficient"] for r in off[1:])
@@ -264,18 +264,19 @@ def test_multipass_cli_json_and_mistakes(tmp_path):
     assert heavy.exit_code == 3
     assert "Traceback" not in heavy.output
     both = runner.invoke(main, ["multipass", "--slip", "0.3", "--passes", "2", "--compare",
-                                "model.rut_shear=1", "--out", str(tmp_path), "--json"])
+                                "model.rut_shear=0", "--out", str(tmp_path), "--json"])
     assert both.exit_code == 0, both.output
     doc = json.loads(both.output)
-    assert (doc["rut_shear"], doc["compare"]["rut_shear"]) == (0, 1)
-    assert doc["compare"]["set"] == ["model.rut_shear=1"]
+    assert (doc["rut_shear"], doc["compare"]["rut_shear"]) == (1, 0)
+    assert doc["compare"]["set"] == ["model.rut_shear=0"]
     first, other = doc["runs"][0]["passes"], doc["compare"]["runs"][0]["passes"]
     assert other[0] == first[0]  # the first pass meets virgin soil
-    assert other[1]["traction_coefficient"] > first[1]["traction_coefficient"]
+    assert first[1]["traction_coefficient"] > other[1]["traction_coefficient"]
     text = runner.invoke(main, ["multipass", "--slip", "0.3", "--passes", "2", "--compare",
-                                "model.rut_shear=1", "--out", str(tmp_path)])
-    assert "compared: model.rut_shear=1" in text.output
-    assert "rut shear cumulative" in text.output
+                                "model.rut_shear=0", "--out", str(tmp_path)])
+    assert "compared: model.rut_shear=0" in text.output
+    assert "rut shear 1\n" in text.output
+    assert "rut shear 0\n" in text.output
     wrong = runner.invoke(main, ["multipass", "--slip", "0.3", "--compare", "model.rut_shear=7",
                                  "--out", str(tmp_path)])
     assert wrong.exit_code == 2

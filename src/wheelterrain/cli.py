@@ -390,15 +390,23 @@ def _slip_list(text: str) -> list[float]:
               help="Passes over the same strip (Tanaka et al. ran five with the Rashid wheel).")
 @click.option("--compare", "compare", multiple=True, metavar="NAME=VALUE",
               help="Run the passes again with this assignment added (repeatable), printed "
-                   "after the first and drawn dashed: e.g. --compare model.rut_shear=1 shows "
+                   "after the first and drawn dashed: e.g. --compare model.rut_shear=0 shows "
                    "what the shear a rut remembers changes.")
+@click.option("--scm-reference", "scm", is_flag=True,
+              help="Add the independent reference: the Soil Contact Model's node law "
+                   "(elastic reloading up to the pressure a node carried, the "
+                   "pressure-sinkage law beyond, its shear displacement kept by the share "
+                   "model.rut_shear) on a discretised rim of the same wheel and soil; driving "
+                   "slips 0 <= i < 1.")
 @click.option("--out", default="validation/output", show_default=True,
               type=click.Path(file_okay=False), help="Folder for multipass.png.")
 @json_option('One object {"preset", "load", "soil_memory", "rut_shear", "runs": [{"slip", '
              '"slip_paper", "passes": [{"pass", "traction_coefficient", "sinkage", "rut_left", '
-             '...}]}], "units"}; with --compare also "compare": {"set", "rut_shear", "runs"}')
+             '...}]}], "units"}; with --compare also "compare": {"set", "rut_shear", "runs"}; '
+             'with --scm-reference also "scm_reference": {"runs": [{"slip", "passes": [{"pass", '
+             '"traction_coefficient", "sinkage", "sinkage_increment", ...}]}]}')
 def multipass(preset: str, assignments: tuple[str, ...], slip_text: str, slip_definition: str,
-              load: float, passes: int, compare: tuple[str, ...], out: str,
+              load: float, passes: int, compare: tuple[str, ...], scm: bool, out: str,
               json_target: str | None) -> None:
     """The single-wheel rig run PASSES times over the same strip: per pass, the traction
     coefficient (drawbar pull / load), the sinkage from the original surface and the rut left.
@@ -407,10 +415,12 @@ def multipass(preset: str, assignments: tuple[str, ...], slip_text: str, slip_de
     rut the pass before left (soil.rut_depth): with model.soil_memory = 1 (the default) the
     soil is elastic-plastic, it answers elastically up to the pressure it has carried and
     along the pressure-sinkage law beyond, and the wheel's contact begins at the rut's
-    surface; with 0 every pass meets virgin soil. With model.rut_shear = 1 (default 0) a
-    pass counts its shear displacement on from the displacement the pass before left
-    (cumulative shear: every later pass pulls more per newton); with 0 each pass starts its
-    shear afresh and later passes pull less (their contact from the rut's surface is short).
+    surface; with 0 every pass meets virgin soil. A pass counts its shear displacement on
+    from the share model.rut_shear of the displacement the pass before left (default 1, all
+    of it, as the Soil Contact Model's node keeps it: every later pass pulls more per
+    newton); with 0 each pass starts its shear afresh and later passes pull less (their
+    contact from the rut's surface is short). --reference scm adds the independent
+    reference: SCM's node law on a discretised rim, same wheel and soil (drawn dotted).
     The soil's constants are the virgin soil's in every pass: no cited rule for how a pass
     compacts a soil (density, modulus, strength) is applied. Writes OUT/multipass.png.
     """
@@ -434,22 +444,42 @@ def multipass(preset: str, assignments: tuple[str, ...], slip_text: str, slip_de
                          "passes": rows})
         return runs
 
+    def scm_reference() -> list[dict]:
+        from wheelterrain.fit import scm_reference as scm_law
+
+        out = []
+        for s in slips_given:
+            sigma = slips.to_unified(s, slip_definition)
+            if not 0 <= sigma < 1:
+                _usage_error(f"--scm-reference takes driving slips (0 <= i < 1); slip {s:g} "
+                             f"is {sigma:g} in the model's definition")
+            try:
+                rows = scm_law.passes(ps, load, sigma, passes)
+            except ValueError as err:
+                _fail(WheelTerrainError(f"the SCM reference at slip {s:g}: {err}"))
+            out.append({"slip": sigma, "slip_paper": slips.paper_from_unified(sigma),
+                        "passes": rows})
+        return out
+
     try:
         runs = passes_at_each_slip(ps)
         compared = passes_at_each_slip(other) if compare else None
     except WheelTerrainError as err:
         _fail(err)
+    reference = scm_reference() if scm else None
     document = {"preset": preset, "set": list(assignments), "load": load,
                 "soil_memory": int(ps["model.soil_memory"]),
-                "rut_shear": int(ps["model.rut_shear"]), "runs": runs, "units": mp.UNITS}
+                "rut_shear": ps["model.rut_shear"], "runs": runs, "units": mp.UNITS}
     if compare:
-        document["compare"] = {"set": list(compare), "rut_shear": int(other["model.rut_shear"]),
+        document["compare"] = {"set": list(compare), "rut_shear": other["model.rut_shear"],
                                "runs": compared}
+    if reference is not None:
+        document["scm_reference"] = {"runs": reference}
     with files.one_set(Path(out)) as staging:
         plots.multipass(runs, staging / "multipass.png",
                         f"{preset}, {load:g} N" + (f", {' '.join(assignments)}"
                                                     if assignments else ""),
-                        (" ".join(compare), compared) if compare else None)
+                        (" ".join(compare), compared) if compare else None, reference)
     if _emit_json(json_target, document):
         return
     for label, params, of in (("", ps, runs), (" ".join(compare), other, compared)):
@@ -458,8 +488,12 @@ def multipass(preset: str, assignments: tuple[str, ...], slip_text: str, slip_de
         click.echo(f"multi-pass, preset {preset}, load {load:g} N"
                    + (f", compared: {label}" if label else "") + ", soil memory "
                    f"{'on' if params['model.soil_memory'] == 1 else 'off'}, rut shear "
-                   f"{'cumulative' if params['model.rut_shear'] == 1 else 'off'}")
+                   f"{params['model.rut_shear']:g}")
         _multipass_table(of)
+    if reference is not None:
+        click.echo("the SCM reference (node law on a discretised rim, same wheel and soil, shear "
+                   f"share {ps['model.rut_shear']:g})")
+        _multipass_table(reference)
     click.echo(f"wrote {Path(out) / 'multipass.png'}")
 
 
@@ -1158,6 +1192,11 @@ def rover(scenario: str, gravity: str, preset: str, assignments: tuple[str, ...]
             value = figures[key]
             click.echo(f"  {key:30} {value:.4g}" if isinstance(value, float)
                        else f"  {key:30} {value}")
+    if figures.get("predicted_stability_mode"):
+        m = figures["predicted_stability_mode"]
+        click.echo(f"  {'predicted_stability_mode':30} {m['leading']} grows at "
+                   f"{m['growth_rate_per_s']:.3g} 1/s, {m['frequency_hz']:.3g} Hz"
+                   + (" (a divergence, no oscillation)" if m["frequency_hz"] == 0 else ""))
     if figures.get("limit_band"):
         b = figures["limit_band"]
         span = "none" if b["low"] is None else f"{b['low']:.2f} .. {b['high']:.2f} deg"

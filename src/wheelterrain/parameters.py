@@ -281,19 +281,22 @@ TABLE: tuple[Parameter, ...] = (
        "Wong, Theory of Ground Vehicles, ch. 2 (repetitive loading); Krenn & Hirzinger 2009 "
        "(SCM's elastic-plastic soil node)", kind="enum",
        choices=MappingProxyType({0: "off", 1: "elastic-plastic"})),
-    _P("model.rut_shear", "1", 0, 0, 1,
-       "Shear a rut remembers: 1 = cumulative: a wheel in a rut (model.soil_memory = 1, "
-       "soil.rut_depth > 0) counts its Janosi shear displacement on from the displacement the "
-       "wheel that made the rut left there, taking that wheel to have run at this one's slip "
-       "with this one's radius and soil (its exit displacement at the rut's yield depth, "
-       "buried to the axle at most); "
-       "0 = every wheel's displacement starts at 0 at its entry, as on virgin soil. Unused "
-       "where the wheel meets virgin soil.",
-       "Wong, Theory of Ground Vehicles, ch. 2 (repetitive shear loading: reloaded soil takes "
-       "up its shear stress again within a short displacement) and the track analysis there "
-       "(the shear displacement accumulates from the front of the contact); applied here "
-       "across wheels in line. Multi-pass traction rising in a rut: Holm 1969", kind="enum",
-       choices=MappingProxyType({0: "off", 1: "cumulative"})),
+    _P("model.rut_shear", "1", 1.0, 0.0, 1.0,
+       "Shear a rut remembers: the share of the shear displacement the wheel that made a rut "
+       "left at its exit that a wheel in the rut (model.soil_memory = 1, soil.rut_depth > 0) "
+       "inherits and counts its Janosi displacement on from, taking the rut's maker to have run "
+       "at this wheel's slip with its radius and soil (its exit displacement at the rut's yield "
+       "depth, buried to the axle at most). 1 = all of it, as the Soil Contact Model keeps each "
+       "soil node's accumulated shear displacement from contact to contact (the default: the "
+       "multi-pass direction of that node law, tests/test_multipass_scm.py); 0 = every "
+       "wheel's displacement starts at 0 at its entry, as on virgin soil. Unused where the "
+       "wheel meets virgin soil.",
+       "Krenn & Hirzinger 2009 and Chrono's SCMTerrain (the node's accumulated shear "
+       "displacement, kept across contacts); Wong, Theory of Ground Vehicles, ch. 2 (repetitive "
+       "shear loading: reloaded soil takes up its shear stress again within a short "
+       "displacement). Multi-pass traction rising in a rut: Holm 1969",
+       plausible=(0.0, 1.0, "unmeasured: 0 (reloaded soil shears afresh) to 1 (SCM's node "
+                  "keeps all of it); the rover's limit_band spans both ends")),
     # --- cross-wheel mechanisms (validation/DATA.md; chosen by leave-one-dataset-out) ----------
     _P("model.shear_length_ratio", "1", 0.0, 0.0, 2.0,
        "Growth of the shear deformation modulus with the length of the shearing surface: "

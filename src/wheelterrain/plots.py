@@ -270,12 +270,21 @@ def rover(result, figures: dict, path: Path) -> None:
 
 
 def multipass(runs: list[dict], path: Path, title: str,
-              compare: tuple[str, list[dict]] | None = None) -> None:
+              compare: tuple[str, list[dict]] | None = None,
+              reference: list[dict] | None = None) -> None:
     """Multi-pass on the rig: the traction coefficient per pass (left) and the sinkage from
     the original surface with the rut each pass leaves (right), one line per slip.
     ``compare``: (label, runs) of the same slips with other settings, their traction drawn
-    dashed on the left."""
+    dashed on the left. ``reference``: the SCM reference's runs at the same slips, traction
+    and sinkage drawn dotted."""
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
+    for k, run in enumerate(reference or []):
+        rows = run["passes"]
+        n = [r["pass"] for r in rows]
+        left.plot(n, [r["traction_coefficient"] for r in rows], "x:", color=f"C{k}",
+                  label=f"slip {run['slip']:.3g}, SCM reference")
+        right.plot(n, [1e3 * r["sinkage"] for r in rows], "x:", color=f"C{k}",
+                   label=f"slip {run['slip']:.3g}: SCM reference")
     for k, run in enumerate(compare[1] if compare else []):
         rows = run["passes"]
         left.plot([r["pass"] for r in rows], [r["traction_coefficient"] for r in rows], "^--",

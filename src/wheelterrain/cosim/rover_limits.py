@@ -147,14 +147,22 @@ PROBE_KICK = 1e-4  # rad/s: the pitch rate the steady motion is started with
 def holds(terrain: Mapping, p: Mapping[str, float], slope: float, slip: float,
           step: float = STEP, balance_tow: bool = False) -> bool:
     """Whether the rover's steady motion at ``slip`` on ``slope`` survives a small
-    disturbance, by running it: from the steady state (:func:`steady_state_vector`, each wheel's
-    plastic sinkage at its sinkage) with the pitch rate PROBE_KICK, in process for PROBE_TIME s
-    at that slope; it holds when the normal forces' deviation from the steady motion over the
-    last second is below its largest over the first second (it dies out) and the slip stays
-    below STALL_SLIP. The test for a soil with memory, which has no one linearisation: lifted,
-    a wheel unloads along the stiff elastic line; pressed, it yields along the soft
-    pressure-sinkage law. ``balance_tow``: the towing force is whatever holds the rover at
-    that slip (the pull test), else 0 (``slip`` must be the slope's steady slip)."""
+    disturbance (:func:`probe`'s ``holds``)."""
+    return probe(terrain, p, slope, slip, step, balance_tow)["holds"]
+
+
+def probe(terrain: Mapping, p: Mapping[str, float], slope: float, slip: float,
+          step: float = STEP, balance_tow: bool = False) -> dict:
+    """The rover's steady motion at ``slip`` on ``slope`` disturbed and run: from the steady
+    state (:func:`steady_state_vector`, each wheel's plastic sinkage at its sinkage) with the
+    pitch rate PROBE_KICK, in process for PROBE_TIME s at that slope. ``holds``: the normal
+    forces' deviation from the steady motion over the last second is below its largest over
+    the first second (it dies out) and the slip stays below STALL_SLIP. The test for a soil
+    with memory, which has no one linearisation: lifted, a wheel unloads along the stiff
+    elastic line; pressed, it yields along the soft pressure-sinkage law. ``mode``: where it
+    does not hold, the disturbance that grew, measured from the run (:func:`_grown_mode`).
+    ``balance_tow``: the towing force is whatever holds the rover at that slip (the pull
+    test), else 0 (``slip`` must be the slope's steady slip)."""
     balance = rover.steady_balance(terrain, p, slope, slip)
     tow = balance["surplus"] if balance_tow else 0.0
     x = steady_state_vector(balance, p)
@@ -164,15 +172,46 @@ def holds(terrain: Mapping, p: Mapping[str, float], slope: float, slip: float,
     soil = Soil(terrain["front_left"])
     res = simulate(soil, dict(p), PROBE_TIME, step=step, slope=slope, towing=tow, x0=x0,
                    ruts0=ruts.steady_ruts(balance, p, x, soil.map_values()))
-    if res.left_domain or res.time.size < round(PROBE_TIME / step) - 1:
-        return False
     steady = np.array([balance["wheels"][w]["normal_force"] for w in rover.WHEELS])
     forces = np.array([res.wheels[w]["normal_force"] for w in rover.WHEELS])
+    if res.left_domain or res.time.size < round(PROBE_TIME / step) - 1:
+        return {"holds": False, "mode": _grown_mode(res.time, forces - steady[:, None])}
     deviation = np.max(np.abs(forces - steady[:, None]), axis=0)
     second = round(1.0 / step)
     slips = np.array([res.wheels[w]["slip"] for w in rover.WHEELS])
-    return bool(deviation[-second:].max() < deviation[:second].max()
-                and slips.max() < STALL_SLIP)
+    ok = bool(deviation[-second:].max() < deviation[:second].max()
+              and slips.max() < STALL_SLIP)
+    return {"holds": ok, "mode": None if ok else _grown_mode(res.time, forces - steady[:, None])}
+
+
+MODE_CHUNKS = 6
+"""Pieces of a probe run's second half whose largest deviations give the growth rate."""
+
+
+def _grown_mode(time: np.ndarray, deviation: np.ndarray) -> dict | None:
+    """The disturbance that grew in a probe run, from the wheels' normal-force deviations
+    ``deviation`` (one row per wheel of rover.WHEELS) over ``time``: ``leading``, the wheel
+    whose force strays furthest at the end; ``growth_rate_per_s``, the slope of the log of
+    the largest |deviation| over MODE_CHUNKS pieces of the run's second half (the first
+    mixes in the kick's own transient); ``frequency_hz``, half the leading wheel's sign
+    changes per second over those pieces (0: a divergence, no oscillation). None for a run
+    too short to tell (under 2 * MODE_CHUNKS samples)."""
+    n = time.size
+    if n < 2 * MODE_CHUNKS:
+        return None
+    tail = max(1, n // 10)
+    lead = int(np.argmax(np.max(np.abs(deviation[:, -tail:]), axis=1)))
+    start = n // 2
+    x = deviation[lead, start:]
+    t = time[start:]
+    pieces = np.array_split(np.arange(x.size), MODE_CHUNKS)
+    centres = np.array([t[k].mean() for k in pieces])
+    peaks = np.array([np.max(np.abs(x[k])) for k in pieces])
+    rate = float(np.polyfit(centres, np.log(np.maximum(peaks, 1e-300)), 1)[0])
+    changes = int(np.count_nonzero(np.diff(np.sign(x[x != 0])) != 0))
+    span = float(t[-1] - t[0]) if t.size > 1 else 0.0
+    return {"leading": f"{rover.WHEELS[lead]}.normal_force", "growth_rate_per_s": rate,
+            "frequency_hz": changes / (2 * span) if span > 0 else 0.0}
 
 
 def statically_stable(terrain: Mapping, p: Mapping[str, float], slope: float,
@@ -233,8 +272,10 @@ def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
     motion has no eigenvalue with a positive real part; on a soil with memory, which has none,
     the perturbed motion is run (:func:`holds`). Bisection on the slope from level ground, every
     condition checked at every trial; ``limit`` says which one ended it (a tolerance of
-    1e-3 rad where the motion is run). ``trials(k, n)`` is told each trial done, of the n the
-    bisection takes at most."""
+    1e-3 rad where the motion is run). ``mode``: for ``stability``, the disturbance that grew
+    at the first slope past the limit (:func:`_grown_mode` from the probe run; on a soil
+    without memory the eigenvalue's real part and frequency, ``leading`` "eigenvalue"), else
+    None. ``trials(k, n)`` is told each trial done, of the n the bisection takes at most."""
     top = direction * math.radians(60)
     memory = has_memory(terrain)
     if memory:
@@ -251,6 +292,8 @@ def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
             if trials is not None:
                 trials(done, most)
 
+    modes: dict[float, dict | None] = {}
+
     def _verdict(slope: float) -> str | None:
         i = steady_slip(terrain, p, slope)
         if i is None:
@@ -259,15 +302,24 @@ def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
         if cause is not None:
             return cause
         if memory:
-            return None if holds(terrain, p, slope, i) else "stability"
-        return "stability" if growth_rate(terrain, p, slope, i)["rate"] > 0 else None
+            run = probe(terrain, p, slope, i)
+            modes[slope] = run["mode"]
+            return None if run["holds"] else "stability"
+        g = growth_rate(terrain, p, slope, i)
+        modes[slope] = {"leading": "eigenvalue", "growth_rate_per_s": g["rate"],
+                        "frequency_hz": g["frequency_hz"]}
+        return "stability" if g["rate"] > 0 else None
+
+    def mode(slope: float, why: str | None) -> dict | None:
+        return modes.get(slope) if why == "stability" else None
 
     level = verdict(0.0)  # each verdict once: on a soil with memory it runs the rover
     if level is not None:
-        return {"slope": 0.0, "limit": level, "slip": None}
+        return {"slope": 0.0, "limit": level, "slip": None, "mode": mode(0.0, level)}
     why = verdict(top)
     if why is None:
-        return {"slope": top, "limit": None, "slip": steady_slip(terrain, p, top)}
+        return {"slope": top, "limit": None, "slip": steady_slip(terrain, p, top),
+                "mode": None}
     lo, hi = 0.0, top
     while abs(hi - lo) > tolerance:
         mid = (lo + hi) / 2
@@ -276,7 +328,8 @@ def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
             lo = mid
         else:
             hi, why = mid, v
-    return {"slope": lo, "limit": why, "slip": steady_slip(terrain, p, lo)}
+    return {"slope": lo, "limit": why, "slip": steady_slip(terrain, p, lo),
+            "mode": mode(hi, why)}
 
 
 STALL_SLIP = 0.95

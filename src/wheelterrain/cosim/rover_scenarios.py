@@ -171,7 +171,7 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
            "real_time_factor": float((res.time[-1] + step) / max(res.wall_time, 1e-12)),
            "averaged_from_s": sc.settle, "step_s": step,
            "soil_memory": int(terrain["model.soil_memory"]),
-           "rut_shear": int(terrain["model.rut_shear"]),
+           "rut_shear": terrain["model.rut_shear"],
            "wheels": [{"name": w, "mean_slip": _mean(v["slip"], keep),
                        "mean_sinkage": _mean(v["sinkage"], keep),
                        "mean_normal_force": _mean(v["normal_force"], keep),
@@ -190,6 +190,7 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
             out["stall_slope_deg"] = math.degrees(res.inputs["slope"][k]) if hit.size else None
             out["predicted_stall_slope_deg"] = math.degrees(pred["slope"])
             out["predicted_stall_limit"] = pred["limit"]
+            out["predicted_stability_mode"] = pred["mode"]
             out["stall_cause"] = (run_cause(res, quiet, p, float(res.inputs["slope"][k]))
                                   if hit.size else None)
             out["slip_vs_slope"] = slip_vs_slope(res)
@@ -202,6 +203,7 @@ def run_scenario(name: str, terrain: ParameterSet, gravity: str = "earth",
     if name == "descent":
         out["predicted_descent_limit_deg"] = math.degrees(pred["slope"])
         out["predicted_descent_limit"] = pred["limit"]
+        out["predicted_stability_mode"] = pred["mode"]
         locked = locked_limit(quiet, p)  # the soil's own braking limit, whatever the drive
         out["locked_limit_deg"] = None if locked is None else math.degrees(locked)
         # the first step a wheel's slip passes SLIDE_SLIP (a run checks its stop condition
@@ -233,13 +235,16 @@ BAND_VARIANTS = {
     "phases aligned": ({}, {f"rover.grouser_phase.{w}": 0.0 for w in rover.WHEELS}),
     "C_f 400": ({"soil.damping": 400.0}, {}),
     "C_f 1600": ({"soil.damping": 1600.0}, {}),
+    "rut_shear 0": ({"model.rut_shear": 0.0}, {}),
 }
 """The unmeasured values a rover limit depends on, one at a time at each end of its band, as
 (terrain values, rover values): soil.unloading_stiffness K_u over its plausible range (4e6-4e8
 Pa/m: Chrono's SCM demos use 4e7-4e8, a decade softer for loose sand; not measured for this
 soil), the four grouser phases aligned against the default spread, soil.damping C_f at half and
 twice the paper's 800 N.s/m (one value without a source in the paper; the factor 2 is an
-assumption)."""
+assumption), and model.rut_shear at 0 against the default 1 (SCM's node keeps all of the shear
+displacement; 0, the rear wheels shearing afresh in the front wheels' ruts, is the other end of
+an unmeasured share)."""
 BAND_EVENTS = {"slope": "stall_slope_deg", "descent": "slide_slope_deg"}
 
 

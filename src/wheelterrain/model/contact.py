@@ -381,7 +381,7 @@ def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, nodes:
     # model.rut_shear: the displacement the rut's maker, at this slip, left at its exit
     maker = _maker_angle(ground, P)
     made = _Displacement(maker, slip, P, Rc, Rs, Rref).along(maker - exit_angle(maker, P))
-    made = ca.if_else(_cumulative(P), made, 0)
+    made = ca.if_else(_cumulative(P), P["model.rut_shear"] * made, 0)
     g_front = shear_function(made + displacement.at(front), P, K)
     g_rear = shear_function(made + displacement.at(rear), P, K)
 
@@ -531,8 +531,8 @@ def patch_shear_mean_after(a0: ca.SX, a: ca.SX, P: Params) -> ca.SX:
 
 
 def _cumulative(P: Params) -> ca.SX:
-    """1 where a wheel's shear counts on from the rut's (``model.rut_shear`` = 1 in a rut)."""
-    return ca.logic_and(in_rut(P), P["model.rut_shear"] == 1)
+    """1 where a wheel's shear counts on from the rut's (``model.rut_shear`` > 0 in a rut)."""
+    return ca.logic_and(in_rut(P), P["model.rut_shear"] > 0)
 
 
 def _contact_length(theta_f: ca.SX, P: Params) -> ca.SX:
@@ -609,8 +609,9 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, ripp
     x = (1 - kinematics) * (a - v / Rs) + kinematics * (soil_ratio - 1)
     K = effective_shear_modulus(length, P)
     mobilised = patch_shear_mean(x * length / K, P)
-    # model.rut_shear: the rut's maker, at this slip, left j0 = x*(its contact length)
-    made = x * _contact_length(_maker_angle(ground, P), P)
+    # model.rut_shear: the share of j0 = x*(its contact length) that the rut's maker, at this
+    # slip, left and this wheel inherits
+    made = P["model.rut_shear"] * x * _contact_length(_maker_angle(ground, P), P)
     mobilised = ca.if_else(_cumulative(P), patch_shear_mean_after(made / K, x * length / K, P),
                            mobilised)
     thrust = (c * b * length + normal * tan_phi) * mobilised
