@@ -79,6 +79,8 @@ SOURCES = {
     **{f"rover-{s}-{g}": Source(("rover", "--scenario", s, "--gravity", g, "--json", "{json}",
                                  "--out", "{tmp}"))
        for s in ("level", "slope", "descent") for g in ("earth", "moon")},
+    "multipass": Source(("multipass", "--slip", "0.1,0.3,0.5", "--scm-reference", "--json",
+                         "{json}", "--out", "{tmp}")),
     "bench-rover": Source(("benchmarks/rover.py", "--quick", "--json"), python=True),
     "bench-fmus": Source(("benchmarks/fmus.py", "--quick", "--json"), python=True),
     "bench-core": Source(("benchmarks/core.py", "--quick", "--json"), python=True),
@@ -93,6 +95,19 @@ class Figure:
 
     def text(self, value) -> str:
         return "none" if value is None else self.fmt.format(value)
+
+
+def _multipass_runs(doc: dict, who: str) -> list[dict]:
+    """The multipass document's runs: the model's, or the SCM reference's."""
+    return doc["runs"] if who == "model" else doc["scm_reference"]["runs"]
+
+
+def _mode_text(mode: dict | None) -> str:
+    """The predicted stability mode in words: what grows, how fast, at what frequency."""
+    if mode is None:
+        return "none"
+    kind = "a divergence" if mode["frequency_hz"] == 0 else f"{mode['frequency_hz']:.1f} Hz"
+    return f"{kind} growing at {mode['growth_rate_per_s']:.0f}/s, {mode['leading']} leading"
 
 
 def _nested(doc: dict, dataset: str, role: str) -> dict:
@@ -183,11 +198,22 @@ FIGURES: dict[str, Figure] = {
         f"rover-slope-{g}", lambda d: d["predicted_stall_limit"], "{}")
        for g in ("earth", "moon")},
     **{f"rover.{g}.descent.slide_deg": Figure(
-        f"rover-descent-{g}", lambda d: abs(d["slide_slope_deg"])
-        if d["slide_slope_deg"] is not None else None, "{:.1f}°")
+        f"rover-descent-{g}", lambda d: f"slides at {abs(d['slide_slope_deg']):.1f}°"
+        if d["slide_slope_deg"] is not None else "holds 20°", "{}")
        for g in ("earth", "moon")},
-    **{f"rover.{g}.descent.cause": Figure(f"rover-descent-{g}", lambda d: d["stall_cause"],
-                                          "{}") for g in ("earth", "moon")},
+    **{f"rover.{g}.descent.cause": Figure(f"rover-descent-{g}", lambda d: d["stall_cause"]
+                                          or "no slide", "{}") for g in ("earth", "moon")},
+    # multi-pass on the rig, 62 N (wheelterrain multipass --scm-reference --json)
+    **{f"multipass.{who}.{slip}.pass{k}.{what}": Figure(
+        "multipass", lambda d, who=who, i=i, k=k, key=key, scale=scale:
+        scale * _multipass_runs(d, who)[i]["passes"][k - 1][key], fmt)
+       for who in ("model", "scm") for i, slip in enumerate(("0.1", "0.3", "0.5"))
+       for k in range(1, 6)
+       for what, key, scale, fmt in (("pull", "traction_coefficient", 1.0, "{:.3f}"),
+                                     ("increment_mm", "sinkage_increment", 1e3, "{:.2f}"))},
+    **{f"rover.{g}.slope.mode": Figure(
+        f"rover-slope-{g}", lambda d: _mode_text(d.get("predicted_stability_mode")), "{}")
+       for g in ("earth", "moon")},
     **{f"rover.{g}.descent.predicted_deg": Figure(
         f"rover-descent-{g}", lambda d: abs(d["predicted_descent_limit_deg"]), "{:.1f}°")
        for g in ("earth", "moon")},

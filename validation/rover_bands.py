@@ -7,10 +7,10 @@ Each limit scenario of `wheelterrain rover` (in process, default wheel and soil)
 default values and once per end of each unmeasured value's band, one at a time
 (`wheelterrain.cosim.rover_scenarios.limit_band`, its BAND_VARIANTS: soil.unloading_stiffness
 over its plausible range, the grouser phases aligned, soil.damping at half and twice the
-paper's). Per run: the simulated limit (stall or slide slope), its cause, the prediction and
-its limit, and on the descent the steepest slope four locked wheels hold (`locked_limit_deg`).
-The band is the smallest and largest limit over the runs; a run that reaches its end without a
-stall or slide is counted apart.
+paper's, model.rut_shear at 0). Per run: the simulated limit (stall or slide slope), its cause,
+the prediction and its limit, and on the descent the steepest slope four locked wheels hold
+(`locked_limit_deg`). The band is the smallest and largest limit over the runs; a run that
+reaches its end without a stall or slide is counted apart.
 """
 
 from __future__ import annotations
