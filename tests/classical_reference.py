@@ -108,6 +108,41 @@ class Classical:
         T = self.R**2 * self.b * self._integrate(tau, tf, br, eps)
         return {"normal_force": Fz, "drawbar_pull": DP, "torque": T}
 
+    def lateral(self, z: float, i: float, beta: float, K_y: float,
+                side: bool = True) -> dict[str, float]:
+        """Side force [N] and its moment about the vertical through the centre [N.m] of a
+        driven wheel (0 <= i < 1) at slip angle ``beta`` [rad], from Ishigami, Miwa, Nagatani
+        & Yoshida 2007: the lateral shear displacement j_y = R*(1 - i)*(theta_f - theta)*
+        tan(beta), the lateral stress (c + sigma*tan(phi))*(1 - exp(-|j_y|/K_y)) against it,
+        and (``side``) the side face's bulldozing after Hegedus, R_b(h)*(R - h*cos(theta)),
+        h = R*(cos(theta) - cos(theta_f)), R_b = D1*(c*h + D2*gamma*h**2/2), D1 = cot(X) +
+        tan(X + phi), D2 = cot(X) + cot(X)**2*tan(phi), X = pi/4 - phi/2, each element taken
+        as mobilised as the lateral shear at its angle (this project's reading)."""
+        tf, sigma, _, br, eps = self._parts(z, i)
+        sign = -math.copysign(1.0, beta) if beta != 0 else 0.0
+        x = math.pi / 4 - self.phi / 2
+        d1 = 1 / math.tan(x) + math.tan(x + self.phi)
+        d2 = 1 / math.tan(x) + math.tan(self.phi) / math.tan(x) ** 2
+
+        def mobilised(t: float) -> float:
+            jy = self.R * (1.0 - i) * (tf - t) * abs(math.tan(beta))
+            return 1.0 - math.exp(-jy / K_y)
+
+        def shear(t: float) -> float:
+            return self.R * self.b * (self.c + sigma(t) * math.tan(self.phi)) * mobilised(t)
+
+        def bulldozing(t: float) -> float:
+            if not side:
+                return 0.0
+            h = self.R * (math.cos(t) - math.cos(tf))
+            rb = d1 * (self.c * h + d2 * self.gamma * h**2 / 2)
+            return rb * (self.R - h * math.cos(t)) * mobilised(t)
+
+        force = self._integrate(lambda t: shear(t) + bulldozing(t), tf, br, eps)
+        moment = self._integrate(lambda t: (shear(t) + bulldozing(t)) * self.R * math.sin(t),
+                                 tf, br, eps)
+        return {"lateral_force": sign * force, "aligning_moment": sign * moment}
+
     def sinkage(self, load: float, i: float) -> float:
         """Sinkage [m] at which the normal force equals ``load`` (Brent, z in (0, R])."""
         return brentq(lambda z: self.forces(z, i)["normal_force"] - load, 1e-12, self.R,

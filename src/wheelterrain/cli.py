@@ -324,19 +324,34 @@ def params(preset: str, assignments: tuple[str, ...], json_target: str | None) -
               help="Also a 90 % interval for drawbar pull and sinkage: the soil values' spread "
                    "through the exact Jacobian, and the preset's model-form error on the "
                    "shipped data sets of other wheels (validation/DATA.md).")
+@click.option("--slip-angle", "slip_angle_deg", type=float, default=None, metavar="DEG",
+              help="Slip angle [deg] between the wheel's heading and its velocity (positive: "
+                   "it moves toward its left; |angle| <= 80), --slip then the slip along its "
+                   "heading: adds lateral_force [N] (the soil's force along the axle, positive "
+                   "to the left), aligning_moment [N.m] (about the vertical through the "
+                   "centre, positive counter-clockwise from above), lateral_shear_force and "
+                   "side_bulldozing [N] (Ishigami et al. 2007's side force: lateral shear on "
+                   "the rim and the side face's bulldozing).")
 @json_option("One object (the contract's keys, with `preset`)")
 def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definition: str,
-           load: float, interval: bool, json_target: str | None) -> None:
+           load: float, interval: bool, slip_angle_deg: float | None,
+           json_target: str | None) -> None:
     """Quasi-static operating point: solve the sinkage that carries LOAD at SLIP.
 
     Prints sinkage [m], drawbar_pull [N], normal_force [N], torque [N.m], both slips, the entry,
     exit and max-stress angles [rad], gross thrust, compaction resistance, contact length and mean
-    pressure. Values are grouser-period means (ripple-free) at zero sinkage rate.
+    pressure; with --slip-angle also the lateral force and moments. Values are grouser-period
+    means (ripple-free) at zero sinkage rate.
     """
     _check_file_target(json_target)
     ps = _load(preset, assignments)
+    if slip_angle_deg is not None and not (math.isfinite(slip_angle_deg)
+                                           and abs(slip_angle_deg) <= 80.0):
+        _usage_error(f"--slip-angle {slip_angle_deg:g}: valid range [-80, 80] deg (a wheel "
+                     "moving sideways has no heading to slip along)")
+    beta = None if slip_angle_deg is None else math.radians(slip_angle_deg)
     try:
-        result = model.steady_state(ps, load, slip, slip_definition)
+        result = model.steady_state(ps, load, slip, slip_definition, slip_angle=beta)
         if interval:
             from wheelterrain.fit import crosswheel, datasets
 
@@ -361,6 +376,12 @@ def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definiti
         extra = f"   ({value / DEG:.3f} deg)" if unit == "rad" else ""
         extra = f"   ({value * 1e3:.3f} mm)" if key == "sinkage" else extra
         click.echo(f"{key:22} {value:14.6g} {unit}{extra}")
+    if beta is not None:
+        lateral = {"slip_angle": "rad", "lateral_force": "N", "aligning_moment": "N.m",
+                   "lateral_shear_force": "N", "side_bulldozing": "N"}
+        for key, unit in lateral.items():
+            extra = f"   ({result[key] / DEG:.3f} deg)" if unit == "rad" else ""
+            click.echo(f"{key:22} {result[key]:14.6g} {unit}{extra}")
     for key, (lo, hi) in result.get("interval", {}).items():
         click.echo(f"{key + ' 90 %':22} [{lo:.6g}, {hi:.6g}] {table[key]}")
 

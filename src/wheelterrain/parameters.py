@@ -297,6 +297,23 @@ TABLE: tuple[Parameter, ...] = (
        "displacement). Multi-pass traction rising in a rut: Holm 1969",
        plausible=(0.0, 1.0, "unmeasured: 0 (reloaded soil shears afresh) to 1 (SCM's node "
                   "keeps all of it); the rover's limit_band spans both ends")),
+    # --- lateral mechanics (a wheel at a slip angle: docs/model.md, "Lateral mechanics") -------
+    _P("model.lateral_shear_ratio", "1", 1.0, 0.05, 5.0,
+       "Lateral shear deformation modulus K_y as a share of the soil's K: the lateral shear "
+       "stress of a wheel at a slip angle is (c + sigma*tan(phi))*g(j_y) with the modulus "
+       "K_y = ratio*K. 1 = isotropic (one K for any direction of the displacement).",
+       "Ishigami, Miwa, Nagatani & Yoshida 2007, J. Field Robotics 24(3) (K_x and K_y fitted "
+       "apart on a lunar simulant, K_y the smaller); isotropic: the Soil Contact Model's one "
+       "Janosi K for a node's tangential displacement (Krenn & Hirzinger 2009), Jia et al. "
+       "2011", plausible=(0.3, 1.0, "assumption: from isotropic (1) down to a lateral modulus "
+                          "about a third of the longitudinal, the anisotropy Ishigami et al. "
+                          "2007 report (their fitted values were not at hand)")),
+    _P("model.side_bulldozing", "1", 1.0, 0.0, 1.0,
+       "Share of the bulldozing resistance of the wheel's side face that a wheel at a slip "
+       "angle meets (the soil wedge its side pushes: Hegedus's bulldozing over the buried "
+       "side face, mobilised like the lateral shear). 0 = the lateral shear alone.",
+       "Ishigami, Miwa, Nagatani & Yoshida 2007 (side-face bulldozing after Hegedus 1960, "
+       "soil destructive angle pi/4 - phi/2)"),
     # --- cross-wheel mechanisms (validation/DATA.md; chosen by leave-one-dataset-out) ----------
     _P("model.shear_length_ratio", "1", 0.0, 0.0, 2.0,
        "Growth of the shear deformation modulus with the length of the shearing surface: "

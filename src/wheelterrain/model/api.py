@@ -83,14 +83,25 @@ def capacity(params: Mapping[str, float] | ParameterSet, slip: float,
     return float(_functions.build().capacity(i, ps.vector()))
 
 
+SLIP_ANGLE_LIMIT = math.radians(80.0)
+"""rad: the largest |slip angle| the lateral contact takes (tan(beta), the sideways travel per
+metre forward, is 5.7 there; a wheel moving sideways, 90 deg, has no heading to slip along)."""
+
+
 def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: float,
-                 slip_definition: str = DEFAULT_DEFINITION) -> dict[str, float]:
+                 slip_definition: str = DEFAULT_DEFINITION,
+                 slip_angle: float | None = None) -> dict[str, float]:
     """Quasi-static operating point: the sinkage at which the static normal force carries ``load``.
 
     load [N] >= 0 (0 gives zero sinkage and zero forces). The result is the grouser-period mean
     (ripple-free, zero sinkage rate) and holds every ``solve.STEADY_OUTPUTS`` plus ``load``,
     ``slip`` (the model's sigma: the traction slip driving, the skid braking,
-    :mod:`wheelterrain.model.slip`) and ``slip_paper``.
+    :mod:`wheelterrain.model.slip`) and ``slip_paper``. ``slip_angle`` [rad], |beta| <=
+    SLIP_ANGLE_LIMIT: the angle between the wheel's heading and its velocity (positive: it
+    moves toward its left), ``slip`` then the slip along its heading; the result adds
+    ``slip_angle`` and ``contact.LATERAL_OUTPUTS`` at the solved sinkage (the longitudinal
+    results are those without it, bit for bit: the slip angle does not change the normal
+    stress or the longitudinal shear).
 
     Raises LoadTooLargeError if the wheel cannot carry the load fully buried, SolveError if the
     solve did not reach RESIDUAL_TOLERANCE (never observed; it is checked, not assumed).
@@ -98,6 +109,8 @@ def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: 
     ps = _params(params)
     w = _finite("load", load, lo=0.0)
     i = to_unified(slip, slip_definition)
+    beta = None if slip_angle is None else _finite("slip_angle", slip_angle,
+                                                   -SLIP_ANGLE_LIMIT, SLIP_ANGLE_LIMIT)
     out = _named(_functions.build().steady(w, i, ps.vector()), _solve.STEADY_OUTPUTS)
     if w > out["capacity"]:
         raise LoadTooLargeError(w, out["capacity"], contact_radius(ps))
@@ -105,6 +118,9 @@ def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: 
         raise SolveError(f"sinkage solve did not converge for load {w:g} N, slip {i:g}: "
                          + _unconverged(out["residual"], out["last_step"]))
     out.update(load=w, slip=i, slip_paper=paper_from_unified(i))
+    if beta is not None:
+        side = _functions.build().lateral(out["sinkage"], i, beta, ps.vector())
+        out.update(slip_angle=beta, **_named(side, _contact.LATERAL_OUTPUTS))
     return out
 
 

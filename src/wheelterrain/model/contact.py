@@ -339,6 +339,47 @@ def _offset_trig(sin_f: ca.SX, cos_f: ca.SX, x: ca.SX) -> dict:
             "cos_drop": 2 * sa * sh, "sin_drop": 2 * cs * sh}
 
 
+class _ArcNodes:
+    """The arc form's quadrature at entry angle ``theta_f``: the nodes of its front and rear
+    panels (:func:`_offset_trig` dicts ``front``, ``rear``; a rear node's theta* is the front
+    node's theta), their weights, and the ripple-free normal stress ``sigma0`` at the front
+    nodes (the rear nodes carry the same values, Wong & Reece's mapping), with the exit and
+    max-stress angles, the exponent ``n``, the shear :class:`_Displacement` and the rut
+    ``ground``. ``reversal``: split the panels at the shear reversal
+    (:func:`_reversal_offset`). Shared by the longitudinal contact (:func:`_arc_form`) and the
+    lateral one (:func:`_lateral_arc`)."""
+
+    def __init__(self, theta_f, slip, P: Params, nodes: tuple[int, int], reversal: bool) -> None:
+        Rc, Rs, Rref = radii(P)
+        b = P["wheel.width"]
+        n, modulus = reece(slip, P)
+        k_eq = modulus * (Rc / b) ** n
+        theta_r = exit_angle(theta_f, P)
+        theta_m = _max_stress_ratio(slip, P) * theta_f
+        displacement = _Displacement(theta_f, slip, P, Rc, Rs, Rref)
+        d_front, d_rear = theta_f - theta_m, theta_m - theta_r
+        if reversal:
+            g, w = _split_rule(_reversal_offset(theta_f, theta_r, d_front, d_rear,
+                                                displacement), nodes)
+        else:
+            g, w = _panel_rule(nodes[0])
+        # x = theta_f - theta at each node, formed without cancellation
+        trig_f = displacement.sin_f, displacement.cos_f
+        self.front = _offset_trig(*trig_f, d_front * g)  # also theta* of the rear nodes
+        self.rear = _offset_trig(*trig_f, (theta_f - theta_r) - d_rear * g)
+        self.w_front, self.w_rear = d_front * w, d_rear * w
+        # k_eq*drop**n, shared by both panels, as exp(n*log(drop)): the same number to
+        # rounding, and its derivative by theta_f needs no second power (d pow(x, n) =
+        # n*pow(x, n - 1)): the Newton steps of the sinkage solve cost ~15 % less. drop = 0
+        # (theta_f = 0) gives 0 and a zero derivative, as the power did for n > 1.
+        drop = self.front["cos_drop"]
+        sigma0 = k_eq * ca.if_else(drop > 0, ca.exp(n * ca.log(drop)), 0)
+        self.ground = rut(slip, P)  # in a rut: the elastic-plastic soil below its surface
+        self.sigma0 = ca.if_else(self.ground.on, self.ground.pressure(Rc * drop), sigma0)
+        self.n, self.theta_r, self.theta_m = n, theta_r, theta_m
+        self.displacement = displacement
+
+
 def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, nodes: tuple[int, int],
               ripple: bool, reversal: bool) -> dict:
     """The arc form: all contact quantities for a given entry angle (no damping).
@@ -348,33 +389,11 @@ def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, nodes:
     Rc, Rs, Rref = radii(P)
     b = P["wheel.width"]
     c, tan_phi = shear_strength(P)
-    n, modulus = reece(slip, P)
-    k_eq = modulus * (Rc / b) ** n
-
-    theta_r = exit_angle(theta_f, P)
-    theta_m = _max_stress_ratio(slip, P) * theta_f
-
-    displacement = _Displacement(theta_f, slip, P, Rc, Rs, Rref)
-    d_front, d_rear = theta_f - theta_m, theta_m - theta_r
-    if reversal:
-        g, w = _split_rule(_reversal_offset(theta_f, theta_r, d_front, d_rear, displacement),
-                           nodes)
-    else:
-        g, w = _panel_rule(nodes[0])
-    # x = theta_f - theta at each node, formed without cancellation
-    trig_f = displacement.sin_f, displacement.cos_f
-    front = _offset_trig(*trig_f, d_front * g)  # also theta* of the rear nodes
-    rear = _offset_trig(*trig_f, (theta_f - theta_r) - d_rear * g)
-    w_front, w_rear = d_front * w, d_rear * w
+    arc = _ArcNodes(theta_f, slip, P, nodes, reversal)
+    n, theta_r, theta_m, displacement = arc.n, arc.theta_r, arc.theta_m, arc.displacement
+    front, rear, w_front, w_rear = arc.front, arc.rear, arc.w_front, arc.w_rear
     cos_f, sin_f, cos_r, sin_r = front["cos"], front["sin"], rear["cos"], rear["sin"]
-    # k_eq*drop**n, shared by both panels, as exp(n*log(drop)): the same number to rounding,
-    # and its derivative by theta_f needs no second power (d pow(x, n) = n*pow(x, n - 1)): the
-    # Newton steps of the sinkage solve cost ~15 % less. drop = 0 (theta_f = 0) gives 0 and a
-    # zero derivative, as the power did for n > 1.
-    drop = front["cos_drop"]
-    sigma0 = k_eq * ca.if_else(drop > 0, ca.exp(n * ca.log(drop)), 0)
-    ground = rut(slip, P)  # in a rut: the elastic-plastic soil below its surface
-    sigma0 = ca.if_else(ground.on, ground.pressure(Rc * drop), sigma0)
+    sigma0, ground = arc.sigma0, arc.ground
 
     contact_length = Rc * (ca.sin(theta_f) - ca.sin(theta_r))
     K = effective_shear_modulus(contact_length, P)
@@ -633,6 +652,170 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, ripp
         "bulldozing_resistance": dozing,
         "rut_left": rut_left(theta_f, ground, P),
     }
+
+
+# --- lateral mechanics: a wheel at a slip angle ------------------------------------------------
+
+LATERAL_INPUTS = ("sinkage", "slip", "slip_angle", "p")
+LATERAL_OUTPUTS = ("lateral_force", "aligning_moment", "lateral_shear_force", "side_bulldozing")
+"""The lateral contact of :func:`lateral_at`: the soil's force on the wheel along its axle
+(positive to the wheel's left), its moment about the vertical through the wheel's centre
+(positive counter-clockwise seen from above), and the force's two parts: the lateral shear on
+the rim and the side face's bulldozing."""
+SMALL_DECAY = 1e-3  # below it, the first moment of exp(-A*s) is its Taylor series
+
+
+def _lateral_kinematics(slip, slip_angle, P: Params, Rs, Rref):
+    """(per radian, per metre): the lateral shear displacement j_y accumulated by a rim element
+    per radian of x = theta_f - theta (wheel element) and per metre the wheel travels (soil
+    element), times tan(slip angle). The wheel moves sideways by tan(beta) per metre forward.
+    Wheel element (``model.shear_kinematics`` 0): in the time the rim turns dx, V*dx/omega
+    forward, v*dx with v of :func:`_kinematics` (driving (1 - sigma)*R_ref; braking, counted
+    per distance as the longitudinal shear, R_ref): j_y = tan(beta)*v*x, Ishigami et al.
+    2007's j_y = r*(1 - s)*(theta_f - theta)*tan(beta) (driving). Soil element (1): the soil
+    under the wheel is sheared by the wheel's sideways travel while it passes it:
+    j_y = tan(beta)*R_c*(sin(theta_f) - sin(theta))."""
+    _, v, _ = _kinematics(slip, Rs, Rref)
+    tan_b = ca.tan(slip_angle)
+    return tan_b * v, tan_b
+
+
+def _lateral_modulus(length, P: Params):
+    """K_y: ``model.lateral_shear_ratio`` times the effective K of a contact of ``length``."""
+    return P["model.lateral_shear_ratio"] * effective_shear_modulus(length, P)
+
+
+def _hegedus(h, P: Params):
+    """Bulldozing resistance [N/m] of the side face at depth ``h`` [m] below the surface it
+    meets (Hegedus 1960, as Ishigami et al. 2007 apply it to a wheel's side):
+    D1*(c*h + D2*gamma*h**2/2), D1 = cot(X) + tan(X + phi), D2 = cot(X) + cot(X)**2*tan(phi),
+    X = pi/4 - phi/2 the soil's destructive angle."""
+    phi, c, gamma = P["soil.phi"], P["soil.cohesion"], P["soil.gamma"]
+    x = math.pi / 4 - phi / 2
+    cot = 1 / ca.tan(x)
+    d1 = cot + ca.tan(x + phi)
+    d2 = cot + cot**2 * ca.tan(phi)
+    depth = ca.fmax(h, 0)
+    return d1 * (c * depth + d2 * gamma * depth**2 / 2)
+
+
+def _side_bulldozing(nodes_weights, j_y, K_y, P: Params, Rc):
+    """(force, moment) of the side face's bulldozing over the contact arc (Ishigami et al.
+    2007: int R_b(h)*(R - h*cos(theta)) dtheta, h = R_c*(cos(theta) - cos(theta_f))), each
+    element mobilised like the lateral shear at its node, g(j_y), and opposing the sideways
+    motion; the moment's lever the element's position along the wheel, R_c*sin(theta).
+    ``nodes_weights``: ((node dict, weights), ...) of :func:`_offset_trig` nodes; ``j_y``: the
+    lateral displacement at each, in the same order."""
+    force = moment = 0
+    for (o, w), j in zip(nodes_weights, j_y, strict=True):
+        h = Rc * o["cos_drop"]
+        element = -_hegedus(h, P) * (Rc - h * o["cos"]) * shear_function(j, P, K_y)
+        force = force + ca.dot(w, element)
+        moment = moment + ca.dot(w, element * Rc * o["sin"])
+    share = P["model.side_bulldozing"]
+    return share * force, share * moment
+
+
+def _lateral_arc(theta_f, slip, slip_angle, P: Params, nodes: tuple[int, int]) -> dict:
+    """The arc form's lateral contact (LATERAL_OUTPUTS) at entry angle ``theta_f``, ripple-free
+    (the grouser-period mean): the lateral shear stress -(c + sigma*tan(phi))*g(j_y; K_y) on
+    the rim, sigma the arc's own normal stress at each node (:class:`_ArcNodes`), plus the side
+    face's bulldozing (:func:`_side_bulldozing`). Ishigami et al. 2007's side force with the
+    lateral shear law kept apart from the longitudinal one, as they do (the two are not
+    combined into one resultant limited by Coulomb's strength: at a large slip angle and slip
+    both can be near full, a known limit of the form)."""
+    Rc, Rs, Rref = radii(P)
+    b = P["wheel.width"]
+    c, tan_phi = shear_strength(P)
+    arc = _ArcNodes(theta_f, slip, P, nodes, reversal=False)  # j_y keeps its sign
+    per_radian, per_metre = _lateral_kinematics(slip, slip_angle, P, Rs, Rref)
+    kin = P["model.shear_kinematics"]
+
+    def j_y(o):
+        return (1 - kin) * per_radian * o["x"] + kin * per_metre * Rc * o["sin_drop"]
+
+    length = Rc * (ca.sin(theta_f) - ca.sin(arc.theta_r))
+    K_y = _lateral_modulus(length, P)
+    strength = c + arc.sigma0 * tan_phi  # the rear nodes carry the front nodes' stress
+    j_front, j_rear = j_y(arc.front), j_y(arc.rear)
+    tau_f = -strength * shear_function(j_front, P, K_y)
+    tau_r = -strength * shear_function(j_rear, P, K_y)
+    shear = b * Rs * (ca.dot(arc.w_front, tau_f) + ca.dot(arc.w_rear, tau_r))
+    moment = b * Rs * Rc * (ca.dot(arc.w_front, tau_f * arc.front["sin"])
+                            + ca.dot(arc.w_rear, tau_r * arc.rear["sin"]))
+    side, side_moment = _side_bulldozing(((arc.front, arc.w_front), (arc.rear, arc.w_rear)),
+                                         (j_front, j_rear), K_y, P, Rc)
+    return {"lateral_force": shear + side, "aligning_moment": moment + side_moment,
+            "lateral_shear_force": shear, "side_bulldozing": side}
+
+
+def _first_moment_decay(m):
+    """int_0^1 s*exp(-m*s) ds for m >= 0: (1 - exp(-m)*(1 + m))/m**2, its Taylor series below
+    SMALL_DECAY (error ~m**4)."""
+    small = m < SMALL_DECAY
+    safe = ca.if_else(small, 1, m)
+    exact = -(ca.expm1(-safe) + safe * ca.exp(-safe)) / safe**2
+    return ca.if_else(small, 0.5 - m / 3 + m**2 / 8 - m**3 / 30, exact)
+
+
+def patch_shear_first_moment(a, P: Params):
+    """int_0^1 s*g(a*s*K) ds: the first moment, along the patch from its front (s = 0) to its
+    rear (s = 1), of the mobilised shear fraction whose displacement grows linearly to ``a``
+    = j(rear)/K (:func:`patch_shear_mean`'s zeroth moment); odd in ``a``. Janosi:
+    1/2 - M(a); hump: K_r*[1/2 - M(a) + C*e*(M(a) - M(2a))], M(m) = int_0^1 s*exp(-m*s) ds."""
+    Kr, hump = P["soil.residual_ratio"], P["model.shear_model"]
+    m = ca.fabs(a)
+    janosi = 0.5 - _first_moment_decay(m)
+    C = 1 / (Kr * (1 - math.exp(-1))) - 1
+    wong = Kr * (janosi + C * math.e * (_first_moment_decay(m) - _first_moment_decay(2 * m)))
+    return ca.sign(a) * ((1 - hump) * janosi + hump * wong)
+
+
+def _lateral_patch(theta_f, slip, slip_angle, P: Params, nodes: tuple[int, int]) -> dict:
+    """The patch form's lateral contact (LATERAL_OUTPUTS): Bekker's patch shear turned
+    sideways, -(c*b*l + Fz_static*tan(phi))*m(y*l/K_y), y the lateral displacement per metre
+    of the patch (:func:`_lateral_kinematics` over R_s, the rim's speed past the soil, as the
+    patch's longitudinal shear counts it), m :func:`patch_shear_mean`; its moment from the
+    first moment of the same distribution (:func:`patch_shear_first_moment`) about the patch
+    front at R_c*sin(theta_f); the side face's bulldozing as in the arc form, over the same
+    arc's geometry."""
+    Rc, Rs, Rref = radii(P)
+    b = P["wheel.width"]
+    c, tan_phi = shear_strength(P)
+    static = _patch_form(theta_f, slip, 0, P, False)
+    length, normal = static["contact_length"], static["normal_force_static"]
+    per_radian, per_metre = _lateral_kinematics(slip, slip_angle, P, Rs, Rref)
+    kin = P["model.shear_kinematics"]
+    rate = (1 - kin) * per_radian / Rs + kin * per_metre  # j_y per metre of the patch
+    K_y = _lateral_modulus(length, P)
+    a = rate * length / K_y
+    full = c * b * length + normal * tan_phi
+    shear = -full * patch_shear_mean(a, P)
+    front_x = Rc * ca.sin(theta_f)
+    moment = -full * (front_x * patch_shear_mean(a, P) - length * patch_shear_first_moment(a, P))
+    theta_r = exit_angle(theta_f, P)
+    g, w = _panel_rule(nodes[0])
+    trig_f = ca.sin(theta_f), ca.cos(theta_f)
+    arc = _offset_trig(*trig_f, (theta_f - theta_r) * g)
+    j_y = rate * Rc * arc["sin_drop"]
+    side, side_moment = _side_bulldozing((((arc, (theta_f - theta_r) * w)),), (j_y,), K_y, P, Rc)
+    return {"lateral_force": shear + side, "aligning_moment": moment + side_moment,
+            "lateral_shear_force": shear, "side_bulldozing": side}
+
+
+def lateral_at(z, slip, slip_angle, P: Params, nodes: tuple[int, int] = DEFAULT_NODES) -> dict:
+    """The lateral contact (LATERAL_OUTPUTS) of a wheel at sinkage ``z`` [m] (from the original
+    surface; its contact begins at the rut's surface as the longitudinal one's), the model's
+    slip ``slip`` along its heading and the slip angle ``slip_angle`` [rad] between its heading
+    and its velocity (positive: the wheel moves toward its left), in the form
+    ``model.contact_form`` selects, quasi-static and ripple-free. 0 at slip angle 0, exactly;
+    odd in the slip angle. The longitudinal contact is not changed by the slip angle (the
+    slip is the one along the heading, the normal stress the same)."""
+    theta_f = entry_angle(z - rut_surface(P), P)
+    arc = _lateral_arc(theta_f, slip, slip_angle, P, nodes)
+    patch = _lateral_patch(theta_f, slip, slip_angle, P, nodes)
+    on_patch = P["model.contact_form"] == 1
+    return {k: ca.if_else(on_patch, patch[k], arc[k]) for k in LATERAL_OUTPUTS}
 
 
 BOUND_MARGIN = 1 + 1e-9  # covers rounding where the bound is the value itself (the patch)

@@ -19,8 +19,11 @@ from wheelterrain.model.contact import (
     CONTACT_OUTPUTS,
     DEFAULT_NODES,
     FORCES,
+    LATERAL_INPUTS,
+    LATERAL_OUTPUTS,
     MEMORY_OUTPUTS,
     contact_at,
+    lateral_at,
     plastic_rate,
     plastic_update,
 )
@@ -54,6 +57,10 @@ class ModelFunctions:
     - ``steady_jacobian(load, slip, p, sinkage)`` -> ``d_inputs`` (4x2: sinkage, normal_force,
       drawbar_pull, torque by load, slip) and ``d_params`` (4 x len(p)), by the implicit function
       theorem at a solved ``sinkage``.
+    - ``lateral(sinkage, slip, slip_angle, p)`` -> LATERAL_OUTPUTS: a wheel at a slip angle
+      (:func:`wheelterrain.model.contact.lateral_at`), quasi-static, ripple-free.
+    - ``lateral_jacobian(sinkage, slip, slip_angle, p)`` -> ``d_state`` (2x3: lateral_force,
+      aligning_moment by sinkage, slip, slip_angle), exact.
 
     All are MX graphs over the SX Functions of :func:`form_switch`: the contact is a called switch,
     not inlined, so each evaluation runs the one form and rule that apply.
@@ -68,6 +75,8 @@ class ModelFunctions:
     steady: ca.Function
     steady_from: ca.Function
     steady_jacobian: ca.Function
+    lateral: ca.Function
+    lateral_jacobian: ca.Function
     nodes: tuple[int, int]
 
 
@@ -133,6 +142,16 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
     d_params = ca.vertcat(dz_dp, ca.jacobian(ys, p) + dy_dz @ dz_dp)
     steady_jacobian = ca.Function("steady_jacobian", [load, slip, p, z], [d_inputs, d_params],
                                   [*STEADY_INPUTS, "sinkage"], ["d_inputs", "d_params"])
+    angle_of_slip = ca.MX.sym("slip_angle")
+    side = lateral_at(z, slip, angle_of_slip, P, nodes)
+    lateral = ca.Function("lateral", [z, slip, angle_of_slip, p],
+                          [side[k] for k in LATERAL_OUTPUTS], list(LATERAL_INPUTS),
+                          list(LATERAL_OUTPUTS))
+    pair = ca.vertcat(side["lateral_force"], side["aligning_moment"])
+    lateral_jacobian = ca.Function(
+        "lateral_jacobian", [z, slip, angle_of_slip, p],
+        [ca.jacobian(pair, ca.vertcat(z, slip, angle_of_slip))], list(LATERAL_INPUTS),
+        ["d_state"])
     return ModelFunctions(contact, contact_memory, plastic_step, contact_jacobian, sinkage_solve,
                           capacity_fn, steady, solve.steady_from(steady, nodes), steady_jacobian,
-                          nodes)
+                          lateral, lateral_jacobian, nodes)
