@@ -5,6 +5,7 @@ independent implementation of Ishigami et al. 2007's side-force integrals
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -149,3 +150,75 @@ def test_steady_cli_takes_a_slip_angle():
         assert wrong.exit_code == 2
         assert "--slip-angle" in wrong.output
         assert "Traceback" not in wrong.output
+
+
+def _user_csv(tmp_path, extra_header: str, extra_cells) -> str:
+    from wheelterrain import data
+
+    lines = [ln for ln in data.path("wheel_tests.csv").read_text().splitlines()
+             if ln.strip() and not ln.startswith("#")]
+    rows = [ln for ln in lines[1:] if ln.startswith("rashid-rig")][:4]
+    text = "\n".join([lines[0] + extra_header,
+                      *(r + cell for r, cell in zip(rows, extra_cells, strict=True))])
+    path = tmp_path / "tests.csv"
+    path.write_text(text + "\n")
+    return str(path)
+
+
+@pytest.mark.slow
+def test_validate_data_judges_the_lateral_force_beside_its_baseline(tmp_path):
+    """`validate --data` with slip_angle and lateral_force columns: every form's
+    lateral_force_mae, computed at the point's steady sinkage, beside the baseline
+    -W*tan(phi)*sin(beta); the rows without those columns are what they were."""
+    import json
+    import subprocess
+    import sys
+
+    from wheelterrain.fit import crosswheel, datasets
+
+    angles = [math.radians(a) for a in (5.0, 10.0, 15.0, 20.0)]
+    measured = [-3.0, -6.0, -9.0, -11.0]
+    path = _user_csv(tmp_path, ",slip_angle [rad],lateral_force [N]",
+                     [f",{a!r},{f!r}" for a, f in zip(angles, measured, strict=True)])
+    run = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "validate", "--data", path,
+                          "--json"], capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    doc = json.loads(run.stdout)
+    lateral = doc["lateral"]["rashid-rig"]
+    pts = datasets.read(path)[0].points
+    baseline = np.mean([abs(crosswheel.lateral_baseline(p) - p.lateral_force) for p in pts])
+    assert lateral["points"] == 4
+    assert lateral["baseline"] == pytest.approx(baseline, rel=1e-12)
+    forms = {r["model"]: r for r in doc["rows"] if r["model"] != "line"}
+    assert set(lateral["forms"]) == set(forms)
+    for name, row in forms.items():
+        assert row["lateral_force_mae"] == lateral["forms"][name]
+        assert row["lateral_force_mae"] > 0
+    text = subprocess.run([sys.executable, "-m", "wheelterrain.cli", "validate", "--data", path],
+                          capture_output=True, text=True, timeout=600)
+    assert "lateral force MAE" in text.stdout
+
+
+def test_the_lateral_columns_are_checked():
+    from wheelterrain.errors import WheelTerrainError
+    from wheelterrain.fit import datasets
+
+    def parse(extra_header, cell):
+        from wheelterrain import data
+
+        lines = [ln for ln in data.path("wheel_tests.csv").read_text().splitlines()
+                 if ln.strip() and not ln.startswith("#")]
+        row = next(ln for ln in lines[1:] if ln.startswith("rashid-rig"))
+        return datasets.parse(lines[0] + extra_header + "\n" + row + cell + "\n")
+
+    ok = parse(",slip_angle [rad],lateral_force [N]", ",0.2,-4.5")[0].points[0]
+    assert (ok.slip_angle, ok.lateral_force) == (0.2, -4.5)
+    plain = parse("", "")[0].points[0]
+    assert plain.slip_angle == 0.0
+    assert math.isnan(plain.lateral_force)
+    for header, cell, words in ((",lateral_force [N]", ",-4.5", "without its slip_angle"),
+                                (",slip_angle [rad]", ",2.0", "beyond"),
+                                (",slip_angle [deg]", ",20", "[rad]"),
+                                (",slip_angle [rad],lateral_force [N]", ",0.2,-1e6", "beyond")):
+        with pytest.raises(WheelTerrainError, match=re.escape(words)):
+            parse(header, cell)

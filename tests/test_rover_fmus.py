@@ -230,9 +230,11 @@ def test_an_engine_s_run_ends_where_a_wheel_leaves_the_model_s_domain(built, ter
 def test_a_whole_moon_stall_scenario_agrees_in_the_one_step_late_engines(built, terrain,
                                                                         engine):
     """A whole stall scenario at its own step: the Moon's descent (the braking speed loops
-    let the rover slide at 15.08 deg, 25 s, 0.25 ms). Its Rover-descent.ssp in libcosim and ecos
-    gives the in-process means within 1e-3 over the whole run and the slide within 0.01 deg
-    (measured 2026-11-28: 15.082025 against 15.082000 deg). The slide is read at the first step
+    hold the rover to the end of the tilt and it slides at 20.00 deg, 31.9 s, 0.25 ms; before
+    the rut's shear was remembered by default, at 15.08 deg, 25 s). Its Rover-descent.ssp in
+    libcosim and ecos gives the in-process means within 1e-3 over the whole run and the slide
+    within 0.01 deg (measured 2026-11-28 before that change: 15.082025 against 15.082000
+    deg). The slide is read at the first step
     a wheel's slip passes SLIDE_SLIP in every engine: read at the record's end, the in-process
     run (which checks its stop condition once a block of 100 steps) put it 18 ms later."""
     _skip_unless_installed(engine)

@@ -1290,7 +1290,10 @@ def validate(json_target: str | None, starts: int, data_file: str | None) -> Non
       soil.n0, soil.cohesion, soil.phi [rad], soil.gamma, soil.shear_modulus, and
       soil.k_c + soil.k_phi (Reece) or bekker.k_c [N/m^(n+1)] + bekker.k_phi [N/m^(n+2)];
       optional sd.<soil column>: its standard deviation; optional soil_source: where the soil
-      values come from (measured, table-i, sourcebook-nominal; one per data set).
+      values come from (measured, table-i, sourcebook-nominal; one per data set);
+      optional slip_angle [rad] and lateral_force [N] (along the axle, positive to the
+      wheel's left; slip is then the slip along the wheel's heading): each form's
+      lateral_force_mae beside the baseline -W*tan(phi)*sin(beta).
     The shipped data set is in this format: wheelterrain/data/wheel_tests.csv.
     """
     from wheelterrain.fit import prediction
@@ -1329,6 +1332,10 @@ def _validate_user_data(data_file: str, json_target: str | None, starts: int) ->
               "units": {"drawbar_pull_mae": "N", "sinkage_mae": "m",
                         "drawbar_pull_mae_per_load": "1", "sinkage_mae_per_radius": "1"}}
     result["beats_the_line"] = crosswheel.verdicts(rows)
+    lateral = crosswheel.lateral_table(user, rows)
+    if lateral:
+        result["lateral"] = lateral
+        result["units"]["lateral_force_mae"] = "N"
     result["sinkage_datum"] = crosswheel.datum_check(user)
     result["soil_sources"] = {ds.name: ds.soil_source for ds in user}
     forms = [r for r in rows if r["model"] != "line"]
@@ -1338,6 +1345,11 @@ def _validate_user_data(data_file: str, json_target: str | None, starts: int) ->
         for name, better in result["beats_the_line"].items():
             click.echo(f"{name}: " + (f"{', '.join(better)} beat the line on pull"
                                       if better else "no form beats the line on pull"))
+        for name, lat in lateral.items():
+            forms = ", ".join(f"{form} {mae:.3g}" if mae is not None else f"{form} (failed)"
+                              for form, mae in lat["forms"].items())
+            click.echo(f"{name}: lateral force MAE [N] over {lat['points']} point(s): "
+                       f"baseline W*tan(phi)*sin(beta) {lat['baseline']:.3g}; {forms}")
     if forms and len(failed) == len(forms):  # nothing was predicted: not a result
         click.echo(f"error: no model form could predict {data_file}: {failed[0]['error']}",
                    err=True)

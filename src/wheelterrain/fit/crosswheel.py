@@ -61,6 +61,7 @@ from scipy.optimize import least_squares
 from wheelterrain import model
 from wheelterrain.errors import WheelTerrainError
 from wheelterrain.fit.datasets import DEFAULT_SPREAD, Dataset, Point
+from wheelterrain.model import functions as model_functions
 from wheelterrain.parameters import BY_NAME, INDEX, NO_RIPPLE, ParameterSet
 
 Z90 = 1.6448536269514722  # two-sided 90 % of a normal distribution
@@ -115,6 +116,15 @@ PREDICTED = ("drawbar_pull", "sinkage", "torque")
 def steady(form: Form, point: Point, constants: dict[str, float] | None = None) -> dict:
     """The whole steady state of ``point`` in ``form`` (:func:`wheelterrain.model.steady_state`)."""
     return model.steady_state(parameters(form, point, constants), point.load, point.slip)
+
+
+def lateral(form: Form, point: Point, constants: dict[str, float] | None, state: dict) -> float:
+    """The lateral force [N] of ``point`` at its slip angle in ``form``, at the sinkage of its
+    steady ``state`` (the slip angle does not move the sinkage)."""
+    ps = parameters(form, point, constants)
+    side = model_functions.build().lateral(state["sinkage"], state["slip"], point.slip_angle,
+                                           ps.vector())
+    return float(side[0])
 
 
 def predict(form: Form, point: Point, constants: dict[str, float] | None = None) -> dict:
@@ -356,6 +366,14 @@ class Fold:
                 out.append(name)
         return out
 
+    def lateral_mae(self) -> float | None:
+        """The mean absolute error of the lateral force [N] over the points that measured one
+        (None where none did, or where a point could not be predicted)."""
+        errs = [abs(p["lateral_force"] - p["measured"]["lateral_force"]) for p in self.points
+                if "lateral_force" in p["measured"] and p.get("lateral_force") is not None]
+        wanted = sum("lateral_force" in p["measured"] for p in self.points)
+        return float(np.mean(errs)) if errs and len(errs) == wanted else None
+
     def as_row(self) -> dict:
         cases = [p["case"] for p in self.points]
         if len(set(cases)) < len(cases):  # a user's data set may repeat a case name
@@ -374,9 +392,33 @@ class Fold:
                "errors": {case: {k: p[k] - p["measured"][k] for k in SCALES
                                  if p.get(k) is not None}
                           for case, p in zip(cases, self.points, strict=True)}}
+        if any("lateral_force" in p["measured"] for p in self.points):
+            row["lateral_force_mae"] = self.lateral_mae()
         if self.error:
             row["error"] = self.error
         return row
+
+
+def lateral_baseline(pt: Point) -> float:
+    """The baseline a predicted lateral force is judged beside: Coulomb friction on the whole
+    load, turned by the slip angle, -W*tan(phi)*sin(beta) (against the sideways motion)."""
+    return -pt.load * math.tan(pt.values["soil.phi"]) * math.sin(pt.slip_angle)
+
+
+def lateral_table(user: Sequence[Dataset], rows: Sequence[dict]) -> dict[str, dict]:
+    """Per user data set that measured a lateral force: ``points`` (how many), ``baseline``
+    (the MAE [N] of :func:`lateral_baseline`) and each form's ``lateral_force_mae`` [N] from
+    ``rows`` (:func:`user_rows`')."""
+    out = {}
+    for ds in user:
+        pts = [p for p in ds.points if math.isfinite(p.lateral_force)]
+        if not pts:
+            continue
+        forms = {r["model"]: r.get("lateral_force_mae") for r in rows
+                 if r.get("dataset") == ds.name and "lateral_force_mae" in r}
+        out[ds.name] = {"points": len(pts), "baseline": float(np.mean(
+            [abs(lateral_baseline(p) - p.lateral_force) for p in pts])), "forms": forms}
+    return out
 
 
 def _scale(pt: Point) -> dict[str, float]:
@@ -393,9 +435,13 @@ def judge(form: Form, constants: dict[str, float], discrepancy: Discrepancy, hel
         entry = {"case": pt.case, "load": pt.load, "slip": pt.slip,
                  "measured": {"drawbar_pull": pt.drawbar_pull, "sinkage": pt.sinkage},
                  "sinkage_from": pt.sinkage_from, "scale": _scale(pt)}
+        if math.isfinite(pt.lateral_force):
+            entry["measured"]["lateral_force"] = pt.lateral_force
         try:
             state = steady(form, pt, constants)
             out = as_measured(form, pt, constants, state)
+            if math.isfinite(pt.lateral_force):
+                out["lateral_force"] = lateral(form, pt, constants, state)
         except WheelTerrainError as err:
             fold.error = f"{pt.case}: {err}"
             entry.update(drawbar_pull=None, sinkage=None)

@@ -44,6 +44,7 @@ SOIL_COMMON = ("soil.n0", "soil.cohesion", "soil.phi", "soil.gamma", "soil.shear
 REECE = ("soil.k_c", "soil.k_phi")
 BEKKER = ("bekker.k_c", "bekker.k_phi")
 UNITS = {"load": "N", "slip": "1", "drawbar_pull": "N", "sinkage": "m", "torque": "N.m",
+         "slip_angle": "rad", "lateral_force": "N",
          "bekker.k_c": "N/m^(n+1)", "bekker.k_phi": "N/m^(n+2)", "dataset": "", "case": "",
          "sinkage_from": "", "soil_source": ""}
 SOIL_SOURCES = {
@@ -89,6 +90,8 @@ class Point:
     sinkage: float
     torque: float = math.nan
     sinkage_from: str = "surface"  # one of SINKAGE_FROM
+    slip_angle: float = 0.0  # rad: between the wheel's heading and its velocity
+    lateral_force: float = math.nan  # N: along the axle, positive to the wheel's left
 
 
 @dataclass
@@ -239,10 +242,25 @@ def _point(cells: dict[str, str], line: int) -> Point:
                         f"{', '.join(SINKAGE_FROM)} (or empty: surface)")
     _check_measured(line, values, load, get("drawbar_pull"), get("sinkage"),
                     get("torque", False), datum)
+    beta, lateral = get("slip_angle", False), get("lateral_force", False)
+    if not math.isnan(lateral) and math.isnan(beta):
+        raise DataError(f"line {line}: lateral_force is given without its slip_angle [rad]")
+    beta = 0.0 if math.isnan(beta) else beta
+    if abs(beta) > SLIP_ANGLE_LIMIT:
+        raise DataError(f"line {line}: slip_angle = {beta:g} rad is beyond "
+                        f"{SLIP_ANGLE_LIMIT:.4g} rad (80 deg); check its unit (rad)")
+    if not math.isnan(lateral) and abs(lateral) > PULL_BOUND * load:
+        raise DataError(f"line {line}: lateral_force = {lateral:g} N is beyond {PULL_BOUND:g} "
+                        f"times the load ({load:g} N); check its unit (N)")
     return Point(dataset=cells.get("dataset") or "user", case=cells.get("case") or f"line {line}",
                  values=values, spread=spread, load=load, slip=slip,
                  drawbar_pull=get("drawbar_pull"), sinkage=get("sinkage"),
-                 torque=get("torque", False), sinkage_from=datum)
+                 torque=get("torque", False), sinkage_from=datum, slip_angle=beta,
+                 lateral_force=lateral)
+
+
+SLIP_ANGLE_LIMIT = math.radians(80.0)
+"""rad: the largest |slip_angle| a test point may have (the lateral contact's range)."""
 
 
 PULL_BOUND = 3.0
