@@ -89,6 +89,9 @@ def _random_terrain_values(rng):
             "model.grouser_shear_height": rng.uniform(0, 0.02),
             "model.diameter_exponent": rng.uniform(-1, 1),
             "model.bulldozing": rng.uniform(0, 1),
+            "model.lateral_shear_ratio": rng.uniform(0.3, 1),
+            "model.side_bulldozing": rng.uniform(0, 1),
+            "slip_angle": rng.uniform(-0.7, 0.7),
             "sinkage": rng.uniform(0.0, 0.04), "sinkage_rate": rng.uniform(-0.05, 0.05),
             "wheel_speed": rng.uniform(0.2, 1.0), "carriage_speed": rng.uniform(0.0, 0.03),
             "load": rng.uniform(5, 60)}
@@ -98,7 +101,8 @@ def _random_terrain_values(rng):
 DOMAIN_REASONS = ("outside the model's domain", "beyond full burial",
                   "exceeds what the wheel can carry fully buried")
 TERRAIN_OUT = ("normal_force", "drawbar_pull", "torque", "contact_sinkage", "slip", "slip_paper",
-               "entry_angle", "exit_angle", "contact_length", "wheel_angle")
+               "entry_angle", "exit_angle", "contact_length", "wheel_angle", "lateral_force",
+               "aligning_moment")
 
 
 @pytest.mark.parametrize("contact_form", [0, 1], ids=["arc", "patch"])
@@ -133,11 +137,40 @@ def test_flavours_agree_on_wheelterrain(flavours, quasi_static, contact_form):
                 ps = presets.load(presets.DEFAULT_PRESET).with_values(
                     {k: v for k, v in values.items() if "." in k})
                 first = dict(zip(TERRAIN_OUT, out[1][0], strict=True))
-                ref = model.steady_state(ps, values["load"], first["slip"], "unified")
+                ref = model.steady_state(ps, values["load"], first["slip"], "unified",
+                                         slip_angle=values["slip_angle"])
                 assert first["contact_sinkage"] == pytest.approx(ref["sinkage"], rel=1e-9)
-                assert first["drawbar_pull"] == pytest.approx(ref["drawbar_pull"], rel=1e-9,
-                                                              abs=1e-9)
+                for key in ("drawbar_pull", "lateral_force", "aligning_moment"):
+                    assert first[key] == pytest.approx(ref[key], rel=1e-9, abs=1e-9), key
     assert checked >= 15
+
+
+@pytest.mark.parametrize("flavour", ["pythonfmu", "native", "fmi3"])
+def test_the_slip_angle_is_an_input_that_starts_at_zero_and_is_checked(flavours, flavour):
+    """WheelTerrain's slip_angle input: unset (its start, 0) the lateral outputs are 0 and the
+    others what they were; set, the lateral force opposes the sideways motion; beyond 80 deg
+    the step is refused with the reason (FMI 2 and 3)."""
+    root = flavours["root"] / ("native/fmi3" if flavour == "fmi3" else flavour)
+    values = {"quasi_static": True, "load": 40.0, "wheel_speed": 0.6, "carriage_speed": 0.024}
+    t = Instance(root / "WheelTerrain.fmu", flavours["unzip"][(flavour, "WheelTerrain")],
+                 "angle", log=True).start(values)
+    try:
+        straight = t.get(("lateral_force", "aligning_moment", "drawbar_pull"))
+        assert straight[:2] == [0.0, 0.0]
+        t.set({"slip_angle": math.radians(12.0)})
+        t.fmu.doStep(0.0, 1e-3)
+        turned = t.get(("lateral_force", "aligning_moment", "drawbar_pull"))
+        assert turned[0] < 0 < turned[1]
+        assert turned[2] == pytest.approx(straight[2], rel=1e-12)
+        def beyond():  # refused where the FMU checks: setting the input, or the step
+            t.set({"slip_angle": math.radians(85.0)})
+            t.fmu.doStep(1e-3, 1e-3)
+
+        with pytest.raises(FMICallException):
+            beyond()
+        assert any("slip angle" in m or "slip_angle" in m for m in t.errors()), t.log
+    finally:
+        t.close()
 
 
 @pytest.mark.parametrize("contact_form", [0, 1], ids=["arc", "patch"])

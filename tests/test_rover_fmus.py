@@ -252,15 +252,18 @@ def test_a_whole_moon_stall_scenario_agrees_in_the_one_step_late_engines(built, 
 
 
 @pytest.mark.slow
-def test_earth_s_stall_in_a_one_step_late_engine_closes_on_ours_as_the_step_halves(built,
-                                                                                   terrain):
-    """With the soil's memory a wheel that lifts meets a stiff elastic line, and handed over
-    one step late it is a negative damper: ecos stalls the Earth's climb early at the
-    scenario's 1 ms (measured 22.28 against 26.87 deg; docs/rover.md), and the gap at least
-    halves with the step (0.5 ms: 25.01 against 26.66 deg). The means over the window both
-    runs cover agree at both steps."""
+def test_earth_s_stall_in_a_one_step_late_engine_agrees_with_ours_at_both_steps(built,
+                                                                               terrain):
+    """With the soil's memory a wheel that lifts meets a stiff elastic line, handed over one
+    step late by ecos. Since the climb ends in a divergence (the rear wheels unloading, 0 Hz)
+    rather than the stiff line's oscillation, the one-step delay no longer stalls it early:
+    measured 2026-11-28, in process / ecos 25.414 / 25.468 deg at 1 ms and 25.717 / 25.490 deg
+    at 0.5 ms. The stall itself moves 0.3 deg in process when the step halves (the run meets
+    the divergence at a trough of the grouser ripple), so the engines are held to 0.5 deg of
+    each other at each step, and the means over the window both runs cover to 1e-3 (measured
+    4.2e-5 and 7.4e-5). Before the rut's shear was remembered, ecos stalled 4.6 deg early at
+    1 ms and the gap halved with the step (docs/rover.md)."""
     _skip_unless_installed("ecos")
-    gap = {}
     for h in (1e-3, 5e-4):
         ref = rover_scenarios.run_scenario("slope", terrain, "earth", step=h)
         run = rover_scenarios.run_scenario("slope", terrain, "earth", step=h,
@@ -269,10 +272,9 @@ def test_earth_s_stall_in_a_one_step_late_engine_closes_on_ours_as_the_step_halv
         assert run["figures"]["step_s"] == ref["figures"]["step_s"] == h
         d = rover_scenarios.difference(ref["result"], run["result"],
                                     rover_scenarios.scenarios("earth")["slope"].settle)
-        assert d["worst"] <= 1e-3, d  # measured 7.3e-4 and 7.2e-4
-        gap[h] = ref["figures"]["stall_slope_deg"] - run["figures"]["stall_slope_deg"]
-    assert gap[1e-3] > 0  # the delayed stiff spring stalls it early
-    assert 0 < gap[5e-4] <= gap[1e-3] / 2, gap
+        assert d["worst"] <= 1e-3, d
+        gap = ref["figures"]["stall_slope_deg"] - run["figures"]["stall_slope_deg"]
+        assert abs(gap) <= 0.5, (h, gap)
 
 
 def test_fmpy_ssp_runner_refuses_a_soil_map_with_the_reason(built, terrain, in_process):

@@ -232,3 +232,31 @@ def test_a_local_dask_sweep_leaves_nothing_in_the_temporary_folder(fmu, tmp_path
     assert run.returncode == 0, run.stderr[-2000:]
     assert (tmp_path / "o" / "sweep.csv").is_file()
     assert list(scratch.iterdir()) == []
+
+
+def test_a_sweep_over_the_slip_angle_gives_the_core_models_side_force(fmu, tmp_path):
+    """`sweep --slip-angle GRID` [deg]: a slip_angle [rad] axis, the lateral outputs of the
+    core's steady state at each point; 0 at slip angle 0; a slip angle beyond 80 deg is one
+    line, exit 2."""
+    out = tmp_path / "sweep.csv"
+    result = CliRunner().invoke(main, ["sweep", "--fmu", str(fmu), "--slip", "0.2", "--load",
+                                       "40", "--slip-angle", "0:30:4", "--out", str(out),
+                                       "--workers", "1"])
+    assert result.exit_code == 0, result.output
+    with open(out, newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 4
+    ps = presets.load()
+    for row in rows:
+        beta = float(row["slip_angle [rad]"])
+        want = model.steady_state(ps, 40.0, 0.2, slip_angle=beta)
+        assert float(row["lateral_force [N]"]) == pytest.approx(want["lateral_force"],
+                                                                 rel=1e-9, abs=1e-12)
+        assert float(row["aligning_moment [N.m]"]) == pytest.approx(
+            want["aligning_moment"], rel=1e-9, abs=1e-12)
+    assert float(rows[0]["lateral_force [N]"]) == 0.0
+    assert float(rows[-1]["slip_angle [rad]"]) == pytest.approx(math.radians(30.0))
+    bad = CliRunner().invoke(main, ["sweep", "--fmu", str(fmu), "--slip", "0.2",
+                                    "--slip-angle", "85", "--out", str(tmp_path / "b.csv")])
+    assert bad.exit_code == 2
+    assert "slip_angle" in bad.output

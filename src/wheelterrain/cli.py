@@ -904,6 +904,10 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
 @click.option("--slip", default="0:0.75:7", show_default=True, metavar="GRID",
               help="Slip grid: a:b:n, a,b,c or a value.")
 @slip_definition_option("the --slip grid")
+@click.option("--slip-angle", "slip_angle_grid", default=None, metavar="GRID",
+              help="Slip angles [deg] to sweep (the input slip_angle; |angle| <= 80), a grid "
+                   "as --slip's: the CSV gains a slip_angle [rad] axis and the outputs "
+                   "lateral_force and aligning_moment vary with it. Default: none (0).")
 @click.option("--load", "load_grid", default="62", show_default=True, metavar="GRID",
               help="Vertical load grid [N].")
 @click.option("--grid", "extra", multiple=True, metavar="NAME=GRID",
@@ -921,8 +925,8 @@ def calibrate(preset: str, assignments: tuple[str, ...], free: str, cases: str, 
               type=click.Path(), help="Folder for sweep.csv and sweep.png (created if needed). "
               "The earlier form, a FILE.csv, still names the CSV (the PNG beside it).")
 def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_definition: str,
-          load_grid: str, extra: tuple[str, ...], workers: int, dask_address: str | None,
-          max_points: int, out: str) -> None:
+          slip_angle_grid: str | None, load_grid: str, extra: tuple[str, ...], workers: int,
+          dask_address: str | None, max_points: int, out: str) -> None:
     """Sweep WheelTerrain.fmu (quasi-static mode, through fmpy) over slip, load and any table
     parameter, in parallel.
 
@@ -930,6 +934,7 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
     Examples:
       wheelterrain sweep --slip 0:0.75:16 --load 30,62,90
       wheelterrain sweep --slip 0.25 --grid soil.phi=25deg:45deg:9 --grid soil.k_phi=80,800
+      wheelterrain sweep --slip 0.2 --slip-angle 0:30:7        # the side force
       wheelterrain sweep --dask tcp://scheduler:8786 --slip 0:0.9:50 --load 10:100:50
     Writes one CSV row per point (the axes, the outputs, status ok|infeasible) and a plot of
     drawbar pull and sinkage against slip (or the first axis), one line per other point.
@@ -947,6 +952,10 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
     try:
         axes = {"slip": sweeper.parse_axis("slip", slip),
                 "load": sweeper.parse_axis("load", load_grid)}
+        if slip_angle_grid is not None:
+            degrees = slip_angle_grid.replace("deg", "")  # degrees, with or without the unit
+            axes["slip_angle"] = [math.radians(v) for v in
+                                  sweeper.parse_axis("slip_angle", degrees)]
         for item in extra:
             name, sep, spec = item.partition("=")
             if not sep:

@@ -24,7 +24,7 @@ import numpy as np
 
 from wheelterrain.errors import ParameterError, UsageError
 from wheelterrain.fmu.instance import Instance, read_description
-from wheelterrain.fmu.variables import TERRAIN_OUTPUTS
+from wheelterrain.fmu.variables import SLIP_ANGLE_LIMIT, TERRAIN_OUTPUTS
 from wheelterrain.model.slip import DEFAULT_DEFINITION, reference_radius, speeds, to_unified
 from wheelterrain.parameters import BY_NAME, DEG, TABLE
 
@@ -79,12 +79,18 @@ def check_axes(axes: dict[str, list[float]], slip_definition: str) -> None:
             for v in values:
                 if not v >= 0 or not math.isfinite(v):
                     raise ParameterError("load", v, "must be finite and >= 0 N")
+        elif name == "slip_angle":
+            for v in values:
+                if not abs(v) <= SLIP_ANGLE_LIMIT:
+                    raise ParameterError("slip_angle", v, f"is out of range; valid range "
+                                         f"[-{SLIP_ANGLE_LIMIT:.6g}, {SLIP_ANGLE_LIMIT:.6g}] "
+                                         "rad (80 deg)")
         elif name in BY_NAME:
             for v in values:
                 BY_NAME[name].check(v)
         else:
-            raise ParameterError(name, "", "is not a sweep axis; use slip, load or a table "
-                                 "parameter (wheelterrain params)")
+            raise ParameterError(name, "", "is not a sweep axis; use slip, load, slip_angle "
+                                 "or a table parameter (wheelterrain params)")
 
 
 # --- worker side (module-level so that process pools and Dask can pickle it) ---------------

@@ -14,7 +14,8 @@ WheelTerrain
     the sinkage [m] the solve starts Newton from (``warm_start``: the last contact_sinkage
     output), 0 for a cold solve (``model_functions.build().steady_from``). ``status``: STATUS_OK,
     STATUS_SLIP (the wheel or the carriage moving backward, or the slip outside [-1, 1];
-    ``info`` is the slip), STATUS_LOAD (load beyond the capacity; ``info`` is the capacity),
+    ``info`` is the slip), STATUS_ANGLE (the slip_angle input beyond SLIP_ANGLE_LIMIT; ``info``
+    is the limit), STATUS_LOAD (load beyond the capacity; ``info`` is the capacity),
     STATUS_UNCONVERGED (the solve's convergence check failed), STATUS_BURIED (dynamic mode:
     sinkage beyond full burial, R_c; ``info`` is R_c), STATUS_NONFINITE (an output is NaN or
     infinite: a last guard, so that no non-finite value is served). On a status other than OK the
@@ -41,6 +42,7 @@ from wheelterrain.fmu.variables import (
     ROVER_INPUTS,
     ROVER_OUTPUTS,
     SINKAGE_RANGE,
+    SLIP_ANGLE_LIMIT,
     TERRAIN_INPUTS,
     TERRAIN_OUTPUTS,
 )
@@ -59,6 +61,7 @@ if ROVER_INPUTS != rover.INPUTS:
 SPEED_FLOOR = 1e-9  # m/s: below this the wheel and the carriage are both at rest (slip 0)
 STATUS_OK, STATUS_SLIP, STATUS_LOAD, STATUS_UNCONVERGED, STATUS_BURIED, STATUS_NONFINITE = (
     0, 1, 2, 3, 4, 5)
+STATUS_ANGLE = 6
 FINITE_LIMIT = 1e300  # |y| at or above this (or NaN) is not a finite output
 # What each status tells the user, as printf templates that both FMU flavours fill (the
 # pythonfmu slaves with %, the native wrapper with snprintf), so both print one sentence.
@@ -78,6 +81,8 @@ STATUS_MESSAGES = {
                     "the axle; a wheel pushed deeper is outside its domain"),
     STATUS_NONFINITE: ("the model's outputs are not finite at sinkage %g m, wheel speed %g "
                        "rad/s, carriage speed %g m/s, load %g N"),
+    STATUS_ANGLE: ("slip angle %g rad is outside the lateral contact's range [-%.6g, %.6g] "
+                   "rad (80 deg): a wheel moving sideways has no heading to slip along"),
 }
 
 
@@ -94,6 +99,8 @@ def status_message(status: int, info: float, u) -> str:
     if status == STATUS_NONFINITE:
         return STATUS_MESSAGES[status] % (v["sinkage"], v["wheel_speed"], v["carriage_speed"],
                                           v["load"])
+    if status == STATUS_ANGLE:
+        return STATUS_MESSAGES[status] % (v["slip_angle"], info, info)
     return STATUS_MESSAGES[STATUS_UNCONVERGED] % v["load"]
 
 
@@ -185,17 +192,23 @@ def terrain_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
     slip_bad = ca.logic_or(ca.logic_not(forward), ca.logic_or(unified < -1, unified > 1))
     safe_slip = ca.fmin(ca.fmax(unified, -1), 1)  # only used when the status is OK
 
+    beta = named["slip_angle"]
+    angle_bad = ca.fabs(beta) > SLIP_ANGLE_LIMIT
+    safe_beta = ca.if_else(angle_bad, 0, beta)  # only used when the status is OK
     out = dict(zip((*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS),
                    fns.contact_memory(sinkage, rate, safe_slip, angle, plastic, speed, p),
                    strict=True))
+    out.update(zip(contact.LATERAL_OUTPUTS, fns.lateral_memory(
+        sinkage, safe_slip, safe_beta, plastic, out["mean_pressure"], p), strict=True))
     out.update(contact_sinkage=sinkage, slip=unified, slip_paper=paper)
     y = ca.vertcat(*(out[k] for k in TERRAIN_OUTPUTS))
     # sinkage R_c below the surface the contact begins at (a rut's): the soil at the axle
     full_burial = contact.radii(soil.Params(p))[0] + soil.rut_surface(soil.Params(p))
     status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(
-        sinkage > full_burial, STATUS_BURIED, ca.if_else(
-            _finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE)))
-    info = ca.if_else(slip_bad, unified, full_burial)
+        angle_bad, STATUS_ANGLE, ca.if_else(
+            sinkage > full_burial, STATUS_BURIED, ca.if_else(
+                _finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE))))
+    info = ca.if_else(slip_bad, unified, ca.if_else(angle_bad, SLIP_ANGLE_LIMIT, full_burial))
     dynamic = ca.Function("terrain_dynamic", [u, angle, plastic, given],
                           [y, status, info, out["plastic_rate"]],
                           ["u", "angle", "plastic", "p"], ["y", "status", "info", "plastic_rate"])
@@ -209,13 +222,16 @@ def terrain_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
                       strict=True))
     steady.update(contact_sinkage=steady["sinkage"], slip=unified, slip_paper=paper,
                   ripple_amplitude=0)
+    steady.update(zip(contact.LATERAL_OUTPUTS, fns.lateral(steady["sinkage"], safe_slip,
+                                                           safe_beta, p), strict=True))
     y = ca.vertcat(*(steady[k] for k in TERRAIN_OUTPUTS))
     too_heavy = load > steady["capacity"]
     converged = solve.solve_converged(steady["residual"], steady["last_step"])
-    status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(
+    status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(angle_bad, STATUS_ANGLE, ca.if_else(
         too_heavy, STATUS_LOAD, ca.if_else(converged, ca.if_else(
-            _finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE), STATUS_UNCONVERGED)))
-    info = ca.if_else(slip_bad, unified, steady["capacity"])
+            _finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE), STATUS_UNCONVERGED))))
+    info = ca.if_else(slip_bad, unified, ca.if_else(angle_bad, SLIP_ANGLE_LIMIT,
+                                                    steady["capacity"]))
     quasi = ca.Function("terrain_quasi_static", [u, given, guess], [y, status, info],
                         ["u", "p", "guess"], ["y", "status", "info"])
     return dynamic, quasi, memory

@@ -17,6 +17,7 @@ only when a whole variable list is asked for.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
@@ -108,6 +109,15 @@ _TERRAIN_INPUT_ROWS = [
         start=0.0, min=0.0, max=1.0),
 ]
 _TERRAIN_INPUTS = tuple(v.name for v in _TERRAIN_INPUT_ROWS)
+SLIP_ANGLE_LIMIT = math.radians(80.0)
+"""rad: the largest |slip_angle| WheelTerrain takes (the lateral contact's range,
+wheelterrain.model.api.SLIP_ANGLE_LIMIT)."""
+_SLIP_ANGLE = Var("slip_angle", "input", "Slip angle between the wheel's heading and its "
+                  "velocity, positive when the wheel moves toward its left "
+                  "(atan(lateral speed / forward speed) of the axle); the slip inputs are then "
+                  "the speeds along the heading. 0: a wheel driven straight (no lateral "
+                  "force)", "rad", "Angle", "deg", start=0.0, min=-SLIP_ANGLE_LIMIT,
+                  max=SLIP_ANGLE_LIMIT)
 
 TERRAIN_IO: tuple[Var, ...] = (
     Var("quasi_static", "parameter",
@@ -175,6 +185,18 @@ TERRAIN_IO: tuple[Var, ...] = (
         "under the wheel is the ground.* inputs, connected to a terrain map's query point (e.g. "
         "Terrain.fmu), the soil.* parameters unused", type="Boolean", start=False),
     *_ground_inputs(),
+    # a wheel at a slip angle: after everything else, so that the value references above
+    # stay as they were (today's connections keep working, the new input at its start, 0)
+    _SLIP_ANGLE,
+    *_outputs([
+        Var("lateral_force", "output", "Lateral force of the soil on the wheel, along its "
+            "axle, positive to the wheel's left (Ishigami et al. 2007's side force: lateral "
+            "shear on the rim and the side face's bulldozing; grouser-period mean); 0 at "
+            "slip_angle 0", "N", "Force"),
+        Var("aligning_moment", "output", "Moment of the lateral force about the vertical "
+            "through the wheel's centre, positive counter-clockwise seen from above (the "
+            "self-aligning moment); 0 at slip_angle 0", "N.m", "Torque"),
+    ], (*_TERRAIN_INPUTS, *GROUND, "slip_angle")),
 )
 
 RIG_IO: tuple[Var, ...] = (
@@ -334,7 +356,7 @@ def _names(rows: tuple[Var, ...], causality: str, computed: bool = False) -> tup
                  if v.causality == causality and not (computed and v.integrated))
 
 
-TERRAIN_INPUTS = _TERRAIN_INPUTS
+TERRAIN_INPUTS = (*_TERRAIN_INPUTS, "slip_angle")
 """The order of the terrain Functions' ``u`` (terrain_dynamic, terrain_quasi_static). The
 ground.* inputs (:data:`GROUND`) are not in it: with soil_from_inputs they replace the soil's
 entries of the Functions' ``p`` (:func:`soil_from_ground`)."""

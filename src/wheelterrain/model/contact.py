@@ -803,19 +803,63 @@ def _lateral_patch(theta_f, slip, slip_angle, P: Params, nodes: tuple[int, int])
             "lateral_shear_force": shear, "side_bulldozing": side}
 
 
-def lateral_at(z, slip, slip_angle, P: Params, nodes: tuple[int, int] = DEFAULT_NODES) -> dict:
+NO_SLIP_ANGLE, LATERAL_ARC, LATERAL_PATCH = 0, 1, 2  # the cases of the lateral switch
+
+
+@lru_cache(maxsize=8)
+def lateral_switch(nodes: tuple[int, int]) -> tuple[ca.Function, ca.Function]:
+    """``(case, switch)``: the lateral contact (LATERAL_OUTPUTS) at an entry angle, evaluating
+    only what applies: zeros at slip angle 0 (NO_SLIP_ANGLE: nothing computed, so a wheel
+    driven straight pays nothing for it), else the arc's or the patch's kernel.
+    ``case(theta_f, slip_angle, p)``, ``switch(case, theta_f, slip, slip_angle, p)``."""
+    th, sl, beta, pp = (ca.SX.sym("theta_f"), ca.SX.sym("slip"), ca.SX.sym("slip_angle"),
+                        ca.SX.sym("p", len(NAMES)))
+    P = Params(pp)
+
+    def kernel(name: str, out: dict) -> ca.Function:
+        return ca.Function(name, [th, sl, beta, pp],
+                           [ca.vertcat(*(out[k] for k in LATERAL_OUTPUTS))], {"cse": True})
+
+    zero = kernel("lateral_none", dict.fromkeys(LATERAL_OUTPUTS, ca.SX(0)))
+    arc = kernel("lateral_arc", _lateral_arc(th, sl, beta, P, nodes))
+    patch = kernel("lateral_patch", _lateral_patch(th, sl, beta, P, nodes))
+    case = ca.Function("lateral_case", [th, beta, pp], [ca.if_else(
+        beta == 0, NO_SLIP_ANGLE, ca.if_else(P["model.contact_form"] == 1, LATERAL_PATCH,
+                                             LATERAL_ARC))])
+    return case, ca.Function.conditional("lateral_form", [zero, arc], patch)
+
+
+def unloading_share(z, yielded, mean_pressure, P: Params):
+    """The share of the contact's forces a wheel lifted from where the soil yielded keeps:
+    max(1 - K_u*(z_y - z)/p_mean, 0), every contact pressure falling by K_u*(z_y - z) along
+    the elastic line (see :func:`contact_at`); ``mean_pressure`` the contact's at z_y."""
+    relief = P["soil.unloading_stiffness"] * (yielded - z)
+    return ca.fmax(1 - relief / ca.fmax(mean_pressure, 1e-300), 0)
+
+
+def lateral_at(z, slip, slip_angle, P: Params, nodes: tuple[int, int] = DEFAULT_NODES,
+               plastic=None, mean_pressure=None) -> dict:
     """The lateral contact (LATERAL_OUTPUTS) of a wheel at sinkage ``z`` [m] (from the original
     surface; its contact begins at the rut's surface as the longitudinal one's), the model's
     slip ``slip`` along its heading and the slip angle ``slip_angle`` [rad] between its heading
     and its velocity (positive: the wheel moves toward its left), in the form
-    ``model.contact_form`` selects, quasi-static and ripple-free. 0 at slip angle 0, exactly;
-    odd in the slip angle. The longitudinal contact is not changed by the slip angle (the
-    slip is the one along the heading, the normal stress the same)."""
-    theta_f = entry_angle(z - rut_surface(P), P)
-    arc = _lateral_arc(theta_f, slip, slip_angle, P, nodes)
-    patch = _lateral_patch(theta_f, slip, slip_angle, P, nodes)
-    on_patch = P["model.contact_form"] == 1
-    return {k: ca.if_else(on_patch, patch[k], arc[k]) for k in LATERAL_OUTPUTS}
+    ``model.contact_form`` selects, ripple-free (the grouser-period mean). 0 at slip angle 0,
+    exactly; odd in the slip angle. The longitudinal contact is not changed by the slip angle
+    (the slip is the one along the heading, the normal stress the same).
+
+    ``plastic`` (with ``mean_pressure``, the longitudinal contact's at the yield sinkage, as
+    :func:`contact_at` gives it): the wheel's plastic sinkage; the lateral contact is then
+    that at the yield sinkage z_y = max(z_p, z), scaled by the same elastic unloading as the
+    longitudinal forces (:func:`unloading_share`)."""
+    yielded = _yield_sinkage(z, plastic, P)
+    theta_f = entry_angle(yielded - rut_surface(P), P)
+    case, switch = lateral_switch(nodes)
+    values = switch(case(theta_f, slip_angle, P.p), theta_f, slip, slip_angle, P.p)
+    out = {k: values[i] for i, k in enumerate(LATERAL_OUTPUTS)}
+    if plastic is not None:
+        share = unloading_share(z, yielded, mean_pressure, P)
+        out = {k: share * v for k, v in out.items()}
+    return out
 
 
 BOUND_MARGIN = 1 + 1e-9  # covers rounding where the bound is the value itself (the patch)
@@ -966,8 +1010,7 @@ def contact_at(z, z_rate, slip, wheel_angle, P: Params, nodes: tuple[int, int], 
         values = form(theta_f, slip, wheel_angle, P.p)
         out = {k: values[i] for i, k in enumerate(CONTACT_OUTPUTS)}
     if plastic is not None:
-        relief = P["soil.unloading_stiffness"] * (yielded - z)
-        share = ca.fmax(1 - relief / ca.fmax(out["mean_pressure"], 1e-300), 0)
+        share = unloading_share(z, yielded, out["mean_pressure"], P)
         out.update({k: share * out[k] for k in SCALED})
         below = ca.if_else(share > 0, below, 0)  # lifted off: no damper
         out["yield_sinkage"] = yielded

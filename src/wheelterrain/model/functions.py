@@ -61,6 +61,9 @@ class ModelFunctions:
       (:func:`wheelterrain.model.contact.lateral_at`), quasi-static, ripple-free.
     - ``lateral_jacobian(sinkage, slip, slip_angle, p)`` -> ``d_state`` (2x3: lateral_force,
       aligning_moment by sinkage, slip, slip_angle), exact.
+    - ``lateral_memory(sinkage, slip, slip_angle, plastic_sinkage, mean_pressure, p)`` ->
+      LATERAL_OUTPUTS: the same at the yield sinkage with the elastic unloading of the soil
+      with memory (``mean_pressure``: ``contact_memory``'s output at the same state).
 
     All are MX graphs over the SX Functions of :func:`form_switch`: the contact is a called switch,
     not inlined, so each evaluation runs the one form and rule that apply.
@@ -77,6 +80,7 @@ class ModelFunctions:
     steady_jacobian: ca.Function
     lateral: ca.Function
     lateral_jacobian: ca.Function
+    lateral_memory: ca.Function
     nodes: tuple[int, int]
 
 
@@ -152,6 +156,14 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
         "lateral_jacobian", [z, slip, angle_of_slip, p],
         [ca.jacobian(pair, ca.vertcat(z, slip, angle_of_slip))], list(LATERAL_INPUTS),
         ["d_state"])
+    pressure = ca.MX.sym("mean_pressure")
+    held_side = lateral_at(z, slip, angle_of_slip, P, nodes, plastic=plastic,
+                           mean_pressure=pressure)
+    lateral_memory = ca.Function(
+        "lateral_memory", [z, slip, angle_of_slip, plastic, pressure, p],
+        [held_side[k] for k in LATERAL_OUTPUTS],
+        ["sinkage", "slip", "slip_angle", "plastic_sinkage", "mean_pressure", "p"],
+        list(LATERAL_OUTPUTS))
     return ModelFunctions(contact, contact_memory, plastic_step, contact_jacobian, sinkage_solve,
                           capacity_fn, steady, solve.steady_from(steady, nodes), steady_jacobian,
-                          lateral, lateral_jacobian, nodes)
+                          lateral, lateral_jacobian, lateral_memory, nodes)
