@@ -662,7 +662,6 @@ LATERAL_OUTPUTS = ("lateral_force", "aligning_moment", "lateral_shear_force", "s
 (positive to the wheel's left), its moment about the vertical through the wheel's centre
 (positive counter-clockwise seen from above), and the force's two parts: the lateral shear on
 the rim and the side face's bulldozing."""
-SMALL_DECAY = 1e-3  # below it, the first moment of exp(-A*s) is its Taylor series
 
 
 def _lateral_kinematics(slip, slip_angle, P: Params, Rs, Rref):
@@ -749,25 +748,37 @@ def _lateral_arc(theta_f, slip, slip_angle, P: Params, nodes: tuple[int, int]) -
             "lateral_shear_force": shear, "side_bulldozing": side}
 
 
-def _first_moment_decay(m):
-    """int_0^1 s*exp(-m*s) ds for m >= 0: (1 - exp(-m)*(1 + m))/m**2, its Taylor series below
-    SMALL_DECAY (error ~m**4)."""
-    small = m < SMALL_DECAY
+SMALL_CENTRED = 0.05
+"""Below it, :func:`_centred_decay` is its Taylor series: above, its closed form loses at
+most ~1e-13 relative to cancellation (also with an expm1 written as exp(x) - 1, as the
+Modelica library's is)."""
+
+
+def _centred_decay(m):
+    """D(m) = int_0^1 (s - 1/2)*exp(-m*s) ds for m >= 0: (1 - exp(-m)*(1 + m))/m**2 -
+    (1 - exp(-m))/(2*m) above SMALL_CENTRED, else its series
+    sum_k>=1 (-m)**k*k/(2*k!*(k + 1)*(k + 2)) to k = 7 (next term < 1e-16 relative)."""
+    small = m < SMALL_CENTRED
     safe = ca.if_else(small, 1, m)
-    exact = -(ca.expm1(-safe) + safe * ca.exp(-safe)) / safe**2
-    return ca.if_else(small, 0.5 - m / 3 + m**2 / 8 - m**3 / 30, exact)
+    rise = -ca.expm1(-safe)  # 1 - exp(-m)
+    exact = (rise - safe * ca.exp(-safe)) / safe**2 - rise / (2 * safe)
+    series = 0
+    for k in range(7, 0, -1):  # Horner, highest power first
+        series = series * m + (-1) ** k * k / (2 * math.factorial(k) * (k + 1) * (k + 2))
+    return ca.if_else(small, series * m, exact)
 
 
-def patch_shear_first_moment(a, P: Params):
-    """int_0^1 s*g(a*s*K) ds: the first moment, along the patch from its front (s = 0) to its
-    rear (s = 1), of the mobilised shear fraction whose displacement grows linearly to ``a``
-    = j(rear)/K (:func:`patch_shear_mean`'s zeroth moment); odd in ``a``. Janosi:
-    1/2 - M(a); hump: K_r*[1/2 - M(a) + C*e*(M(a) - M(2a))], M(m) = int_0^1 s*exp(-m*s) ds."""
+def patch_shear_centred_moment(a, P: Params):
+    """int_0^1 (s - 1/2)*g(a*s*K) ds: the first moment, about the patch's middle, of the
+    mobilised shear fraction whose displacement grows linearly from the front (s = 0) to ``a``
+    = j(rear)/K at the rear (:func:`patch_shear_mean`'s zeroth moment); odd in ``a``, positive
+    (the shear rises toward the rear). Janosi: -D(a); hump: K_r*[-D(a) + C*e*(D(a) - D(2a))],
+    D = :func:`_centred_decay` (the constant part of g has no moment about the middle)."""
     Kr, hump = P["soil.residual_ratio"], P["model.shear_model"]
     m = ca.fabs(a)
-    janosi = 0.5 - _first_moment_decay(m)
+    janosi = -_centred_decay(m)
     C = 1 / (Kr * (1 - math.exp(-1))) - 1
-    wong = Kr * (janosi + C * math.e * (_first_moment_decay(m) - _first_moment_decay(2 * m)))
+    wong = Kr * (janosi + C * math.e * (_centred_decay(m) - _centred_decay(2 * m)))
     return ca.sign(a) * ((1 - hump) * janosi + hump * wong)
 
 
@@ -776,9 +787,10 @@ def _lateral_patch(theta_f, slip, slip_angle, P: Params, nodes: tuple[int, int])
     sideways, -(c*b*l + Fz_static*tan(phi))*m(y*l/K_y), y the lateral displacement per metre
     of the patch (:func:`_lateral_kinematics` over R_s, the rim's speed past the soil, as the
     patch's longitudinal shear counts it), m :func:`patch_shear_mean`; its moment from the
-    first moment of the same distribution (:func:`patch_shear_first_moment`) about the patch
-    front at R_c*sin(theta_f); the side face's bulldozing as in the arc form, over the same
-    arc's geometry."""
+    first moment of the same distribution about the patch's middle
+    (:func:`patch_shear_centred_moment`, free of cancellation) and the middle's position
+    R_c*(sin(theta_f) + sin(theta_r))/2; the side face's bulldozing as in the arc form, over
+    the same arc's geometry."""
     Rc, Rs, Rref = radii(P)
     b = P["wheel.width"]
     c, tan_phi = shear_strength(P)
@@ -791,9 +803,10 @@ def _lateral_patch(theta_f, slip, slip_angle, P: Params, nodes: tuple[int, int])
     a = rate * length / K_y
     full = c * b * length + normal * tan_phi
     shear = -full * patch_shear_mean(a, P)
-    front_x = Rc * ca.sin(theta_f)
-    moment = -full * (front_x * patch_shear_mean(a, P) - length * patch_shear_first_moment(a, P))
     theta_r = exit_angle(theta_f, P)
+    middle = Rc * (ca.sin(theta_f) + ca.sin(theta_r)) / 2  # the patch's middle, ahead of the axle
+    moment = -full * (middle * patch_shear_mean(a, P)
+                      - length * patch_shear_centred_moment(a, P))
     g, w = _panel_rule(nodes[0])
     trig_f = ca.sin(theta_f), ca.cos(theta_f)
     arc = _offset_trig(*trig_f, (theta_f - theta_r) * g)
@@ -827,6 +840,24 @@ def lateral_switch(nodes: tuple[int, int]) -> tuple[ca.Function, ca.Function]:
         beta == 0, NO_SLIP_ANGLE, ca.if_else(P["model.contact_form"] == 1, LATERAL_PATCH,
                                              LATERAL_ARC))])
     return case, ca.Function.conditional("lateral_form", [zero, arc], patch)
+
+
+@lru_cache(maxsize=4)
+def lateral_export(nodes: tuple[int, int] = DEFAULT_NODES) -> ca.Function:
+    """The quasi-static lateral contact as one plain SX Function of LATERAL_INPUTS (both forms'
+    kernels under a select, zeros at slip angle 0), for code that is not CasADi's (the
+    Modelica library): the same expressions :func:`lateral_at` switches between."""
+    z, sl, beta, pp = (ca.SX.sym("sinkage"), ca.SX.sym("slip"), ca.SX.sym("slip_angle"),
+                       ca.SX.sym("p", len(NAMES)))
+    P = Params(pp)
+    theta_f = entry_angle(z - rut_surface(P), P)
+    arc = _lateral_arc(theta_f, sl, beta, P, nodes)
+    patch = _lateral_patch(theta_f, sl, beta, P, nodes)
+    on_patch = P["model.contact_form"] == 1
+    rows = [ca.if_else(beta == 0, 0, ca.if_else(on_patch, patch[k], arc[k]))
+            for k in LATERAL_OUTPUTS]
+    return ca.Function("lateral", [z, sl, beta, pp], [ca.vertcat(*rows)], list(LATERAL_INPUTS),
+                       ["y"], {"cse": True})
 
 
 def unloading_share(z, yielded, mean_pressure, P: Params):

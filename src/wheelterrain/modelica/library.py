@@ -146,6 +146,8 @@ INPUT_DOC = {
     "carriage_speed": "the axle's forward speed V [m/s]",
     "wheel_speed": "the wheel's angular velocity omega [rad/s]",
     "slip_paper": "the paper's slip s = (omega*R_ref - V)/V [1]",
+    "slip_angle": "the slip angle between the wheel's heading and its velocity, positive when "
+                  "it moves toward its left [rad]",
     "p": "the parameters in table order (Data, Records.parameterVector)",
     "r": "the rover's parameters in table order (Data.rover)",
     "x": "the chassis' state (Index.rover_states order)",
@@ -236,6 +238,15 @@ def exported() -> tuple[Exported, ...]:
                         (Port("slip", description="the model's slip: s/(1 + s) driving, s "
                               "braking [1]"),),
                         "The model's slip from the paper's slip", _derivative(f, ("slip_paper",))))
+    f = contact.lateral_export()
+    names = contact.LATERAL_INPUTS
+    out.append(Exported("lateral", f, names, (Port("y", len(contact.LATERAL_OUTPUTS),
+                                                   description="the outputs, Index.Lateral "
+                                                   "order"),),
+                        "The quasi-static lateral contact of a wheel at a slip angle "
+                        "(Ishigami et al. 2007's side force): lateral force, aligning moment "
+                        "and the force's two parts, 0 at slip angle 0",
+                        _derivative(f, names)))
     out += _rover_functions()
     return tuple(out)
 
@@ -451,6 +462,10 @@ def _index(lib: Library, where: str) -> None:
         for k, name in enumerate(names):
             lines.append(f"    constant Integer {name.replace('.', '_')} = {k + 1};")
         lines.append(f"  end {package};")
+    lines.append('  package Lateral "Positions in lateral\'s y"')
+    for k, name in enumerate(contact.LATERAL_OUTPUTS):
+        lines.append(f"    constant Integer {name} = {k + 1};")
+    lines.append("  end Lateral;")
     lines.append('  package Soil "Positions in soilAt\'s soil"')
     for k, name in enumerate(ground.SOIL_NAMES):
         lines.append(f"    constant Integer {name.split('.', 1)[1]} = {k + 1};")
