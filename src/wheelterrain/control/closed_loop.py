@@ -170,7 +170,7 @@ class CasadiPlant:
         return np.array(y).ravel()
 
     def state(self) -> np.ndarray:
-        return np.array([*self.x, self.angle])
+        return np.array([*self.x, self.angle, self.plastic])
 
     def advance(self, command: float, steps: int, record: Callable) -> None:
         for _ in range(steps):
@@ -216,8 +216,10 @@ class FMUPlant:
         self.rig.set(values)
 
     def state(self) -> np.ndarray:
-        """mpc.MPC_STATES: the rig's states (rig.RIG_STATES), then the terrain's wheel angle."""
-        return np.array([*self.rig.get(rig.RIG_STATES), *self.terrain.get(("wheel_angle",))])
+        """mpc.MPC_STATES: the rig's states (rig.RIG_STATES), then the terrain's wheel angle and
+        plastic sinkage."""
+        return np.array([*self.rig.get(rig.RIG_STATES),
+                         *self.terrain.get(("wheel_angle", "plastic_sinkage"))])
 
     def advance(self, command: float, steps: int, record: Callable) -> None:
         for _ in range(steps):
@@ -244,6 +246,11 @@ class FMUPlant:
 # Online soil estimation
 
 
+ESTIMATOR_STATES = (*rig.RIG_STATES, "wheel_angle")
+"""The wheel state the soil estimator's measurement model reads (it yields the soil at the
+wheel's sinkage: the plastic sinkage is not part of it)."""
+
+
 class SoilEstimator:
     """EKF on (soil.phi, soil.k_phi) as random walks, relative to their nominal values.
 
@@ -255,13 +262,13 @@ class SoilEstimator:
     def __init__(self, p: np.ndarray, load: float, interval: float) -> None:
         terrain = fmu_model.terrain_functions()[0]
         theta = ca.MX.sym("theta", len(ESTIMATED))
-        x = ca.MX.sym("x", len(mpc.MPC_STATES))
+        x = ca.MX.sym("x", len(ESTIMATOR_STATES))
         pt = ca.MX.sym("p", len(NAMES))
         nominal = np.array([p[INDEX[name]] for name in ESTIMATED])
         scaled = ca.vertcat(*(pt[INDEX[n]] if n not in ESTIMATED
                               else theta[ESTIMATED.index(n)] * nominal[ESTIMATED.index(n)]
                               for n in NAMES))
-        xs = dict(zip(mpc.MPC_STATES, ca.vertsplit(x), strict=True))
+        xs = dict(zip(ESTIMATOR_STATES, ca.vertsplit(x), strict=True))
         # the soil's memory off the measurement model: the wheel yields at its sinkage
         out = dict(zip(fmu_model.TERRAIN_OUTPUTS, ca.vertsplit(
             terrain(mpc.terrain_inputs(xs, load), xs["wheel_angle"], xs["sinkage"], scaled)[0]),
@@ -279,7 +286,7 @@ class SoilEstimator:
         self.projections = 0
 
     def update(self, x: np.ndarray, measured: np.ndarray) -> np.ndarray:
-        """One predict-update with the state ``x`` (mpc.MPC_STATES) and the forces measured
+        """One predict-update with the state ``x`` (ESTIMATOR_STATES) and the forces measured
         there; returns the table parameter vector with the estimates."""
         self.P = self.P + self.Q
         y, H = (np.array(v) for v in self.measure(self.theta, x, self.p))
@@ -321,6 +328,7 @@ class Result:
         error = self.series["slip"] - self.series["slip_reference"]
         out = {"scenario": self.scenario, "plant": self.plant,
                "solver": self.settings.solver, "compiled": self.settings.compiled,
+               "memory": self.settings.memory,
                "horizon": self.settings.horizon, "interval_s": self.settings.interval,
                "solve_time_median_s": float(np.median(self.solve_times)),
                "solve_time_p90_s": float(np.percentile(self.solve_times, 90)),

@@ -2,11 +2,13 @@
 
 Prediction model
     The WheelTerrain FMU's Function ``terrain_dynamic`` (the full contact model, grouser ripple
-    included, at the wheel's sinkage, sinkage rate, speeds and angle) closed by the rig's
-    equations :func:`wheelterrain.model.rig.rates` in the same drive and carriage mode as the plant.
-    States (MPC_STATES): sinkage, sinkage rate, wheel speed, the speed loop's integral, carriage
-    speed, wheel angle. No surrogate: the prediction differs from the co-simulated plant only by
-    its discretisation.
+    included, at the wheel's sinkage, sinkage rate, speeds and angle, with the soil's memory)
+    closed by the rig's equations :func:`wheelterrain.model.rig.rates` in the same drive and
+    carriage mode as the plant. States (MPC_STATES): sinkage, sinkage rate, wheel speed, the
+    speed loop's integral, carriage speed, wheel angle, plastic sinkage (the soil's memory,
+    the plant's own state, measured). No surrogate: the prediction differs from the
+    co-simulated plant by its discretisation and by the yield's corner, rounded over
+    YIELD_WIDTH so that a linearisation can cross it.
 
 Why a speed command (the stiffness analysis, :func:`stiffness`)
     With the motor torque as the input, the wheel on the calibrated soil has eigenvalues down to
@@ -61,6 +63,20 @@ from wheelterrain.model import rig
 from wheelterrain.parameters import NAMES
 
 MPC_STATES = (*rig.RIG_STATES, "wheel_angle")
+"""The prediction's states without the soil's memory (the default, Settings.memory False)."""
+MEMORY_STATES = (*MPC_STATES, "plastic_sinkage")
+"""The prediction's states with it (Settings.memory True): the plant's plastic sinkage too."""
+YIELD_WIDTH = 1e-5
+"""m: the memory prediction's smooth yield (contact.soft_max of the sinkage and the plastic
+sinkage over it): the plant's law has a corner at z = z_p that a linearisation cannot cross.
+A hundredth of a millimetre, small against the ripple's digging (0.5-0.7 mm). Measured on the
+nominal scenario: 3e-6 m tracks to 1.1e-4 with rti but sqpmethod diverges; 1e-6 m leaves 28
+of 300 rti QPs unsolved; 1e-5 m, 4.1e-4 with both; 3e-5 m, 1.6e-3."""
+
+
+def states(memory: bool = False) -> tuple[str, ...]:
+    """The prediction's states: MEMORY_STATES with the soil's memory, else MPC_STATES."""
+    return MEMORY_STATES if memory else MPC_STATES
 OUTPUTS = ("slip", "drawbar_pull", "normal_force", "soil_torque", "motor_torque", "power")
 REGULARISATION = 1e-4  # Levenberg-Marquardt term on the Gauss-Newton Hessian (slip terms ~1e6)
 SLIP_SCALE = 1e-3  # slip error of weight 1 in the tracking objective
@@ -94,6 +110,12 @@ class Settings:
     speed_limit: float = 5.0  # rad/s, largest speed command
     move_weight: float = 1e-2  # weight of (command move / command scale)^2
     max_iterations: int = 20
+    memory: bool = False
+    """The prediction carries the soil's memory (the plant's plastic sinkage a state, the yield
+    smoothed over YIELD_WIDTH): False, the soil yields at the wheel's sinkage (the loading
+    branch). With it the nominal scenario tracks to 4.1e-4 on the memory plant (6.3e-3
+    without); free-carriage leaves the domain and efficiency's solves fail, so off by default
+    (docs/mpc.md)."""
     speed_weight: float = 0.0
     """track: weight of ((carriage speed - speed reference)/(speed reference*SLIP_SCALE))^2, a
     relative speed error weighed like a slip error of the same size. 0 (the rig): slip only.
@@ -133,26 +155,30 @@ def terrain_inputs(states: dict, load):
     return ca.vertcat(*(given[n] for n in fmu_model.TERRAIN_INPUTS))
 
 
-@lru_cache(maxsize=1)
-def dynamics() -> ca.Function:
+@lru_cache(maxsize=2)
+def dynamics(memory: bool = False) -> ca.Function:
     """``dynamics(x, command, p_terrain, p_rig) -> (xdot, y)``: the continuous prediction model
-    (x = MPC_STATES, y = OUTPUTS) from the FMUs' Functions: terrain_dynamic and rig.rates."""
-    terrain = fmu_model.terrain_functions()[0]
-    x = ca.MX.sym("x", len(MPC_STATES))
+    (x = :func:`states`, y = OUTPUTS) from the FMUs' Functions: terrain_dynamic and rig.rates.
+    Without ``memory`` the soil yields at the wheel's sinkage (the loading branch); with it,
+    the plastic sinkage is a state, its rate the model's, the yield smoothed (YIELD_WIDTH)."""
+    names = states(memory)
+    terrain = fmu_model.terrain_functions(YIELD_WIDTH if memory else None)[0]
+    x = ca.MX.sym("x", len(names))
     command = ca.MX.sym("command")
     pt, pr = ca.MX.sym("p_terrain", len(NAMES)), ca.MX.sym("p_rig", len(rig.RIG_NAMES))
     named = rig.named(pr)
-    xs = dict(zip(MPC_STATES, ca.vertsplit(x), strict=True))
-    # the prediction yields the soil at the wheel's sinkage (plastic sinkage = sinkage): the
-    # loading branch, smooth, without the unloading memory the plant keeps
-    out = dict(zip(fmu_model.TERRAIN_OUTPUTS, ca.vertsplit(
-        terrain(terrain_inputs(xs, named["rig.load"]), xs["wheel_angle"], xs["sinkage"],
-                pt)[0]), strict=True))
+    xs = dict(zip(names, ca.vertsplit(x), strict=True))
+    # with memory: the plastic sinkage as the plant keeps it, its yield smoothed; without, the
+    # soil yields at the wheel's sinkage (the loading branch)
+    evaluated = terrain(terrain_inputs(xs, named["rig.load"]), xs["wheel_angle"],
+                        xs["plastic_sinkage"] if memory else xs["sinkage"], pt)
+    out = dict(zip(fmu_model.TERRAIN_OUTPUTS, ca.vertsplit(evaluated[0]), strict=True))
     # the command is the speed loop's reference (rig.drive 1) or the torque (rig.drive 2)
     given = {**out, "wheel_speed_command": command, "motor_torque_command": command}
     inputs = tuple(given[n] for n in rig.INPUTS)
     x_rig = tuple(xs[n] for n in rig.RIG_STATES)
-    xdot = ca.vertcat(*rig.rates(x_rig, inputs, named), xs["wheel_speed"])
+    xdot = ca.vertcat(*rig.rates(x_rig, inputs, named), xs["wheel_speed"],
+                      *((evaluated[3],) if memory else ()))
     motor = rig.motor_torque(x_rig, inputs, named)
     y = {**out, "soil_torque": out["torque"], "motor_torque": motor,
          "power": motor * xs["wheel_speed"]}
@@ -161,12 +187,13 @@ def dynamics() -> ca.Function:
                        ["x", "command", "p_terrain", "p_rig"], ["xdot", "y"])
 
 
-@lru_cache(maxsize=1)
-def interval_residual() -> ca.Function:
+@lru_cache(maxsize=2)
+def interval_residual(memory: bool = False) -> ca.Function:
     """``interval(x0, x1, command, p_terrain, p_rig, h) -> (residual, y1)``: backward Euler
     x1 - x0 - h*f(x1, command) and the outputs at the interval's end."""
-    f = dynamics()
-    x0, x1 = ca.MX.sym("x0", len(MPC_STATES)), ca.MX.sym("x1", len(MPC_STATES))
+    f = dynamics(memory)
+    nx = len(states(memory))
+    x0, x1 = ca.MX.sym("x0", nx), ca.MX.sym("x1", nx)
     command, h = ca.MX.sym("command"), ca.MX.sym("h")
     pt, pr = ca.MX.sym("p_terrain", len(NAMES)), ca.MX.sym("p_rig", len(rig.RIG_NAMES))
     xdot, y = f(x1, command, pt, pr)
@@ -174,12 +201,13 @@ def interval_residual() -> ca.Function:
                        ["x0", "x1", "command", "p_terrain", "p_rig", "h"], ["residual", "y"])
 
 
-@lru_cache(maxsize=1)
-def interval_step() -> ca.Function:
+@lru_cache(maxsize=2)
+def interval_step(memory: bool = False) -> ca.Function:
     """``step(x0, command, p_terrain, p_rig, h) -> (x1, y1)``: one backward-Euler interval
     solved by Newton (for forward rollouts: the first guess and the shift's last interval)."""
-    residual = interval_residual()
-    x0, x1 = ca.MX.sym("x0", len(MPC_STATES)), ca.MX.sym("x1", len(MPC_STATES))
+    residual = interval_residual(memory)
+    nx = len(states(memory))
+    x0, x1 = ca.MX.sym("x0", nx), ca.MX.sym("x1", nx)
     command, h = ca.MX.sym("command"), ca.MX.sym("h")
     pt, pr = ca.MX.sym("p_terrain", len(NAMES)), ca.MX.sym("p_rig", len(rig.RIG_NAMES))
     g = ca.Function("g", [x1, ca.vertcat(x0, command, pt, pr, h)],
@@ -193,8 +221,8 @@ def interval_step() -> ca.Function:
                        ["x0", "command", "p_terrain", "p_rig", "h"], ["x1", "y"])
 
 
-@lru_cache(maxsize=1)
-def compiled_interval() -> ca.Function:
+@lru_cache(maxsize=2)
+def compiled_interval(memory: bool = False) -> ca.Function:
     """:func:`interval_residual` as generated C with its Jacobian, compiled once per model
     version (the C's SHA-256 names the cache entry) and loaded with ``ca.external``.
 
@@ -205,7 +233,7 @@ def compiled_interval() -> ca.Function:
     differentiates by its variables only, and their Jacobian blocks would be half the code.
     Compiled at -O1: the arc forms' derivatives make ~170 000 lines of C, which -O2 takes
     twice as long over (~2 min) for no measurable gain on this model."""
-    f = interval_residual()
+    f = interval_residual(memory)
     args = [ca.MX.sym(name, f.sparsity_in(k)) for k, name in enumerate(f.name_in())]
     fn = ca.Function(f.name(), args, f(*args), f.name_in(), f.name_out(),
                      {"is_diff_in": [name in ("x0", "x1", "command") for name in f.name_in()]})
@@ -260,9 +288,11 @@ class Controller:
 
     # --- the NLP --------------------------------------------------------------------------
     def _build(self) -> None:
-        s, n, nx = self.settings, self.settings.horizon, len(MPC_STATES)
-        # scale of each state in the NLP's variables: m, m/s, rad/s, rad, m/s, rad
-        self.x_scale = x_scale = np.array([1e-2, 1e-2, self.command_scale, 1e-2, 1e-2, 1.0])
+        self.states = states(self.settings.memory)
+        s, n, nx = self.settings, self.settings.horizon, len(self.states)
+        # scale of each state in the NLP's variables: m, m/s, rad/s, rad, m/s, rad (, m)
+        self.x_scale = x_scale = np.array([1e-2, 1e-2, self.command_scale, 1e-2, 1e-2, 1.0,
+                                           1e-2][:nx])
         u_hat, x_hat = ca.MX.sym("u", n), ca.MX.sym("x", nx, n)
         x0, pt = ca.MX.sym("x_now", nx), ca.MX.sym("p_terrain", len(NAMES))
         reference, previous = ca.MX.sym("slip_reference", n), ca.MX.sym("previous_command")
@@ -271,7 +301,8 @@ class Controller:
         u = u_hat * self.command_scale
         xs = ca.diag(ca.DM(x_scale)) @ x_hat
         starts = ca.horzcat(x0, xs[:, :-1])
-        interval = (compiled_interval() if s.compiled else interval_residual()).map(n)
+        interval = (compiled_interval(s.memory) if s.compiled
+                    else interval_residual(s.memory)).map(n)
         residual, y = interval(starts, xs, u.T, pt, pr, s.interval)
         residual = ca.diag(ca.DM(1 / x_scale)) @ residual
         # slip, motor torque and power from the states (the same expressions as the plant's),
@@ -332,7 +363,7 @@ class Controller:
         if not ca.has_conic(RTI_QP):
             raise MPCError(f"solver = 'rti' needs CasADi's {RTI_QP} QP plugin, which this "
                            f"CasADi {ca.__version__} lacks; valid: sqpmethod, ipopt")
-        n, nx = self.settings.horizon, len(MPC_STATES)
+        n, nx = self.settings.horizon, len(self.states)
         ne = n * nx  # the interval residuals: the first ne rows of g; the commands: w[:n]
         jac_g = ca.jacobian(g, w)
         jac_u, jac_x = jac_g[:ne, :n], jac_g[:ne, n:]
@@ -395,8 +426,8 @@ class Controller:
 
     # --- solving -----------------------------------------------------------------------------
     def rollout(self, x_now: np.ndarray, commands: np.ndarray, pt: np.ndarray) -> np.ndarray:
-        """States (len(MPC_STATES) x horizon) of the prediction model under ``commands``."""
-        step = interval_step()
+        """States (len(self.states) x horizon) of the prediction model under ``commands``."""
+        step = interval_step(self.settings.memory)
         xs, x = [], np.asarray(x_now, dtype=float)
         for c in commands:
             x = np.array(step(x, c, pt, self.p_rig, self.settings.interval)[0]).ravel()
@@ -405,12 +436,12 @@ class Controller:
 
     def solve(self, x_now, pt, reference, previous: float,
               speed_reference: float = 0.0) -> Step:
-        """Solve the NLP at state ``x_now`` (MPC_STATES) with soil ``pt`` and the slip ``reference``
-        (scalar or one per interval); ``previous`` is the command applied until now;
-        ``speed_reference`` [m/s] the carriage speed the speed term holds (Settings.speed_weight
-        > 0)."""
+        """Solve the NLP at state ``x_now`` (:func:`states`; a longer state, the plastic sinkage
+        appended, is cut to them) with soil ``pt`` and the slip ``reference`` (scalar or one per
+        interval); ``previous`` is the command applied until now; ``speed_reference`` [m/s] the
+        carriage speed the speed term holds (Settings.speed_weight > 0)."""
         n = self.settings.horizon
-        x_now = np.asarray(x_now, dtype=float)
+        x_now = np.asarray(x_now, dtype=float)[:len(self.states)]
         reference = np.broadcast_to(np.asarray(reference, dtype=float), (n,))
         if self.guess is None:  # forward rollout, not a constant state (a bad local minimum)
             commands = np.full(n, previous)
@@ -461,8 +492,8 @@ class Controller:
         guess's first interval starts 2*pi away from the state once per turn, and one
         Gauss-Newton step (the real-time iteration) linearises the ripple over that jump:
         a wild command (seen on the rover after 10.5 s)."""
-        n, nx = self.settings.horizon, len(MPC_STATES)
-        angle = MPC_STATES.index("wheel_angle")
+        n, nx = self.settings.horizon, len(self.states)
+        angle = self.states.index("wheel_angle")
         scale = self.x_scale[angle]
         first = self.guess[n + angle] * scale  # the guess's angle at the first interval's end
         turns = round((first - x_now[angle]) / (2 * math.pi))
@@ -472,7 +503,7 @@ class Controller:
     def _shift(self, w: np.ndarray, pt: np.ndarray) -> None:
         """Warm start for the next solve: the solution moved one interval on, its last
         interval repeated with the last command."""
-        n, nx = self.settings.horizon, len(MPC_STATES)
+        n, nx = self.settings.horizon, len(self.states)
         u, x = w[:n], w[n:].reshape(n, nx)
         last = self.rollout(x[-1] * self.x_scale, [u[-1] * self.command_scale], pt)[:, 0]
         self.guess = np.concatenate([np.append(u[1:], u[-1]),

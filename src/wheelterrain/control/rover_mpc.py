@@ -117,7 +117,8 @@ def run(soil: rover_system.Soil, rover_values: Mapping[str, float], stop: float,
             for k, w in enumerate(rover.WHEELS):
                 z, rate = rover.wheel_kinematics(x[:n_states], p, w)
                 state = [z, rate, s[f"{w}.wheel_speed"], s[f"{w}.speed_error_integral"],
-                         rover.axle_speed(x[:n_states], p, w), mpc.wrap_angle(x[n_states + k])]
+                         rover.axle_speed(x[:n_states], p, w), mpc.wrap_angle(x[n_states + k]),
+                         x[n_states + len(rover.WHEELS) + k]]  # its plastic sinkage
                 pt = base.copy()
                 pt[INDEX["ripple.phase"]] += rover.grouser_phase(p, w)  # this wheel's
                 where = rover.wheel_position(p, s["position"], w)

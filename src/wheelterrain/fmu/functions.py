@@ -173,9 +173,13 @@ def with_grouser_phase(p, phase):
     return ca.vertcat(p[:k], p[k] + phase, p[k + 1:])
 
 
-@lru_cache(maxsize=2)
-def terrain_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
+@lru_cache(maxsize=4)
+def terrain_functions(smooth: float | None = None
+                      ) -> tuple[ca.Function, ca.Function, ca.Function]:
     """(terrain_dynamic, terrain_quasi_static, terrain_memory): see the module's docstring.
+    ``smooth``: the smooth yield of that width [m] in terrain_dynamic (the slip NMPC's
+    prediction model, :func:`wheelterrain.model.functions.contact_memory_smooth`); None, the
+    FMU's own law.
     ``terrain_dynamic(u, angle, plastic, p) -> (y, status, info, plastic_rate)`` takes the
     wheel's plastic sinkage (WheelTerrain's second state) and gives its rate (model exchange);
     ``terrain_memory(u, plastic, p, h) -> plastic_next`` advances it over a co-simulation
@@ -195,9 +199,10 @@ def terrain_functions() -> tuple[ca.Function, ca.Function, ca.Function]:
     beta = named["slip_angle"]
     angle_bad = ca.fabs(beta) > SLIP_ANGLE_LIMIT
     safe_beta = ca.if_else(angle_bad, 0, beta)  # only used when the status is OK
+    held = (fns.contact_memory if smooth is None
+            else model_functions.contact_memory_smooth(smooth))
     out = dict(zip((*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS),
-                   fns.contact_memory(sinkage, rate, safe_slip, angle, plastic, speed, p),
-                   strict=True))
+                   held(sinkage, rate, safe_slip, angle, plastic, speed, p), strict=True))
     out.update(zip(contact.LATERAL_OUTPUTS, fns.lateral_memory(
         sinkage, safe_slip, safe_beta, plastic, out["mean_pressure"], p), strict=True))
     out.update(contact_sinkage=sinkage, slip=unified, slip_paper=paper)

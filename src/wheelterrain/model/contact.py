@@ -860,12 +860,35 @@ def lateral_export(nodes: tuple[int, int] = DEFAULT_NODES) -> ca.Function:
                        ["y"], {"cse": True})
 
 
-def unloading_share(z, yielded, mean_pressure, P: Params):
+def soft_max(a, b, width):
+    """max(a, b) with its corner rounded over ``width``: (a + b + sqrt((a - b)**2 +
+    width**2))/2, above the max by at most width/2 (at a = b), smooth everywhere."""
+    return (a + b + ca.sqrt((a - b) ** 2 + width**2)) / 2
+
+
+SHARE_WIDTH = 1e-3
+"""The smooth yield's rounding of the unloading share's corner at 0 (a wheel lifted off)."""
+
+
+def unloading_share(z, yielded, mean_pressure, P: Params, smooth=None):
     """The share of the contact's forces a wheel lifted from where the soil yielded keeps:
     max(1 - K_u*(z_y - z)/p_mean, 0), every contact pressure falling by K_u*(z_y - z) along
-    the elastic line (see :func:`contact_at`); ``mean_pressure`` the contact's at z_y."""
+    the elastic line (see :func:`contact_at`); ``mean_pressure`` the contact's at z_y.
+    ``smooth`` (a width [m], the smooth yield of a prediction model): the corner at 0 rounded
+    over SHARE_WIDTH (:func:`soft_max`)."""
     relief = P["soil.unloading_stiffness"] * (yielded - z)
-    return ca.fmax(1 - relief / ca.fmax(mean_pressure, 1e-300), 0)
+    # no contact (p_mean = 0): every force the share scales is 0, so the share is taken as 1;
+    # the division is made safe, not only not taken: CasADi differentiates the branch not
+    # taken too (0 times the infinite derivative of relief/0 was NaN in every Jacobian of a
+    # wheel out of the soil)
+    touching = mean_pressure > 0
+    safe = ca.if_else(touching, mean_pressure, 1)
+    kept = ca.if_else(touching, 1 - relief / safe, 1)
+    if smooth is None:
+        return ca.fmax(kept, 0)
+    # bounded below first: a wheel lifted far off a contact of no pressure makes kept ~ -1e300,
+    # whose square in soft_max would overflow (the share is 0 there either way)
+    return soft_max(ca.fmax(kept, -1), 0, SHARE_WIDTH)
 
 
 def lateral_at(z, slip, slip_angle, P: Params, nodes: tuple[int, int] = DEFAULT_NODES,
@@ -1015,7 +1038,7 @@ SCALED = ("normal_force", "drawbar_pull", "torque", "gross_thrust", "compaction_
 
 
 def contact_at(z, z_rate, slip, wheel_angle, P: Params, nodes: tuple[int, int], ripple: bool,
-             form: ca.Function | None = None, plastic=None) -> dict:
+             form: ca.Function | None = None, plastic=None, smooth=None) -> dict:
     """Contact quantities at sinkage z (m, to the contact circle), with damping C_f*dz/dt.
     ``form``: one of :func:`form_switch`' kernels to use in place of the switch (the lane kernels of
     :func:`lane_kernels`); by default the switch picks it.
@@ -1031,8 +1054,12 @@ def contact_at(z, z_rate, slip, wheel_angle, P: Params, nodes: tuple[int, int], 
     patch form's uniform pressure without cohesion, an approximation of the arc's distribution;
     d <= p_mean/K_u, a fraction of a millimetre, is small against the sinkage, so the geometry
     stays that of z_y). The damper acts while the wheel is in contact. Where z >= z_p (and
-    with ``model.soil_memory`` = 0) this is the contact without it, exactly."""
-    yielded = _yield_sinkage(z, plastic, P)
+    with ``model.soil_memory`` = 0) this is the contact without it, exactly.
+
+    ``smooth``: a width [m] for a prediction model that needs derivatives across the yield
+    (the slip NMPC): z_y = :func:`soft_max` (z_p, z) over it and the unloading share's corner
+    rounded (:func:`unloading_share`); None (every plant, FMU and face) is the law above."""
+    yielded = _yield_sinkage(z, plastic, P, smooth)
     below = yielded - rut_surface(P)  # depth below the surface the contact begins at
     theta_f = entry_angle(below, P)
     if form is None:
@@ -1041,7 +1068,7 @@ def contact_at(z, z_rate, slip, wheel_angle, P: Params, nodes: tuple[int, int], 
         values = form(theta_f, slip, wheel_angle, P.p)
         out = {k: values[i] for i, k in enumerate(CONTACT_OUTPUTS)}
     if plastic is not None:
-        share = unloading_share(z, yielded, out["mean_pressure"], P)
+        share = unloading_share(z, yielded, out["mean_pressure"], P, smooth)
         out.update({k: share * out[k] for k in SCALED})
         below = ca.if_else(share > 0, below, 0)  # lifted off: no damper
         out["yield_sinkage"] = yielded
@@ -1050,29 +1077,49 @@ def contact_at(z, z_rate, slip, wheel_angle, P: Params, nodes: tuple[int, int], 
     return out
 
 
-def _yield_sinkage(z, plastic, P: Params):
+def _yield_sinkage(z, plastic, P: Params, smooth=None):
     """z_y: the sinkage the soil under the wheel has yielded to, max(z_p, z) with
-    ``model.soil_memory`` = 1; z without memory (or without a plastic sinkage)."""
+    ``model.soil_memory`` = 1 (:func:`soft_max` over ``smooth`` [m] where given); z without
+    memory (or without a plastic sinkage)."""
     if plastic is None:
         return z
-    return ca.if_else(P["model.soil_memory"] == 1, ca.fmax(plastic, z), z)
+    deeper = ca.fmax(plastic, z) if smooth is None else soft_max(plastic, z, smooth)
+    return ca.if_else(P["model.soil_memory"] == 1, deeper, z)
 
 
-def _imprint_decay(yielded, speed, P: Params):
+def _imprint_decay(yielded, speed, P: Params, shortest: float = 1e-300):
     """|V|/l: the rate at which a wheel rolling at ``speed`` replaces the soil under it, l the
     contact length at the yield sinkage (R_c*(sin(theta_f) - sin(theta_r)), the contact
-    forms' own)."""
+    forms' own), at least ``shortest`` [m]."""
     length = _contact_length(entry_angle(yielded - rut_surface(P), P), P)
-    return ca.fabs(speed) / ca.fmax(length, 1e-300)
+    return ca.fabs(speed) / ca.fmax(length, shortest)
 
 
-def plastic_rate(z, z_rate, plastic, speed, P: Params):
+SHORTEST_IMPRINT = 1e-4
+"""m: the smooth yield's shortest contact length in the imprint's decay. The smooth rate
+blends both branches, so the lifted one's |V|/l is evaluated where the wheel is out of the soil
+too (l = 0); floored here it stays finite (the law's own branch is not taken there)."""
+
+
+RATE_WIDTH = 1e-6
+"""m/s: the smooth yield's rounding of max(dz/dt, 0) in the plastic sinkage's rate."""
+
+
+def plastic_rate(z, z_rate, plastic, speed, P: Params, smooth=None):
     """d(z_p)/dt of the wheel's plastic sinkage (model exchange; :func:`plastic_update` is the
     co-simulation step): while the wheel presses the soil (z >= z_p) z_p follows the sinkage
     down, max(dz/dt, 0); lifted (z < z_p) the imprint relaxes toward the wheel as it rolls onto
     the soil ahead, -(|V|/l)*(z_p - z), l the contact length. 0 with ``model.soil_memory`` = 0.
     Where the sinkage rate input is not the exact derivative of the sinkage, z_p can drift
-    below z: the outputs then yield at z (memory lost, never stiffness added)."""
+    below z: the outputs then yield at z (memory lost, never stiffness added). ``smooth``
+    (the smooth yield of :func:`contact_at`): the two branches blended by
+    (1 + tanh((z - z_p)/smooth))/2, max(dz/dt, 0) rounded over RATE_WIDTH."""
+    if smooth is not None:  # the smooth yield: the branches blended over ``smooth`` [m]
+        decay = _imprint_decay(soft_max(plastic, z, smooth), speed, P, SHORTEST_IMPRINT)
+        pressing = (1 + ca.tanh((z - plastic) / smooth)) / 2
+        rate = (pressing * soft_max(z_rate, 0, RATE_WIDTH)
+                - (1 - pressing) * decay * (plastic - z))
+        return ca.if_else(P["model.soil_memory"] == 1, rate, 0)
     decay = _imprint_decay(ca.fmax(plastic, z), speed, P)
     rate = ca.if_else(z >= plastic, ca.fmax(z_rate, 0), -decay * (plastic - z))
     return ca.if_else(P["model.soil_memory"] == 1, rate, 0)

@@ -84,6 +84,25 @@ class ModelFunctions:
     nodes: tuple[int, int]
 
 
+@lru_cache(maxsize=4)
+def contact_memory_smooth(width: float, nodes: tuple[int, int] = DEFAULT_NODES) -> ca.Function:
+    """``contact_memory`` with the smooth yield of width ``width`` [m] (:func:`contact_at`'s
+    ``smooth``, :func:`plastic_rate`'s): the same inputs and outputs, derivatives continuous
+    across z = z_p, for a prediction model that linearises across the yield (the slip NMPC);
+    within ~``width`` of the yield it differs from ``contact_memory``, elsewhere to rounding."""
+    z, z_rate, slip, angle, p = _symbols()
+    P = Params(p)
+    plastic, speed = ca.MX.sym("plastic_sinkage"), ca.MX.sym("carriage_speed")
+    held = contact_at(z, z_rate, slip, angle, P, nodes, ripple=True, plastic=plastic,
+                      smooth=width)
+    held["plastic_rate"] = plastic_rate(z, z_rate, plastic, speed, P, smooth=width)
+    return ca.Function(
+        "contact_memory_smooth", [z, z_rate, slip, angle, plastic, speed, p],
+        [held[k] for k in (*CONTACT_OUTPUTS, *MEMORY_OUTPUTS)],
+        [*CONTACT_INPUTS[:4], "plastic_sinkage", "carriage_speed", "p"],
+        [*CONTACT_OUTPUTS, *MEMORY_OUTPUTS])
+
+
 def _symbols():
     return (ca.MX.sym("sinkage"), ca.MX.sym("sinkage_rate"), ca.MX.sym("slip"),
             ca.MX.sym("wheel_angle"), ca.MX.sym("p", len(NAMES)))
