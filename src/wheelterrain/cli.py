@@ -30,7 +30,14 @@ from wheelterrain.errors import (
     WheelTerrainError,
 )
 from wheelterrain.model import slip as slips
-from wheelterrain.parameters import DEG, ROWS, TABLE, parse_assignments, rover_lookup
+from wheelterrain.parameters import (
+    DEG,
+    ROWS,
+    SLIP_ANGLE_LIMIT,
+    TABLE,
+    parse_assignments,
+    rover_lookup,
+)
 
 EXIT_USAGE, EXIT_INFEASIBLE, EXIT_NUMERICAL = 2, 3, 4
 OUTPUT_ERRORS = {errno.ENOSPC, errno.EPIPE, errno.EIO, getattr(errno, "EDQUOT", errno.ENOSPC)}
@@ -345,10 +352,11 @@ def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definiti
     """
     _check_file_target(json_target)
     ps = _load(preset, assignments)
+    limit = math.degrees(SLIP_ANGLE_LIMIT)
     if slip_angle_deg is not None and not (math.isfinite(slip_angle_deg)
-                                           and abs(slip_angle_deg) <= 80.0):
-        _usage_error(f"--slip-angle {slip_angle_deg:g}: valid range [-80, 80] deg (a wheel "
-                     "moving sideways has no heading to slip along)")
+                                           and abs(slip_angle_deg) <= limit):
+        _usage_error(f"--slip-angle {slip_angle_deg:g}: valid range [-{limit:g}, {limit:g}] deg "
+                     "(a wheel moving sideways has no heading to slip along)")
     beta = None if slip_angle_deg is None else math.radians(slip_angle_deg)
     try:
         result = model.steady_state(ps, load, slip, slip_definition, slip_angle=beta)

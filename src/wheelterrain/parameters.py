@@ -366,6 +366,10 @@ STANDARD_GRAVITY = 9.80665  # m/s2: the rig's load as a mass (rig.mass = load/g)
 NO_RIPPLE = {"ripple.k_g": 0.0, "ripple.k_0": 0.0}
 """The grouser ripple off: the contact's grouser-period mean (the data's means, the steady
 motion a rover limit is predicted from)."""
+SLIP_ANGLE_LIMIT = math.radians(80.0)
+"""rad: the largest |slip angle| the lateral contact takes, in every face (the API, the FMU's
+input, a sweep's axis, a test file's column): tan(beta), the sideways travel per metre
+forward, is 5.7 there; a wheel moving sideways, 90 deg, has no heading to slip along."""
 GRAVITY = {"earth": 9.81, "moon": 1.62}
 """m/s2: the gravities a rover runs in (``wheelterrain rover --gravity``; the rover.gravity
 row's default is the Earth's) and the Earth's of the shipped wheel tests' soil weights."""

@@ -24,9 +24,9 @@ import numpy as np
 
 from wheelterrain.errors import ParameterError, UsageError
 from wheelterrain.fmu.instance import Instance, read_description
-from wheelterrain.fmu.variables import SLIP_ANGLE_LIMIT, TERRAIN_OUTPUTS
+from wheelterrain.fmu.variables import TERRAIN_OUTPUTS
 from wheelterrain.model.slip import DEFAULT_DEFINITION, reference_radius, speeds, to_unified
-from wheelterrain.parameters import BY_NAME, DEG, TABLE
+from wheelterrain.parameters import BY_NAME, DEG, SLIP_ANGLE_LIMIT, TABLE
 
 OUTPUTS = TERRAIN_OUTPUTS  # every output WheelTerrain.fmu computes, one column each
 COLUMNS = {"slip": "slip_traction"}  # the FMU's output 'slip' next to the grid's 'slip' axis

@@ -35,7 +35,7 @@ from pathlib import Path
 
 from wheelterrain import data
 from wheelterrain.errors import DataError, WheelTerrainError
-from wheelterrain.parameters import lookup
+from wheelterrain.parameters import SLIP_ANGLE_LIMIT, lookup
 
 SHIPPED = "wheel_tests.csv"
 WHEEL_COLUMNS = ("wheel.radius", "wheel.width", "grouser.height", "grouser.count")
@@ -258,9 +258,6 @@ def _point(cells: dict[str, str], line: int) -> Point:
                  torque=get("torque", False), sinkage_from=datum, slip_angle=beta,
                  lateral_force=lateral)
 
-
-SLIP_ANGLE_LIMIT = math.radians(80.0)
-"""rad: the largest |slip_angle| a test point may have (the lateral contact's range)."""
 
 
 PULL_BOUND = 3.0

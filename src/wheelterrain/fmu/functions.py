@@ -42,14 +42,13 @@ from wheelterrain.fmu.variables import (
     ROVER_INPUTS,
     ROVER_OUTPUTS,
     SINKAGE_RANGE,
-    SLIP_ANGLE_LIMIT,
     TERRAIN_INPUTS,
     TERRAIN_OUTPUTS,
 )
 from wheelterrain.model import contact, ground, rig, rover, soil, solve
 from wheelterrain.model import functions as model_functions
 from wheelterrain.model.slip import reference_radius
-from wheelterrain.parameters import INDEX, NAMES
+from wheelterrain.parameters import INDEX, NAMES, SLIP_ANGLE_LIMIT
 
 if RIG_INPUTS != rig.INPUTS:  # the FMU's inputs are the rig model's, in the same order
     raise ImportError(f"SingleWheelRig's inputs {RIG_INPUTS} differ from the rig model's "

@@ -17,7 +17,6 @@ only when a whole variable list is asked for.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
@@ -27,6 +26,7 @@ from wheelterrain.parameters import (
     RIG_FMU,
     ROVER_FMU,
     ROWS,
+    SLIP_ANGLE_LIMIT,
     TERRAIN_FMU,
     Parameter,
 )
@@ -109,9 +109,6 @@ _TERRAIN_INPUT_ROWS = [
         start=0.0, min=0.0, max=1.0),
 ]
 _TERRAIN_INPUTS = tuple(v.name for v in _TERRAIN_INPUT_ROWS)
-SLIP_ANGLE_LIMIT = math.radians(80.0)
-"""rad: the largest |slip_angle| WheelTerrain takes (the lateral contact's range,
-wheelterrain.model.api.SLIP_ANGLE_LIMIT)."""
 _SLIP_ANGLE = Var("slip_angle", "input", "Slip angle between the wheel's heading and its "
                   "velocity, positive when the wheel moves toward its left "
                   "(atan(lateral speed / forward speed) of the axle); the slip inputs are then "

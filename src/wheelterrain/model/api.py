@@ -26,7 +26,7 @@ from wheelterrain.model.slip import (
     to_unified,
 )
 from wheelterrain.model.solve import RESIDUAL_TOLERANCE, STEP_TOLERANCE  # noqa: F401 (public)
-from wheelterrain.parameters import ParameterSet
+from wheelterrain.parameters import SLIP_ANGLE_LIMIT, ParameterSet
 
 
 def _params(params: Mapping[str, float] | ParameterSet) -> ParameterSet:
@@ -81,11 +81,6 @@ def capacity(params: Mapping[str, float] | ParameterSet, slip: float,
     ps = _params(params)
     i = to_unified(slip, slip_definition)
     return float(_functions.build().capacity(i, ps.vector()))
-
-
-SLIP_ANGLE_LIMIT = math.radians(80.0)
-"""rad: the largest |slip angle| the lateral contact takes (tan(beta), the sideways travel per
-metre forward, is 5.7 there; a wheel moving sideways, 90 deg, has no heading to slip along)."""
 
 
 def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: float,
