@@ -664,7 +664,7 @@ LATERAL_OUTPUTS = ("lateral_force", "aligning_moment", "lateral_shear_force", "s
 the rim and the side face's bulldozing."""
 
 
-def _lateral_kinematics(slip, slip_angle, P: Params, Rs, Rref):
+def _lateral_kinematics(slip, slip_angle, Rs, Rref):
     """(per radian, per metre): the lateral shear displacement j_y accumulated by a rim element
     per radian of x = theta_f - theta (wheel element) and per metre the wheel travels (soil
     element), times tan(slip angle). The wheel moves sideways by tan(beta) per metre forward.
@@ -727,14 +727,13 @@ def _lateral_arc(theta_f, slip, slip_angle, P: Params, nodes: tuple[int, int]) -
     b = P["wheel.width"]
     c, tan_phi = shear_strength(P)
     arc = _ArcNodes(theta_f, slip, P, nodes, reversal=False)  # j_y keeps its sign
-    per_radian, per_metre = _lateral_kinematics(slip, slip_angle, P, Rs, Rref)
+    per_radian, per_metre = _lateral_kinematics(slip, slip_angle, Rs, Rref)
     kin = P["model.shear_kinematics"]
 
     def j_y(o):
         return (1 - kin) * per_radian * o["x"] + kin * per_metre * Rc * o["sin_drop"]
 
-    length = Rc * (ca.sin(theta_f) - ca.sin(arc.theta_r))
-    K_y = _lateral_modulus(length, P)
+    K_y = _lateral_modulus(_contact_length(theta_f, P), P)
     strength = c + arc.sigma0 * tan_phi  # the rear nodes carry the front nodes' stress
     j_front, j_rear = j_y(arc.front), j_y(arc.rear)
     tau_f = -strength * shear_function(j_front, P, K_y)
@@ -796,17 +795,17 @@ def _lateral_patch(theta_f, slip, slip_angle, P: Params, nodes: tuple[int, int])
     c, tan_phi = shear_strength(P)
     static = _patch_form(theta_f, slip, 0, P, False)
     length, normal = static["contact_length"], static["normal_force_static"]
-    per_radian, per_metre = _lateral_kinematics(slip, slip_angle, P, Rs, Rref)
+    per_radian, per_metre = _lateral_kinematics(slip, slip_angle, Rs, Rref)
     kin = P["model.shear_kinematics"]
     rate = (1 - kin) * per_radian / Rs + kin * per_metre  # j_y per metre of the patch
     K_y = _lateral_modulus(length, P)
     a = rate * length / K_y
     full = c * b * length + normal * tan_phi
-    shear = -full * patch_shear_mean(a, P)
-    theta_r = exit_angle(theta_f, P)
+    mean = patch_shear_mean(a, P)
+    shear = -full * mean
+    theta_r = static["exit_angle"]
     middle = Rc * (ca.sin(theta_f) + ca.sin(theta_r)) / 2  # the patch's middle, ahead of the axle
-    moment = -full * (middle * patch_shear_mean(a, P)
-                      - length * patch_shear_centred_moment(a, P))
+    moment = -full * (middle * mean - length * patch_shear_centred_moment(a, P))
     g, w = _panel_rule(nodes[0])
     trig_f = ca.sin(theta_f), ca.cos(theta_f)
     arc = _offset_trig(*trig_f, (theta_f - theta_r) * g)
@@ -844,20 +843,20 @@ def lateral_switch(nodes: tuple[int, int]) -> tuple[ca.Function, ca.Function]:
 
 @lru_cache(maxsize=4)
 def lateral_export(nodes: tuple[int, int] = DEFAULT_NODES) -> ca.Function:
-    """The quasi-static lateral contact as one plain SX Function of LATERAL_INPUTS (both forms'
-    kernels under a select, zeros at slip angle 0), for code that is not CasADi's (the
-    Modelica library): the same expressions :func:`lateral_at` switches between."""
+    """The quasi-static lateral contact as one plain SX Function of LATERAL_INPUTS, for code
+    that is not CasADi's (the Modelica library): :func:`lateral_switch`' own case and kernels,
+    inlined, the switch a select (both forms evaluated)."""
     z, sl, beta, pp = (ca.SX.sym("sinkage"), ca.SX.sym("slip"), ca.SX.sym("slip_angle"),
                        ca.SX.sym("p", len(NAMES)))
     P = Params(pp)
     theta_f = entry_angle(z - rut_surface(P), P)
-    arc = _lateral_arc(theta_f, sl, beta, P, nodes)
-    patch = _lateral_patch(theta_f, sl, beta, P, nodes)
-    on_patch = P["model.contact_form"] == 1
-    rows = [ca.if_else(beta == 0, 0, ca.if_else(on_patch, patch[k], arc[k]))
-            for k in LATERAL_OUTPUTS]
-    return ca.Function("lateral", [z, sl, beta, pp], [ca.vertcat(*rows)], list(LATERAL_INPUTS),
-                       ["y"], {"cse": True})
+    case, switch = lateral_switch(nodes)
+    which = case(theta_f, beta, pp)
+    arc, patch = (switch.find_function(name)(theta_f, sl, beta, pp)
+                  for name in ("lateral_arc", "lateral_patch"))
+    y = ca.if_else(which == NO_SLIP_ANGLE, 0, ca.if_else(which == LATERAL_PATCH, patch, arc))
+    return ca.Function("lateral", [z, sl, beta, pp], [y], list(LATERAL_INPUTS), ["y"],
+                       {"cse": True})
 
 
 def soft_max(a, b, width):
