@@ -173,15 +173,15 @@ def probe(terrain: Mapping, p: Mapping[str, float], slope: float, slip: float,
     res = simulate(soil, dict(p), PROBE_TIME, step=step, slope=slope, towing=tow, x0=x0,
                    ruts0=ruts.steady_ruts(balance, p, x, soil.map_values()))
     steady = np.array([balance["wheels"][w]["normal_force"] for w in rover.WHEELS])
-    forces = np.array([res.wheels[w]["normal_force"] for w in rover.WHEELS])
+    strayed = np.array([res.wheels[w]["normal_force"] for w in rover.WHEELS]) - steady[:, None]
     if res.left_domain or res.time.size < round(PROBE_TIME / step) - 1:
-        return {"holds": False, "mode": _grown_mode(res.time, forces - steady[:, None])}
-    deviation = np.max(np.abs(forces - steady[:, None]), axis=0)
+        return {"holds": False, "mode": _grown_mode(res.time, strayed)}
+    deviation = np.max(np.abs(strayed), axis=0)
     second = round(1.0 / step)
     slips = np.array([res.wheels[w]["slip"] for w in rover.WHEELS])
     ok = bool(deviation[-second:].max() < deviation[:second].max()
               and slips.max() < STALL_SLIP)
-    return {"holds": ok, "mode": None if ok else _grown_mode(res.time, forces - steady[:, None])}
+    return {"holds": ok, "mode": None if ok else _grown_mode(res.time, strayed)}
 
 
 MODE_CHUNKS = 6

@@ -435,12 +435,13 @@ def judge(form: Form, constants: dict[str, float], discrepancy: Discrepancy, hel
         entry = {"case": pt.case, "load": pt.load, "slip": pt.slip,
                  "measured": {"drawbar_pull": pt.drawbar_pull, "sinkage": pt.sinkage},
                  "sinkage_from": pt.sinkage_from, "scale": _scale(pt)}
-        if math.isfinite(pt.lateral_force):
+        sideways = math.isfinite(pt.lateral_force)  # a side force was measured
+        if sideways:
             entry["measured"]["lateral_force"] = pt.lateral_force
         try:
             state = steady(form, pt, constants)
             out = as_measured(form, pt, constants, state)
-            if math.isfinite(pt.lateral_force):
+            if sideways:
                 out["lateral_force"] = lateral(form, pt, constants, state)
         except WheelTerrainError as err:
             fold.error = f"{pt.case}: {err}"

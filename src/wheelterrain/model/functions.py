@@ -91,13 +91,21 @@ def contact_memory_smooth(width: float, nodes: tuple[int, int] = DEFAULT_NODES) 
     across z = z_p, for a prediction model that linearises across the yield (the slip NMPC);
     within ~``width`` of the yield it differs from ``contact_memory``, elsewhere to rounding."""
     z, z_rate, slip, angle, p = _symbols()
-    P = Params(p)
     plastic, speed = ca.MX.sym("plastic_sinkage"), ca.MX.sym("carriage_speed")
+    return _contact_memory("contact_memory_smooth", z, z_rate, slip, angle, plastic, speed, p,
+                           nodes, width)
+
+
+def _contact_memory(name: str, z, z_rate, slip, angle, plastic, speed, p,
+                    nodes: tuple[int, int], smooth: float | None) -> ca.Function:
+    """The contact with the soil's memory and the plastic sinkage's rate (``smooth``: the
+    smooth yield's width, None for the law) as the Function ``name`` of those symbols."""
+    P = Params(p)
     held = contact_at(z, z_rate, slip, angle, P, nodes, ripple=True, plastic=plastic,
-                      smooth=width)
-    held["plastic_rate"] = plastic_rate(z, z_rate, plastic, speed, P, smooth=width)
+                      smooth=smooth)
+    held["plastic_rate"] = plastic_rate(z, z_rate, plastic, speed, P, smooth=smooth)
     return ca.Function(
-        "contact_memory_smooth", [z, z_rate, slip, angle, plastic, speed, p],
+        name, [z, z_rate, slip, angle, plastic, speed, p],
         [held[k] for k in (*CONTACT_OUTPUTS, *MEMORY_OUTPUTS)],
         [*CONTACT_INPUTS[:4], "plastic_sinkage", "carriage_speed", "p"],
         [*CONTACT_OUTPUTS, *MEMORY_OUTPUTS])
@@ -121,13 +129,8 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
 
     plastic, speed, h = (ca.MX.sym("plastic_sinkage"), ca.MX.sym("carriage_speed"),
                          ca.MX.sym("h"))
-    held = contact_at(z, z_rate, slip, angle, P, nodes, ripple=True, plastic=plastic)
-    held["plastic_rate"] = plastic_rate(z, z_rate, plastic, speed, P)
-    contact_memory = ca.Function(
-        "contact_memory", [z, z_rate, slip, angle, plastic, speed, p],
-        [held[k] for k in (*CONTACT_OUTPUTS, *MEMORY_OUTPUTS)],
-        [*CONTACT_INPUTS[:4], "plastic_sinkage", "carriage_speed", "p"],
-        [*CONTACT_OUTPUTS, *MEMORY_OUTPUTS])
+    contact_memory = _contact_memory("contact_memory", z, z_rate, slip, angle, plastic, speed,
+                                     p, nodes, None)
     plastic_step = ca.Function(
         "plastic_step", [z, plastic, speed, p, h], [plastic_update(z, plastic, speed, P, h)],
         ["sinkage", "plastic_sinkage", "carriage_speed", "p", "h"], ["plastic_sinkage_next"])
