@@ -448,7 +448,7 @@ def multipass(preset: str, assignments: tuple[str, ...], slip_text: str, slip_de
     from the share model.rut_shear of the displacement the pass before left (default 1, all
     of it, as the Soil Contact Model's node keeps it: every later pass pulls more per
     newton); with 0 each pass starts its shear afresh and later passes pull less (their
-    contact from the rut's surface is short). --reference scm adds the independent
+    contact from the rut's surface is short). --scm-reference adds the independent
     reference: SCM's node law on a discretised rim, same wheel and soil (drawn dotted).
     The soil's constants are the virgin soil's in every pass: no cited rule for how a pass
     compacts a soil (density, modulus, strength) is applied. Writes OUT/multipass.png.
@@ -473,15 +473,22 @@ def multipass(preset: str, assignments: tuple[str, ...], slip_text: str, slip_de
                          "passes": rows})
         return runs
 
+    if scm:  # refused before any pass is run
+        for s in slips_given:
+            try:
+                sigma = slips.to_unified(s, slip_definition)
+            except WheelTerrainError as err:
+                _fail(err)
+            if not 0 <= sigma < 1:
+                _usage_error(f"--scm-reference takes driving slips (0 <= i < 1); slip {s:g} "
+                             f"is {sigma:g} in the model's definition")
+
     def scm_reference() -> list[dict]:
         from wheelterrain.fit import scm_reference as scm_law
 
         out = []
         for s in slips_given:
             sigma = slips.to_unified(s, slip_definition)
-            if not 0 <= sigma < 1:
-                _usage_error(f"--scm-reference takes driving slips (0 <= i < 1); slip {s:g} "
-                             f"is {sigma:g} in the model's definition")
             try:
                 rows = scm_law.passes(ps, load, sigma, passes)
             except ValueError as err:
