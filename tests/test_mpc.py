@@ -183,7 +183,8 @@ def test_predicting_with_the_soils_memory_meets_the_nominal_goal(solver):
     """Settings.memory: the plant's plastic sinkage a state of the prediction (the yield
     smoothed over YIELD_WIDTH) foresees the ratchet: on the default soil, which remembers, the
     nominal slip error after the transients falls to 4.1e-4 RMS (measured 2026-11-28, both
-    solvers; 6.3e-3 without), under the goal 5e-4, every solve succeeding."""
+    solvers; 6.3e-3 without), under the goal 5e-4, every solve succeeding. In-sample: the
+    smoothing width (mpc.YIELD_WIDTH) was chosen on this scenario."""
     scenario = closed_loop.SCENARIOS["nominal"]
     ps = presets.load(presets.DEFAULT_PRESET)
     result = closed_loop.run(scenario, ps, "casadi", mpc.Settings(solver=solver, memory=True))

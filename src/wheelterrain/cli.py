@@ -1038,8 +1038,9 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
 @click.option("--memory", is_flag=True,
               help="Predict with the soil's memory: the plant's plastic sinkage a state of "
                    "the prediction, the yield smoothed over 0.01 mm (nominal slip RMS 4.1e-4 "
-                   "on the memory plant, against 6.3e-3 without). Not yet for free-carriage "
-                   "and efficiency (docs/mpc.md).")
+                   "on the memory plant, against 6.3e-3 without; in-sample: the smoothing "
+                   "width was chosen on that scenario). Not yet for free-carriage and "
+                   "efficiency (docs/mpc.md).")
 @click.option("--horizon", default=30, show_default=True, type=click.IntRange(1, 500),
               help="Prediction intervals.")
 @click.option("--interval", default=0.02, show_default=True, type=click.FloatRange(1e-3, 1.0),
@@ -1071,7 +1072,7 @@ def mpc(scenario: str, plant: str, preset: str, assignments: tuple[str, ...], so
     The prediction is the soil without memory (smooth, for the optimiser) unless --memory.
     The plant's soil is the preset's: with model.soil_memory = 1 (the default) the grouser
     ripple digs the wheel in, a disturbance the memory-less prediction does not model
-    (nominal slip RMS 6.3e-3; 4.1e-4 with --memory; 5.2e-5 on the elastic soil,
+    (nominal slip RMS 6.3e-3; 4.1e-4 with --memory, in-sample; 5.2e-5 on the elastic soil,
     --set model.soil_memory=0; docs/mpc.md).
     """
     from pathlib import Path
