@@ -942,9 +942,11 @@ def static_bound(theta_f: ca.SX, slip: ca.SX, P: Params) -> ca.SX:
     k_eq = modulus * (Rc / b) ** n
     half = ca.sin(theta_f / 2)
     sigma_max = k_eq * ca.exp(n * ca.log(2 * half**2))  # k_eq*(1 - cos(theta_f))**n
-    ground = rut(slip, P)  # in a rut: the law at the deepest point (the elastic part is less)
-    sigma_max = ca.if_else(ground.on, ground.law(ground.surface + 2 * Rc * half**2),
-                           sigma_max)
+    # in a rut: the rut's pressure at the deepest point (it rises with depth on both its
+    # branches; the law there is not a bound: where the elastic layer is not thin against the
+    # rut, the elastic line law(yield_depth)*d/layer rises above the law at the same depth)
+    ground = rut(slip, P)
+    sigma_max = ca.if_else(ground.on, ground.pressure(2 * Rc * half**2), sigma_max)
     theta_r = exit_angle(theta_f, P)
     ratio = _max_stress_ratio(slip, P)
     theta_m = ratio * theta_f
