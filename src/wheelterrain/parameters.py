@@ -297,6 +297,21 @@ TABLE: tuple[Parameter, ...] = (
        "displacement). Multi-pass traction rising in a rut: Holm 1969",
        plausible=(0.0, 1.0, "unmeasured: 0 (reloaded soil shears afresh) to 1 (SCM's node "
                   "keeps all of it); the rover's limit_band spans both ends")),
+    _P("model.imprint_relaxation", "1", 0, 0, 1,
+       "What the imprint under a rolling wheel lifted from where it yielded relaxes toward, "
+       "at the rate |V|/l it rolls onto soil it has not pressed (model.soil_memory = 1): "
+       "0 = toward the wheel (the imprint follows the wheel up only by its elastic rebound per "
+       "contact length: a wheel whose load falls closes 12 % of the step in five contact "
+       "lengths); 1 = toward the sinkage z_t at which the soil ahead carries the force the "
+       "wheel carries now (Bekker's rigid wheel, F ~ (z - s)**((2n+1)/2) from the surface s "
+       "it meets: a load step settles within a few contact lengths, 62 % of it in one). 1 is "
+       "the physical law and not yet the default: with it the rover's rear wheels, meeting "
+       "the front wheels' ruts a wheelbase later, close a loop that grows on the Moon's climb "
+       "from 20.5 deg (docs/model.md, Known limits).",
+       "Wong, Theory of Ground Vehicles, 4th ed., sec. 2.4.2 (rigid wheel: W from the "
+       "pressure-sinkage law, z**((2n+1)/2)); Krenn & Hirzinger 2009 (SCM: a node meeting the "
+       "wheel for the first time yields along the pressure-sinkage law)", kind="enum",
+       choices=MappingProxyType({0: "toward the wheel", 1: "toward the soil ahead"})),
     # --- lateral mechanics (a wheel at a slip angle: docs/model.md, "Lateral mechanics") -------
     _P("model.lateral_shear_ratio", "1", 1.0, 0.05, 5.0,
        "Lateral shear deformation modulus K_y as a share of the soil's K: the lateral shear "

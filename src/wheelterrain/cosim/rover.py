@@ -135,7 +135,8 @@ def _system_step() -> ca.Function:
     nxt, _ = rover.step(tuple(xs), u, p, h)
     new_angles = [angles[k] + h * s[f"{w}.wheel_speed"] for k, w in enumerate(rover.WHEELS)]
     fns = model_functions.build()
-    new_plastics = [fns.plastic_step(z, plastics[k], out["axle_speed"], soils[:, k], h)
+    new_plastics = [fns.plastic_step(z, plastics[k], out["axle_speed"], out["mean_pressure"],
+                                     out["sinkage_exponent"], soils[:, k], h)
                     for k, (_, z, out) in enumerate(wheels)]
     s["effective_slope"], s["effective_towing_force"] = rover.effective_inputs(xs, u, p)
     record = [v for wheel in rec for v in wheel] + [s[n] for n in CHASSIS_RECORD]

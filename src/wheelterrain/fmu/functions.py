@@ -217,8 +217,18 @@ def terrain_functions(smooth: float | None = None
                           [y, status, info, out["plastic_rate"]],
                           ["u", "angle", "plastic", "p"], ["y", "status", "info", "plastic_rate"])
     h = ca.MX.sym("h")
+    # the imprint relaxing toward the soil ahead needs the contact's mean pressure and exponent
+    # at the step's start (the static mean pressure does not depend on the wheel angle: the
+    # grouser ripple acts on the forces, not on it, so the contact at angle 0 gives it); toward
+    # the wheel it needs neither, and the contact is not evaluated (a short-circuit switch)
+    still = dict(zip((*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS),
+                     held(sinkage, rate, safe_slip, 0, plastic, speed, p), strict=True))
+    toward_soil = fns.plastic_step(sinkage, plastic, speed, still["mean_pressure"],
+                                   still["sinkage_exponent"], p, h)
+    toward_wheel = fns.plastic_step(sinkage, plastic, speed, 1, 0, p, h)
+    relaxation = p[INDEX["model.imprint_relaxation"]]
     memory = ca.Function("terrain_memory", [u, plastic, given, h],
-                         [fns.plastic_step(sinkage, plastic, speed, p, h)],
+                         [ca.if_else(relaxation == 1, toward_soil, toward_wheel, True)],
                          ["u", "plastic", "p", "h"], ["plastic_next"])
 
     guess = ca.MX.sym("guess")

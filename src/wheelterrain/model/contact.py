@@ -1073,6 +1073,7 @@ def contact_at(z, z_rate, slip, wheel_angle, P: Params, nodes: tuple[int, int], 
         out.update({k: share * out[k] for k in SCALED})
         below = ca.if_else(share > 0, below, 0)  # lifted off: no damper
         out["yield_sinkage"] = yielded
+        out["imprint_target"] = imprint_target(z, yielded, share, out["sinkage_exponent"], P)
     damping = ca.if_else(below > 0, P["soil.damping"] * z_rate, 0)
     out["normal_force"] = ca.fmax(out["normal_force"] + damping, 0)
     return out
@@ -1106,37 +1107,57 @@ RATE_WIDTH = 1e-6
 """m/s: the smooth yield's rounding of max(dz/dt, 0) in the plastic sinkage's rate."""
 
 
-def plastic_rate(z, z_rate, plastic, speed, P: Params, smooth=None):
+def imprint_target(z, yielded, share, exponent, P: Params):
+    """z_t [m]: what the imprint under a rolling wheel lifted from where it yielded relaxes
+    toward (``model.imprint_relaxation``). 0: the wheel's sinkage ``z``. 1: the sinkage at which
+    the soil ahead of the wheel, not pressed yet, carries the force the wheel carries now,
+    ``share`` (:func:`unloading_share`) of the contact's at the yield sinkage ``yielded``: a
+    rigid wheel's normal force grows with its sinkage below the surface it meets, s (a rut's,
+    or 0), as (z - s)**((2*n + 1)/2) (Bekker's rigid-wheel integral of p = k*z**n, Wong, Theory
+    of Ground Vehicles, 4th ed., sec. 2.4.2; n the contact's ``sinkage_exponent``), so z_t =
+    s + (z_y - s)*share**(2/(2*n + 1)): z_y where the wheel presses (share 1), the surface
+    where it is lifted off (share 0)."""
+    surface = rut_surface(P)
+    power = 2 / (2 * exponent + 1)
+    kept = ca.if_else(share > 0, ca.exp(power * ca.log(ca.fmax(share, 1e-300))), 0)
+    fresh = surface + (yielded - surface) * kept
+    return ca.if_else(P["model.imprint_relaxation"] == 1, fresh, z)
+
+
+def plastic_rate(z, z_rate, plastic, speed, P: Params, target, smooth=None):
     """d(z_p)/dt of the wheel's plastic sinkage (model exchange; :func:`plastic_update` is the
     co-simulation step): while the wheel presses the soil (z >= z_p) z_p follows the sinkage
-    down, max(dz/dt, 0); lifted (z < z_p) the imprint relaxes toward the wheel as it rolls onto
-    the soil ahead, -(|V|/l)*(z_p - z), l the contact length. 0 with ``model.soil_memory`` = 0.
+    down, max(dz/dt, 0); lifted (z < z_p) the wheel rolls onto soil it has not pressed and the
+    imprint under it relaxes, -(|V|/l)*(z_p - z_t), l the contact length, z_t (``target``,
+    :func:`imprint_target`) the wheel's sinkage or the sinkage at which the soil ahead carries
+    the wheel's present force (``model.imprint_relaxation``). 0 with ``model.soil_memory`` = 0.
     Where the sinkage rate input is not the exact derivative of the sinkage, z_p can drift
-    below z: the outputs then yield at z (memory lost, never stiffness added). ``smooth``
-    (the smooth yield of :func:`contact_at`): the two branches blended by
-    (1 + tanh((z - z_p)/smooth))/2, max(dz/dt, 0) rounded over RATE_WIDTH."""
+    below z: the outputs then yield at z (memory lost, never stiffness added). ``smooth`` (the
+    smooth yield of :func:`contact_at`): the two branches blended by (1 + tanh((z -
+    z_p)/smooth))/2, max(dz/dt, 0) rounded over RATE_WIDTH."""
     if smooth is not None:  # the smooth yield: the branches blended over ``smooth`` [m]
         decay = _imprint_decay(soft_max(plastic, z, smooth), speed, P, SHORTEST_IMPRINT)
         pressing = (1 + ca.tanh((z - plastic) / smooth)) / 2
         rate = (pressing * soft_max(z_rate, 0, RATE_WIDTH)
-                - (1 - pressing) * decay * (plastic - z))
+                - (1 - pressing) * decay * (plastic - target))
         return ca.if_else(P["model.soil_memory"] == 1, rate, 0)
     decay = _imprint_decay(ca.fmax(plastic, z), speed, P)
-    rate = ca.if_else(z >= plastic, ca.fmax(z_rate, 0), -decay * (plastic - z))
+    rate = ca.if_else(z >= plastic, ca.fmax(z_rate, 0), -decay * (plastic - target))
     return ca.if_else(P["model.soil_memory"] == 1, rate, 0)
 
 
-def plastic_update(z, plastic, speed, P: Params, h):
+def plastic_update(z, plastic, speed, P: Params, h, target):
     """The wheel's plastic sinkage z_p after a co-simulation step of ``h`` s with the sinkage
-    ``z`` and carriage speed ``speed`` held: the wheel yields the
-    soil at once to z_y = max(z_p, z) (the step's start), and the imprint under it is replaced
-    by the soil ahead as the wheel rolls, z_p -> z + (z_y - z)*exp(-|V|*h/l), l the contact
-    length at z_y: after one contact length of travel the wheel stands on soil it has not
-    pressed. The rut of earlier passes is
-    the ground's (``soil.rut_depth``), not this state's. ``plastic`` unchanged with
-    ``model.soil_memory`` = 0."""
+    ``z`` and carriage speed ``speed`` held: the wheel yields the soil at once to z_y = max(z_p,
+    z) (the step's start), and the imprint under it is replaced by the soil ahead as the wheel
+    rolls, z_p -> z_t + (z_y - z_t)*exp(-|V|*h/l), l the contact length at z_y, z_t
+    (``target``, :func:`imprint_target` at the step's start) the wheel's sinkage or the sinkage
+    at which the soil ahead carries the wheel's present force (``model.imprint_relaxation``).
+    The rut of earlier passes is the ground's
+    (``soil.rut_depth``), not this state's. ``plastic`` unchanged with ``model.soil_memory`` =
+    0."""
     yielded = ca.fmax(plastic, z)
-    relaxed = z + (yielded - z) * ca.exp(-_imprint_decay(yielded, speed, P) * h)
+    relaxed = target + (yielded - target) * ca.exp(-_imprint_decay(yielded, speed, P) * h)
     return ca.if_else(P["model.soil_memory"] == 1, relaxed, plastic)
 
 
@@ -1155,7 +1176,8 @@ def _form_kernels(names: list[str], sym: list, z, z_rate, slip, angle, plastic, 
         kernel = switch.find_function(name + ("" if ripple else "_static"))
         out = contact_at(z, z_rate, slip, angle, P, nodes, ripple, form=kernel, plastic=plastic)
         if plastic is not None:
-            out["plastic_rate"] = plastic_rate(z, z_rate, plastic, speed, P)
+            out["plastic_rate"] = plastic_rate(z, z_rate, plastic, speed, P,
+                                               out["imprint_target"])
         forms.append(ca.Function(f"contact_{name}", sym, [ca.vertcat(*(out[k] for k in rows))],
                                  names, ["out"], {"cse": True}))
     return case_fn, tuple(forms)

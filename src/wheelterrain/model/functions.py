@@ -23,9 +23,11 @@ from wheelterrain.model.contact import (
     LATERAL_OUTPUTS,
     MEMORY_OUTPUTS,
     contact_at,
+    imprint_target,
     lateral_at,
     plastic_rate,
     plastic_update,
+    unloading_share,
 )
 from wheelterrain.model.soil import Params
 from wheelterrain.model.solve import STEADY_INPUTS, STEADY_OUTPUTS
@@ -41,8 +43,10 @@ class ModelFunctions:
       carriage_speed, p)`` -> CONTACT_OUTPUTS and MEMORY_OUTPUTS: the same with the wheel's
       plastic sinkage (the elastic-plastic soil of :func:`_contact`); ``contact`` exactly where
       sinkage >= plastic_sinkage.
-    - ``plastic_step(sinkage, plastic_sinkage, carriage_speed, p, h)`` ->
-      ``plastic_sinkage_next`` after a co-simulation step (:func:`plastic_update`).
+    - ``plastic_step(sinkage, plastic_sinkage, carriage_speed, mean_pressure,
+      sinkage_exponent, p, h)`` -> ``plastic_sinkage_next`` after a co-simulation step
+      (:func:`plastic_update`; ``mean_pressure`` and ``sinkage_exponent``: ``contact_memory``'s
+      outputs at the step's start).
     - ``contact_jacobian`` -> ``d_state`` (3x3: normal_force, drawbar_pull, torque by sinkage,
       sinkage_rate, slip) and ``d_params`` (3 x len(p)).
     - ``sinkage_solve(load, slip, p)`` -> ``sinkage``, ``residual`` (relative), ``last_step``
@@ -103,7 +107,8 @@ def _contact_memory(name: str, z, z_rate, slip, angle, plastic, speed, p,
     P = Params(p)
     held = contact_at(z, z_rate, slip, angle, P, nodes, ripple=True, plastic=plastic,
                       smooth=smooth)
-    held["plastic_rate"] = plastic_rate(z, z_rate, plastic, speed, P, smooth=smooth)
+    held["plastic_rate"] = plastic_rate(z, z_rate, plastic, speed, P, held["imprint_target"],
+                                        smooth=smooth)
     return ca.Function(
         name, [z, z_rate, slip, angle, plastic, speed, p],
         [held[k] for k in (*CONTACT_OUTPUTS, *MEMORY_OUTPUTS)],
@@ -131,9 +136,14 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
                          ca.MX.sym("h"))
     contact_memory = _contact_memory("contact_memory", z, z_rate, slip, angle, plastic, speed,
                                      p, nodes, None)
+    pressure, exponent = ca.MX.sym("mean_pressure"), ca.MX.sym("sinkage_exponent")
+    yielded = ca.fmax(plastic, z)
+    target = imprint_target(z, yielded, unloading_share(z, yielded, pressure, P), exponent, P)
     plastic_step = ca.Function(
-        "plastic_step", [z, plastic, speed, p, h], [plastic_update(z, plastic, speed, P, h)],
-        ["sinkage", "plastic_sinkage", "carriage_speed", "p", "h"], ["plastic_sinkage_next"])
+        "plastic_step", [z, plastic, speed, pressure, exponent, p, h],
+        [plastic_update(z, plastic, speed, P, h, target)],
+        ["sinkage", "plastic_sinkage", "carriage_speed", "mean_pressure", "sinkage_exponent",
+         "p", "h"], ["plastic_sinkage_next"])
 
     forces = ca.vertcat(*(out[k] for k in FORCES))
     contact_jacobian = ca.Function(
