@@ -9,6 +9,8 @@ from __future__ import annotations
 import math
 import os
 import shutil
+import tarfile
+import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
@@ -18,7 +20,44 @@ from wheelterrain import compiled as native
 from wheelterrain import files, presets
 from wheelterrain.fmu import build_native as nativebuild
 from wheelterrain.fmu import build_pythonfmu as fmubuild
+from wheelterrain.modelica import reference
 from wheelterrain.parameters import ParameterSet
+
+MODELICA_ARCHIVE = Path(os.environ.get(
+    "WHEELTERRAIN_MODELICA_ARCHIVE",
+    Path(__file__).resolve().parents[2] / "shared" / "modelica" / "modelica-libraries.tar.gz"))
+"""The Modelica Standard Library 4.1.0 and PlanarMechanics 1.6.0 sources (BSD 3-Clause) beside
+the repository, as the project's shared folder holds them (its README.txt), or where
+$WHEELTERRAIN_MODELICA_ARCHIVE says: the MSL checks of tests/test_modelica.py unpack it when
+MODELICAPATH has no MSL 4.x, so that they run in CI and not only where someone set it up."""
+
+
+def _unpacked_modelica(archive: Path) -> Path:
+    """The folder ``archive`` unpacks to (its modelica-libraries/), unpacked once per archive
+    (its size and time in the folder's name) under the system's temporary folder, under a lock
+    (xdist's workers configure at once) and marked done only when whole."""
+    stat = archive.stat()
+    name = f"wheelterrain-modelica-{stat.st_size}-{stat.st_mtime_ns}"
+    folder = Path(tempfile.gettempdir()) / name
+    with files.locked(folder.with_suffix(".lock")):
+        if not (folder / ".unpacked").exists():
+            shutil.rmtree(folder, ignore_errors=True)
+            with tarfile.open(archive) as tar:
+                if hasattr(tarfile, "data_filter"):  # Python >= 3.11.4: refuse unsafe members
+                    tar.extractall(folder, filter="data")
+                else:  # pragma: no cover
+                    tar.extractall(folder)  # the project's own shared archive
+            (folder / ".unpacked").touch()
+    return folder / "modelica-libraries"
+
+
+def pytest_configure(config):
+    """MSL on MODELICAPATH for the MSL checks: the shared archive unpacked where it is at hand
+    and MODELICAPATH holds no MSL 4.x (a MODELICAPATH that does is used as it is)."""
+    if reference.find_msl() is None and MODELICA_ARCHIVE.is_file():
+        libraries = _unpacked_modelica(MODELICA_ARCHIVE)
+        os.environ["MODELICAPATH"] = os.pathsep.join(
+            p for p in (str(libraries), os.environ.get("MODELICAPATH", "")) if p)
 
 
 @pytest.fixture(scope="session")

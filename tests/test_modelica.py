@@ -500,11 +500,13 @@ def test_every_quantity_of_the_records_is_an_msl_si_type():
 def test_the_rig_on_msl_components_follows_the_python_models_trajectory(built, msl_root):
     """Rig (Components.Contact on MSL flanges, an MSL speed loop, carriage and mass) against
     the Python model's continuous-time rig (Resources/Reference/Rig<case>.csv) over the first
-    second of each case: 1e-8 relative (rumoca at 1e-10)."""
+    second of each case: 1e-8 relative (rumoca at 1e-12: at 1e-10 its step across the plastic
+    sinkage's yield, where the wheel first presses the soil, leaves 1.3e-8 of the plastic
+    sinkage at C1)."""
     model = _load_example([msl_root], "Rig")
     structure = model.structure()
     assert structure.is_balanced
-    config = rumoca.SimConfig(solver="rk-like", rtol=1e-10, atol=1e-12)
+    config = rumoca.SimConfig(solver="rk-like", rtol=1e-12, atol=1e-14)
     for case, slip_paper in reference.RIG_CASES.items():
         result = model.simulate((0.0, 1.0), dt=reference.RIG_INTERVAL,
                                 params={"slip_paper": slip_paper}, config=config)
