@@ -256,7 +256,31 @@ def test_a_sweep_over_the_slip_angle_gives_the_core_models_side_force(fmu, tmp_p
             want["aligning_moment"], rel=1e-9, abs=1e-12)
     assert float(rows[0]["lateral_force [N]"]) == 0.0
     assert float(rows[-1]["slip_angle [rad]"]) == pytest.approx(math.radians(30.0))
+    assert out.with_suffix(".png").is_file()
     bad = CliRunner().invoke(main, ["sweep", "--fmu", str(fmu), "--slip", "0.2",
                                     "--slip-angle", "85", "--out", str(tmp_path / "b.csv")])
     assert bad.exit_code == 2
     assert "slip_angle" in bad.output
+
+
+def test_the_plot_of_a_slip_angle_sweep_draws_the_side_force_against_the_angle_in_degrees(
+        tmp_path, monkeypatch):
+    """With a slip-angle axis the sweep's plot is the lateral force, the aligning moment and
+    the pull against the slip angle, in degrees, one line per slip."""
+    from wheelterrain import plots
+
+    drawn = {}
+    monkeypatch.setattr(plots, "_save", lambda fig, path: drawn.update(fig=fig, path=path))
+    rows = [{"slip": s, "slip_angle": math.radians(b), "lateral_force": -s - b,
+             "aligning_moment": 0.01 * b, "drawbar_pull": 3.0 * s, "contact_sinkage": 0.01}
+            for s in (0.0, 0.5) for b in (0.0, 10.0, 20.0)]
+    plots.sweep_curves(rows, "slip_angle", ["slip"], tmp_path / "x.png", "t")
+    axes = drawn["fig"].axes
+    assert [ax.get_ylabel().split(" [")[0] for ax in axes] == [
+        "lateral force", "aligning moment", "drawbar pull"]
+    assert all(ax.get_xlabel() == "slip angle [deg]" for ax in axes)
+    lines = axes[0].get_lines()
+    assert len(lines) == 2
+    assert list(lines[1].get_xdata()) == pytest.approx([0.0, 10.0, 20.0], rel=1e-12)
+    assert list(lines[1].get_ydata()) == [-0.5, -10.5, -20.5]
+    assert lines[1].get_label() == "slip = 0.5"

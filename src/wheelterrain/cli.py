@@ -952,7 +952,8 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
       wheelterrain sweep --slip 0.2 --slip-angle 0:30:7        # the side force
       wheelterrain sweep --dask tcp://scheduler:8786 --slip 0:0.9:50 --load 10:100:50
     Writes one CSV row per point (the axes, the outputs, status ok|infeasible) and a plot of
-    drawbar pull and sinkage against slip (or the first axis), one line per other point.
+    drawbar pull and sinkage against slip (or the longest axis), one line per other point;
+    with more than one slip angle, the lateral force, aligning moment and pull against it.
     """
     from pathlib import Path
 
@@ -1003,7 +1004,10 @@ def sweep(preset: str, assignments: tuple[str, ...], fmu: str, slip: str, slip_d
         _fail(err)
     sweeper.write_csv(csv_path, rows)
     bad = sum(r["status"] != "ok" for r in rows)
-    x = "slip" if len(axes["slip"]) > 1 else max(axes, key=lambda k: len(axes[k]))
+    if len(axes.get("slip_angle", ())) > 1:  # the side force against the slip angle
+        x = "slip_angle"
+    else:
+        x = "slip" if len(axes["slip"]) > 1 else max(axes, key=lambda k: len(axes[k]))
     group = [k for k in axes if k != x and len(axes[k]) > 1]
     png = csv_path.with_suffix(".png")
     plots.sweep_curves(rows, x, group, png, f"WheelTerrain.fmu sweep, preset {preset} "

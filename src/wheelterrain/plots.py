@@ -3,6 +3,7 @@ means against Table III. matplotlib with the Agg backend (no display needed)."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import matplotlib
@@ -92,25 +93,38 @@ def means_bar_chart(rows: list[dict], path: Path, preset: str,
     _save(fig, path)
 
 
+SWEEP_PANELS = {
+    "default": (("drawbar_pull", "drawbar pull [N]", 1.0),
+                ("contact_sinkage", "sinkage [mm]", 1e3)),
+    "slip_angle": (("lateral_force", "lateral force [N] (to the wheel's left)", 1.0),
+                   ("aligning_moment", "aligning moment [N·m] (counter-clockwise from above)",
+                    1.0),
+                   ("drawbar_pull", "drawbar pull [N]", 1.0)),
+}
+"""What :func:`sweep_curves` draws: drawbar pull and sinkage; against the slip angle, the side
+force, the aligning moment and the pull (output, axis label, scale)."""
+
+
 def sweep_curves(rows: list[dict], x: str, group: list[str], path: Path, title: str) -> None:
-    """Drawbar pull and sinkage against ``x``, one line per combination of the ``group`` axes
-    (infeasible points are gaps)."""
+    """The sweep's outputs against ``x`` (:data:`SWEEP_PANELS`; a slip angle drawn in degrees),
+    one line per combination of the ``group`` axes (infeasible points are gaps)."""
     from wheelterrain.fmu.variables import units as variable_units
 
     units = {**variable_units(), "slip": "1"}  # the sweep's axes: slip, load, table names
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    panels = SWEEP_PANELS.get(x, SWEEP_PANELS["default"])
+    degrees = x == "slip_angle"
+    fig, axes = plt.subplots(1, len(panels), figsize=(6 * len(panels), 4.5))
     keys = sorted({tuple(r[g] for g in group) for r in rows})
     for key in keys:
         sel = [r for r in rows if tuple(r[g] for g in group) == key]
         sel.sort(key=lambda r: r[x])
-        xs = [r[x] for r in sel]
-        label = ", ".join(f"{g} = {v:.4g} {units.get(g, '')}".rstrip()
+        xs = [math.degrees(r[x]) if degrees else r[x] for r in sel]
+        label = ", ".join(f"{g} = {v:.4g} {units.get(g, '').replace('1', '')}".rstrip()
                           for g, v in zip(group, key, strict=True)) or None
-        axes[0].plot(xs, [r["drawbar_pull"] for r in sel], marker="o", ms=3, label=label)
-        axes[1].plot(xs, [1e3 * r["contact_sinkage"] for r in sel], marker="o", ms=3,
-                     label=label)
-    for ax, label in zip(axes, ("drawbar pull [N]", "sinkage [mm]"), strict=True):
-        ax.set_xlabel(f"{x} [{units.get(x, '1')}]")
+        for ax, (name, _, scale) in zip(axes, panels, strict=True):
+            ax.plot(xs, [scale * r[name] for r in sel], marker="o", ms=3, label=label)
+    for ax, (_, label, _) in zip(axes, panels, strict=True):
+        ax.set_xlabel("slip angle [deg]" if degrees else f"{x} [{units.get(x, '1')}]")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
     if group:
