@@ -19,13 +19,16 @@ inputs are converted to CasADi matrices once, and that conversion is reported on
 force_eval_how and solve_how; the solve cold, at unrelated random points), solve_sweep_s (a
 load x slip sweep through model.steady_map, warm-started from neighbouring points),
 force_eval_reference_s, solve_reference_s (the scipy reference solves cold), their ratios, the
-CasADi-C and VM figures and input_conversion_s.
+CasADi-C and VM figures and input_conversion_s; lateral_eval_s, lateral_eval_reference_s and
+lateral_eval_speedup: the side force and aligning moment of a wheel at a slip angle (5-30 deg),
+against the scipy quadrature of Ishigami et al.'s integrals in the same reference.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import shutil
 import statistics
 import subprocess
@@ -100,6 +103,8 @@ def main(argv: list[str] | None = None) -> None:
     conversion = median_time(lambda: [ca.DM(x) for x in (z, zeros, slip, zeros, P)],
                              args.repeats) / n
     contact_in = [ca.DM(x) for x in (z, zeros, slip, zeros, P)]
+    beta = np.radians(rng.uniform(5.0, 30.0, n))  # the side force, at slip angles
+    lateral_in = [ca.DM(x) for x in (z, slip, beta, P)]
     solve_in = [ca.DM(x) for x in (load, slip, P)]
     figures = {"points": n, "repeats": args.repeats, "input_conversion_s": conversion}
 
@@ -113,6 +118,10 @@ def main(argv: list[str] | None = None) -> None:
         "(not in the figures below)")
 
     contact_map = fns.contact.map(n)
+    lateral_map = fns.lateral.map(n)
+    t_lateral_vm = median_time(lambda: lateral_map(*lateral_in), args.repeats) / n
+    figures["lateral_eval_vm_s"] = t_lateral_vm
+    say(f"  side force, Function.map (CasADi VM)   : {t_lateral_vm * 1e6:9.3f} us/pt")
     solve_map = fns.sinkage_solve.map(n)
     t_map = median_time(lambda: contact_map(*contact_in), args.repeats) / n
     # the VM's solve is the slow one (~1.5 ms/pt): --quick measures it on 2000 points
@@ -185,8 +194,22 @@ def main(argv: list[str] | None = None) -> None:
         say(f"  one Fz_static value, lane-parallel C   : {t_value * 1e6:9.3f} us/pt; a cold "
             f"solve costs {tl_solve / t_value:.1f} of them (the full {scan}-point scan alone "
             f"was {scan})")
+        with tempfile.TemporaryDirectory() as tmp:
+            c_lateral = compile_external(lateral_map, Path(tmp))
+            tc_lateral = median_time(lambda: c_lateral(*lateral_in), args.repeats) / n
+        lane_lateral = lanes.compiled_lateral()
+        tl_lateral = median_time(lambda: lane_lateral(z, slip, beta, P), args.repeats) / n
+        lateral_check = np.max(np.abs(lane_lateral(z, slip, beta, P)
+                                      - np.array(lateral_map(*lateral_in)).reshape(-1, n)))
+        figures.update(lateral_eval_s=tl_lateral, lateral_eval_how="lane-parallel C",
+                       lateral_eval_casadi_c_s=tc_lateral)
+        say(f"  side force, mapped + compiled C        : {tc_lateral * 1e6:9.3f} us/pt "
+            f"= {1 / tc_lateral:10.3g} /s   (slip angles 5-30 deg)")
+        say(f"  side force, lane-parallel C            : {tl_lateral * 1e6:9.3f} us/pt "
+            f"= {1 / tl_lateral:10.3g} /s   (max |F_y - F_y(VM)| = {lateral_check:.1e} N)")
     else:  # the figures of record are the compiled ones; without a compiler, the VM's
-        figures.update(force_eval_s=t_map, solve_s=t_solve)
+        figures.update(force_eval_s=t_map, solve_s=t_solve, lateral_eval_s=t_lateral_vm,
+                       lateral_eval_how="Function.map (CasADi VM)")
     figures["compiled"] = not args.no_compile
 
     sys.path.insert(0, str(ROOT / "tests"))  # the reference lives with the tests it serves
@@ -196,6 +219,12 @@ def main(argv: list[str] | None = None) -> None:
                     gamma=15620, K=0.036)
     t_ref = median_time(lambda: ref.forces(0.03, 0.2), args.repeats)
     t_ref_solve = median_time(lambda: ref.sinkage(62.0, 0.2), args.repeats)
+    t_ref_lateral = median_time(lambda: ref.lateral(0.03, 0.2, math.radians(15.0), K_y=0.036),
+                                args.repeats)
+    figures.update(lateral_eval_reference_s=t_ref_lateral,
+                   lateral_eval_speedup=t_ref_lateral / figures["lateral_eval_s"])
+    say(f"  baseline: scipy-quad reference, side   : {t_ref_lateral * 1e6:9.1f} us "
+        f"({figures['lateral_eval_how']} {figures['lateral_eval_speedup']:7.0f}x faster)")
     figures.update(force_eval_reference_s=t_ref, solve_reference_s=t_ref_solve,
                    force_eval_speedup=t_ref / figures["force_eval_s"],
                    solve_speedup=t_ref_solve / figures["solve_s"])

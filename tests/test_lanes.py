@@ -453,3 +453,24 @@ def test_many_point_inputs_of_other_lengths_or_shapes_are_refused_by_name(table2
         model_api.steady_map(table2, [[10.0, 20.0]], [0.1])
     with pytest.raises(InputError, match="not a number"):
         model_api.steady_states(table2, "heavy", 0.2)
+
+
+@pytest.mark.parametrize("preset", ["paper-table2-arc", "rashid-patch"])
+def test_the_lane_side_force_is_the_casadi_functions_at_every_case(lane_cache, preset):
+    """lanes.compiled_lateral against build().lateral (the CasADi VM) at random points: both
+    forms' kernels and the zero case at slip angle 0, driving and braking, slip angles over the
+    declared range, wheels out of the soil; the same values to rounding."""
+    lateral = compiled_in(lane_cache, lanes.compiled_lateral)
+    rng = np.random.default_rng(7)
+    n = 3000
+    z = rng.uniform(-0.005, 0.06, n)
+    slip = rng.uniform(-1.0, 1.0, n)
+    beta = np.radians(rng.uniform(-80.0, 80.0, n))
+    beta[:200] = 0.0
+    p = presets.load(preset).vector()
+    ref = np.array(model_functions.build().lateral.map(n)(
+        z, slip, beta, np.tile(p[:, None], (1, n)))).reshape(-1, n)
+    got = lateral(z, slip, beta, p)
+    assert np.all(got[:, :200] == 0.0)
+    assert np.count_nonzero(ref[0]) > n // 2  # the kernels ran, not only the zero case
+    assert_agrees(got, ref)

@@ -239,6 +239,8 @@ FIGURES: dict[str, Figure] = {
         "bench-core", lambda d: d["force_eval_reference_s"] / d["force_eval_s"], "{:.0f}×"),
     "bench.core.solve_ratio": Figure(
         "bench-core", lambda d: d["solve_reference_s"] / d["solve_s"], "{:.0f}×"),
+    "bench.core.lateral_ratio": Figure(
+        "bench-core", lambda d: d["lateral_eval_speedup"], "{:.0f}×"),
 }
 
 

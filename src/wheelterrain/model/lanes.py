@@ -425,6 +425,36 @@ int wt_contact(long n, const double* const* in, const long* shared, double* cons
                            args=_KERNEL_ARGS) + body
 
 
+def lateral_source(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> str:
+    """The C of ``wt_lateral(n, in, shared, out)``: the side force (LATERAL_OUTPUTS) at n points
+    of (sinkage, slip, slip_angle, p), each by the kernel of its case (no slip angle, arc,
+    patch: :func:`wheelterrain.model.contact.lateral_switch`' own), as ``build().lateral``."""
+    z, sl, beta = ca.SX.sym("sinkage"), ca.SX.sym("slip"), ca.SX.sym("slip_angle")
+    pp = ca.SX.sym("p", len(_contact.NAMES))
+    P = _contact.Params(pp)
+    theta_f = _contact.entry_angle(z - _contact.rut_surface(P), P)
+    case, switch = _contact.lateral_switch(nodes)
+    args = [z, sl, beta, pp]
+    case_fn = ca.Function("lateral_case", args, [case(theta_f, beta, pp)])
+    forms = [ca.Function(f"lateral_{name}", args, [switch.find_function(f"lateral_{name}")(
+        theta_f, sl, beta, pp)]) for name in ("none", "arc", "patch")]
+    kernels = [kernel_c(case_fn, "k_lateral_case")] + [kernel_c(f, f"k_{f.name()}")
+                                                       for f in forms]
+    names = ", ".join(f"k_{f.name()}" for f in forms)
+    entry = f"""
+int wt_lateral(long n, const double* const* in, const long* shared, double* const* out) {{
+  static const wt_kernel forms[{len(forms)}] = {{{names}}};
+  long js[{len(args)}], is[{len(args)}];
+  wt_strides(n, {len(args)}, shared, js, is);
+  wt_cases(n, NULL, in, js, is, out, n, k_lateral_case, forms, {len(forms)});
+  return 0;
+}}
+"""
+    body = "\n".join(kernels) + entry
+    return _PRELUDE.format(lanes=LANES, declarations=_declarations(body),
+                           args=_KERNEL_ARGS) + body
+
+
 # glibc's vector math (libmvec) first, then its pre-2.35 subset; else the same C, scalar calls.
 # --no-undefined: a vector variant this glibc lacks fails the link, not the later load.
 _SIMD = ("-fopenmp-simd", "-Wl,--no-undefined", "-lmvec")
@@ -569,3 +599,12 @@ def compiled_scan_ends(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> LaneF
     solve = compiled_solve(nodes)
     return LaneFunction(solve.library, "wt_scan_ends", ("first", "last"), solve.vector_math,
                         solve.n_params)
+
+
+@lru_cache(maxsize=4)
+def compiled_lateral(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> LaneFunction:
+    """``lateral(sinkage, slip, slip_angle, p)`` -> LATERAL_OUTPUTS (``build().lateral``'s),
+    compiled on first use and cached."""
+    library, vector_math = compile_source(lateral_source(nodes), "lateral_lanes")
+    return LaneFunction(library, "wt_lateral", _contact.LATERAL_OUTPUTS, vector_math,
+                        len(_contact.NAMES))
