@@ -20,11 +20,11 @@ def points() -> list[tuple[str, list[float]]]:
         for z in (0.0, 1e-7, 0.006, 0.04):
             for slip in (-0.6, 0.3, 0.8):
                 plastic = z + 4e-4 if slip > 0 else 0.0
-                out.append((name, [z, 0.01, slip, 0.3, plastic, 0.02]))
+                out.append((name, [z, 0.01, slip, 0.3, plastic, 0.02, 2.0e4]))
     return out
 
 
-SEED = [0.3, -0.7, 0.11, 0.5, 0.2, -0.05]
+SEED = [0.3, -0.7, 0.11, 0.5, 0.2, -0.05, 40.0]
 
 
 def rover_points() -> list[dict]:
@@ -63,3 +63,4 @@ def vector_seed(name: str, size: int) -> np.ndarray:
 COLUMN = {name: k for k, name in enumerate(contact.EXPORT_INPUTS[True][:-1])}
 COLUMN.update(wheel_speed=2, slip_paper=2)  # the slips' inputs: taken from columns of X
 COLUMN.update(slip_angle=3)  # the wheel angle's column: 0.3 rad, a slip angle of 17 deg
+COLUMN.update(mean_pressure=6)  # 20 kPa: lifted by 0.4 mm, a share of the contact left

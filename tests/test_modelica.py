@@ -124,8 +124,8 @@ def _probe_model(points) -> str:
         P = "{" + ", ".join(library._vector(vectors[name]) for name, _ in chosen) + "}"
         X = "{" + ", ".join(library._vector(x) for _, x in chosen) + "}"
         lines += [f"  parameter Real P{tag}[{len(chosen)}, {len(NAMES)}] = {P};",
-                  f"  parameter Real X{tag}[{len(chosen)}, 6] = {X};"]
-    lines.append(f"  parameter Real S[6] = {library._vector(mp.SEED)};")
+                  f"  parameter Real X{tag}[{len(chosen)}, {len(chosen[0][1])}] = {X};"]
+    lines.append(f"  parameter Real S[{len(mp.SEED)}] = {library._vector(mp.SEED)};")
     rover_points = mp.rover_points()
     for key, tag in VECTOR_ARGUMENTS.items():
         rows = [np.atleast_1d(pt[key]) for pt in rover_points]
@@ -300,7 +300,9 @@ def test_the_export_kernels_are_the_models_contact_and_steady_state():
     for name in presets.available():
         p = presets.load(name).vector()
         case, forms = contact.export_kernels(True)
-        for _, x in mp.points()[:20]:
+        width = len(contact.EXPORT_INPUTS[True]) - 1  # the contact's columns of a point
+        for _, point in mp.points()[:20]:
+            x = point[:width]
             got = np.array(forms[int(case(*x, p))](*x, p), dtype=float).ravel()
             ref = np.array([float(v) for v in fns.contact_memory(*x, p)])
             assert np.allclose(got, ref, rtol=1e-12, atol=1e-12, equal_nan=True), (name, x)
@@ -351,7 +353,9 @@ def quasi_static(built):
     compiled once), run over SlipRamp's second."""
     model = rumoca.Session(roots=[str(built)]).loads(
         f"model Run\n  {ROOT}.Examples.SteadyC2 c2;\n  {ROOT}.Examples.SlipRamp ramp;\n"
-        "end Run;\n", model="Run")
+        f"  {ROOT}.Components.QuasiStaticWheel side(load=62, slip=0.2, slip_angle=0.3);\n"
+        f"  {ROOT}.Components.Wheel w(sinkage=0.012, sinkage_rate=0, wheel_speed=0.25, "
+        "carriage_speed=0.02, slip_angle=-0.2);\nend Run;\n", model="Run")
     assert model.structure().is_balanced
     return model.simulate((0.0, 1.0), dt=0.05)
 
@@ -364,6 +368,26 @@ def test_steady_c2_matches_the_steady_state(built, quasi_static):
         assert ref[key][0] == expected[key]
         got = quasi_static[f"c2.{key}"][-1]
         assert abs(got - expected[key]) <= 1e-8 * abs(expected[key]), key
+
+
+@pytest.mark.slow
+def test_the_wheels_at_a_slip_angle_give_the_models_side_force(quasi_static):
+    """QuasiStaticWheel at a slip angle: the steady state's lateral force and aligning moment
+    (its sinkage solved by the tool, 1e-8); Wheel (the soil with memory, its plastic sinkage
+    still 0 at the start, so pressing): build().lateral_memory at its state, bit for bit."""
+    steady = api.steady_state(presets.load(), 62.0, 0.2, slip_angle=0.3)
+    for key in ("lateral_force", "aligning_moment"):
+        got = quasi_static[f"side.{key}"][-1]
+        assert abs(got - steady[key]) <= 1e-8 * abs(steady[key]), key
+    assert steady["lateral_force"] < 0
+    p = presets.load().vector()
+    fns = model_functions.build()
+    slip = quasi_static["w.slip"][0]
+    pressure = quasi_static[f"w.y[{contact.CONTACT_OUTPUTS.index('mean_pressure') + 1}]"][0]
+    want = np.array(fns.lateral_memory(0.012, slip, -0.2, 0.0, pressure, p)).ravel()
+    assert quasi_static["w.lateral_force"][0] == want[0]
+    assert quasi_static["w.aligning_moment"][0] == want[1]
+    assert want[0] > 0  # moving toward its right: pushed to its left
 
 
 @pytest.mark.slow
@@ -465,7 +489,7 @@ def test_a_wheel_running_the_external_contact_is_balanced_and_refused_by_name(bu
     model = session.loads(
         f"model Run\n  {ROOT}.Components.Wheel w(redeclare function contactFunction = "
         f"{ROOT}.Functions.External.contact, sinkage=0.01, sinkage_rate=0, wheel_speed=0.1, "
-        "carriage_speed=0.01);\nend Run;\n", model="Run")
+        "carriage_speed=0.01, slip_angle=0);\nend Run;\n", model="Run")
     assert model.structure().is_balanced
     with pytest.raises(Exception, match=r"WheelTerrain_contactCase.*cannot execute"):
         model.simulate((0.0, 0.1), dt=0.05)

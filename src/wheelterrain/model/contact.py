@@ -859,6 +859,28 @@ def lateral_export(nodes: tuple[int, int] = DEFAULT_NODES) -> ca.Function:
                        {"cse": True})
 
 
+LATERAL_MEMORY_INPUTS = ("sinkage", "slip", "slip_angle", "plastic_sinkage", "mean_pressure",
+                         "p")
+"""The inputs of :func:`lateral_memory_export`: the lateral contact on the soil with memory."""
+
+
+@lru_cache(maxsize=4)
+def lateral_memory_export(nodes: tuple[int, int] = DEFAULT_NODES) -> ca.Function:
+    """:func:`lateral_export` on the soil with memory (``functions.build().lateral_memory``):
+    the lateral contact at the yield sinkage max(z_p, z), scaled by the elastic unloading of
+    the longitudinal forces (``mean_pressure``: the contact's, as ``contact_memory`` gives it
+    at the same state), one plain SX Function of LATERAL_MEMORY_INPUTS for the Modelica
+    library's wheels."""
+    z, sl, beta, plastic, pressure = (ca.SX.sym(n) for n in LATERAL_MEMORY_INPUTS[:-1])
+    pp = ca.SX.sym("p", len(NAMES))
+    P = Params(pp)
+    yielded = _yield_sinkage(z, plastic, P)
+    y = lateral_export(nodes)(yielded, sl, beta, pp)
+    y = unloading_share(z, yielded, pressure, P) * y  # as lateral_at scales it
+    return ca.Function("lateralMemory", [z, sl, beta, plastic, pressure, pp], [y],
+                       list(LATERAL_MEMORY_INPUTS), ["y"], {"cse": True})
+
+
 def soft_max(a, b, width):
     """max(a, b) with its corner rounded over ``width``: (a + b + sqrt((a - b)**2 +
     width**2))/2, above the max by at most width/2 (at a = b), smooth everywhere."""

@@ -148,6 +148,8 @@ INPUT_DOC = {
     "slip_paper": "the paper's slip s = (omega*R_ref - V)/V [1]",
     "slip_angle": "the slip angle between the wheel's heading and its velocity, positive when "
                   "it moves toward its left [rad]",
+    "mean_pressure": "the contact's mean pressure at the yield sinkage (contact's output "
+                     "mean_pressure at the same state) [Pa]",
     "p": "the parameters in table order (Data, Records.parameterVector)",
     "r": "the rover's parameters in table order (Data.rover)",
     "x": "the chassis' state (Index.rover_states order)",
@@ -246,6 +248,16 @@ def exported() -> tuple[Exported, ...]:
                         "The quasi-static lateral contact of a wheel at a slip angle "
                         "(Ishigami et al. 2007's side force): lateral force, aligning moment "
                         "and the force's two parts, 0 at slip angle 0",
+                        _derivative(f, names)))
+    f = contact.lateral_memory_export()
+    names = contact.LATERAL_MEMORY_INPUTS
+    out.append(Exported("lateralMemory", f, names, (Port("y", len(contact.LATERAL_OUTPUTS),
+                                                         description="the outputs, "
+                                                         "Index.Lateral order"),),
+                        "The lateral contact of a wheel at a slip angle on the soil with "
+                        "memory: lateral's at the yield sinkage max(plastic_sinkage, "
+                        "sinkage), scaled by the longitudinal forces' elastic unloading "
+                        "(mean_pressure: contact's output at the same state)",
                         _derivative(f, names)))
     out += _rover_functions()
     return tuple(out)
@@ -462,7 +474,7 @@ def _index(lib: Library, where: str) -> None:
         for k, name in enumerate(names):
             lines.append(f"    constant Integer {name.replace('.', '_')} = {k + 1};")
         lines.append(f"  end {package};")
-    lines.append('  package Lateral "Positions in lateral\'s y"')
+    lines.append('  package Lateral "Positions in lateral\'s and lateralMemory\'s y"')
     for k, name in enumerate(contact.LATERAL_OUTPUTS):
         lines.append(f"    constant Integer {name} = {k + 1};")
     lines.append("  end Lateral;")
@@ -597,12 +609,14 @@ def _template(name: str, **values) -> str:
 def _components(lib: Library) -> None:
     where = f"{LIBRARY}/Components"
     rows = len(contact.CONTACT_OUTPUTS)
+    lateral_rows = len(contact.LATERAL_OUTPUTS)
     _class_file(lib, where, "QuasiStaticWheel", _template(
-        "QuasiStaticWheel", N=len(NAMES), QUASI_ROWS=rows))
+        "QuasiStaticWheel", N=len(NAMES), QUASI_ROWS=rows, LATERAL_ROWS=lateral_rows))
     _class_file(lib, where, "Contact", _template(
         "Contact", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS)))
     _class_file(lib, where, "PartialWheel", _template(
-        "PartialWheel", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS)))
+        "PartialWheel", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS),
+        LATERAL_ROWS=lateral_rows))
     _class_file(lib, where, "Wheel", _template("Wheel", N=len(NAMES)))
     soil = [NAMES.index(n) for n in ground.SOIL_NAMES]
     in_map = [ground.NAMES.index(n) for n in ground.SOIL_NAMES]
@@ -721,7 +735,8 @@ def _rover_example(name: str = "Rover") -> str:
         lines += [f"  {w}.sinkage = chassis.sinkage[{k}];",
                   f"  {w}.sinkage_rate = chassis.sinkage_rate[{k}];",
                   f"  {w}.wheel_speed = chassis.wheel_speed[{k}];",
-                  f"  {w}.carriage_speed = chassis.carriage_speed[{k}];"]
+                  f"  {w}.carriage_speed = chassis.carriage_speed[{k}];",
+                  f"  {w}.slip_angle = 0;  // the chassis drives straight"]
         if mapped:  # rover.wheel_position: the axle ahead of or behind the reference point
             lines.append(f"  {w}.position = chassis.position "
                          f"{'+' if w in rover.FRONT else '-'} {half};")

@@ -7,6 +7,8 @@ partial block PartialWheel "The WheelTerrain FMU's contact as a block (its model
   input Real sinkage_rate(unit="m/s") "d(sinkage)/dt";
   input Real wheel_speed(unit="rad/s") "the wheel's angular velocity";
   input Real carriage_speed(unit="m/s") "the axle's forward speed";
+  input Real slip_angle(unit="rad")
+    "between the wheel's heading and its velocity, + moving toward its left (0: driven straight)";
   output Real normal_force(unit="N") "the soil's force on the wheel, up";
   output Real drawbar_pull(unit="N") "the soil's net force on the wheel, forward";
   output Real torque(unit="N.m") "the torque the soil resists the wheel's turning with";
@@ -14,7 +16,10 @@ partial block PartialWheel "The WheelTerrain FMU's contact as a block (its model
   output Real rut_left(unit="m") "the rut the wheel leaves";
   Real wheel_angle(unit="rad", start=0, fixed=true) "the grouser ripple's phase";
   Real plastic_sinkage(unit="m", start=0, fixed=true) "the deepest the wheel has pressed the soil under it";
+  output Real lateral_force(unit="N") "the soil's force on the wheel along its axle, + to its left";
+  output Real aligning_moment(unit="N.m") "the soil's moment about the vertical through the centre, + counter-clockwise from above";
   output Real y[${CONTACT_ROWS}] "every output of Functions.contact, Functions.Index order";
+  output Real y_lateral[${LATERAL_ROWS}] "every output of Functions.lateralMemory, Functions.Index.Lateral order";
 equation
   der(wheel_angle) = wheel_speed;
   slip = WheelTerrain.Functions.slipFromSpeeds(wheel_speed, carriage_speed, pk);
@@ -25,5 +30,9 @@ equation
   drawbar_pull = y[WheelTerrain.Functions.Index.drawbar_pull];
   torque = y[WheelTerrain.Functions.Index.torque];
   rut_left = y[WheelTerrain.Functions.Index.rut_left];
-  annotation(Documentation(info="<html><p>The WheelTerrain FMU's model exchange as a block: the same inputs, the same contact, its states wheel_angle and plastic_sinkage. Wheel gives it one parameter vector, MapWheel the soil of a terrain map at the wheel's position.</p></html>"));
+  y_lateral = WheelTerrain.Functions.lateralMemory(sinkage, slip, slip_angle, plastic_sinkage,
+    y[WheelTerrain.Functions.Index.mean_pressure], pk);
+  lateral_force = y_lateral[WheelTerrain.Functions.Index.Lateral.lateral_force];
+  aligning_moment = y_lateral[WheelTerrain.Functions.Index.Lateral.aligning_moment];
+  annotation(Documentation(info="<html><p>The WheelTerrain FMU's model exchange as a block: the same inputs, the same contact, its states wheel_angle and plastic_sinkage; at a slip angle, the lateral force and the aligning moment of the soil with memory (Functions.lateralMemory, the FMU's own, the grouser-period mean). Wheel gives it one parameter vector, MapWheel the soil of a terrain map at the wheel's position.</p></html>"));
 end PartialWheel;

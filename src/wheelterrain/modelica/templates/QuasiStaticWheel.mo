@@ -8,13 +8,18 @@ block QuasiStaticWheel "A wheel at steady state on the soil: the sinkage at whic
     "the contact: Functions.quasiStatic (generated, the default) or Functions.External.quasiStatic (CasADi's C)";
   input Real load(unit="N") "the vertical load on the wheel";
   input Real slip(unit="1") "the model's slip: traction i driving, skid s braking (-1 locked)";
+  input Real slip_angle(unit="rad")
+    "between the wheel's heading and its velocity, + moving toward its left (0: driven straight)";
   output Real sinkage(unit="m", start=sinkage_start, fixed=false)
     "the steady sinkage: the static normal force equals the load";
   output Real drawbar_pull(unit="N") "the net forward force of the soil on the wheel";
   output Real torque(unit="N.m") "the torque the soil resists the wheel's turning with";
   output Real entry_angle(unit="rad") "where the contact begins";
   output Real exit_angle(unit="rad") "where it ends";
+  output Real lateral_force(unit="N") "the soil's force on the wheel along its axle, + to its left";
+  output Real aligning_moment(unit="N.m") "the soil's moment about the vertical through the centre, + counter-clockwise from above";
   output Real y[${QUASI_ROWS}] "every output of quasiStatic, Functions.Index order";
+  output Real y_lateral[${LATERAL_ROWS}] "every output of Functions.lateral, Functions.Index.Lateral order";
 equation
   y = quasiStaticFunction(sinkage, slip, p);
   y[WheelTerrain.Functions.Index.normal_force_static] = load;
@@ -22,5 +27,8 @@ equation
   torque = y[WheelTerrain.Functions.Index.torque];
   entry_angle = y[WheelTerrain.Functions.Index.entry_angle];
   exit_angle = y[WheelTerrain.Functions.Index.exit_angle];
-  annotation(Documentation(info="<html><p>The quasi-static wheel of <code>wheelterrain steady</code>: an implicit equation for the sinkage, solved by the tool. The contact is ripple-free with no sinkage rate and no memory.</p></html>"));
+  y_lateral = WheelTerrain.Functions.lateral(sinkage, slip, slip_angle, p);
+  lateral_force = y_lateral[WheelTerrain.Functions.Index.Lateral.lateral_force];
+  aligning_moment = y_lateral[WheelTerrain.Functions.Index.Lateral.aligning_moment];
+  annotation(Documentation(info="<html><p>The quasi-static wheel of <code>wheelterrain steady</code>: an implicit equation for the sinkage, solved by the tool. The contact is ripple-free with no sinkage rate and no memory. At a slip angle the lateral force and the aligning moment are Functions.lateral's (Ishigami et al. 2007's side force); the longitudinal outputs do not change with it.</p></html>"));
 end QuasiStaticWheel;
