@@ -240,25 +240,19 @@ def exported() -> tuple[Exported, ...]:
                         (Port("slip", description="the model's slip: s/(1 + s) driving, s "
                               "braking [1]"),),
                         "The model's slip from the paper's slip", _derivative(f, ("slip_paper",))))
-    f = contact.lateral_export()
-    names = contact.LATERAL_INPUTS
-    out.append(Exported("lateral", f, names, (Port("y", len(contact.LATERAL_OUTPUTS),
-                                                   description="the outputs, Index.Lateral "
-                                                   "order"),),
-                        "The quasi-static lateral contact of a wheel at a slip angle "
-                        "(Ishigami et al. 2007's side force): lateral force, aligning moment "
-                        "and the force's two parts, 0 at slip angle 0",
-                        _derivative(f, names)))
-    f = contact.lateral_memory_export()
-    names = contact.LATERAL_MEMORY_INPUTS
-    out.append(Exported("lateralMemory", f, names, (Port("y", len(contact.LATERAL_OUTPUTS),
-                                                         description="the outputs, "
-                                                         "Index.Lateral order"),),
-                        "The lateral contact of a wheel at a slip angle on the soil with "
-                        "memory: lateral's at the yield sinkage max(plastic_sinkage, "
-                        "sinkage), scaled by the longitudinal forces' elastic unloading "
-                        "(mean_pressure: contact's output at the same state)",
-                        _derivative(f, names)))
+    side = "lateral force, aligning moment and the force's two parts"
+    for name, f, names, what in (
+            ("lateral", contact.lateral_export(), contact.LATERAL_INPUTS,
+             "The quasi-static lateral contact of a wheel at a slip angle (Ishigami et al. "
+             f"2007's side force): {side}, 0 at slip angle 0"),
+            ("lateralMemory", contact.lateral_memory_export(), contact.LATERAL_MEMORY_INPUTS,
+             f"The lateral contact of a wheel at a slip angle on the soil with memory: {side} "
+             "of lateral at the yield sinkage max(plastic_sinkage, sinkage), scaled by the "
+             "longitudinal forces' elastic unloading (mean_pressure: contact's output at the "
+             "same state)")):
+        out.append(Exported(name, f, names, (Port("y", len(contact.LATERAL_OUTPUTS),
+                                                  description="the outputs, Index.Lateral "
+                                                  "order"),), what, _derivative(f, names)))
     out += _rover_functions()
     return tuple(out)
 
