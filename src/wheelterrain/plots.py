@@ -105,6 +105,11 @@ SWEEP_PANELS = {
 force, the aligning moment and the pull (output, axis label, scale)."""
 
 
+def _unit_suffix(unit: str) -> str:
+    """A unit to print after a value: none for a dimensionless one ("1")."""
+    return "" if unit == "1" else unit
+
+
 def sweep_curves(rows: list[dict], x: str, group: list[str], path: Path, title: str) -> None:
     """The sweep's outputs against ``x`` (:data:`SWEEP_PANELS`; a slip angle drawn in degrees),
     one line per combination of the ``group`` axes (infeasible points are gaps)."""
@@ -119,7 +124,7 @@ def sweep_curves(rows: list[dict], x: str, group: list[str], path: Path, title: 
         sel = [r for r in rows if tuple(r[g] for g in group) == key]
         sel.sort(key=lambda r: r[x])
         xs = [math.degrees(r[x]) if degrees else r[x] for r in sel]
-        label = ", ".join(f"{g} = {v:.4g} {units.get(g, '').replace('1', '')}".rstrip()
+        label = ", ".join(f"{g} = {v:.4g} {_unit_suffix(units.get(g, ''))}".rstrip()
                           for g, v in zip(group, key, strict=True)) or None
         for ax, (name, _, scale) in zip(axes, panels, strict=True):
             ax.plot(xs, [scale * r[name] for r in sel], marker="o", ms=3, label=label)

@@ -842,19 +842,35 @@ def lateral_switch(nodes: tuple[int, int]) -> tuple[ca.Function, ca.Function]:
 
 
 @lru_cache(maxsize=4)
-def lateral_export(nodes: tuple[int, int] = DEFAULT_NODES) -> ca.Function:
-    """The quasi-static lateral contact as one plain SX Function of LATERAL_INPUTS, for code
-    that is not CasADi's (the Modelica library): :func:`lateral_switch`' own case and kernels,
-    inlined, the switch a select (both forms evaluated)."""
+def lateral_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> tuple[ca.Function, tuple]:
+    """The lateral contact as plain SX Functions of LATERAL_INPUTS, for code generators:
+    ``(case, forms)``, ``case`` giving :func:`lateral_switch`' case at each point
+    (NO_SLIP_ANGLE, LATERAL_ARC, LATERAL_PATCH) and ``forms[case]`` that case's kernel, the
+    entry angle from the sinkage as :func:`lateral_at` takes it (the lane kernels of
+    :mod:`wheelterrain.model.lanes`; :func:`lateral_export` selects among them)."""
     z, sl, beta, pp = (ca.SX.sym("sinkage"), ca.SX.sym("slip"), ca.SX.sym("slip_angle"),
                        ca.SX.sym("p", len(NAMES)))
     P = Params(pp)
     theta_f = entry_angle(z - rut_surface(P), P)
     case, switch = lateral_switch(nodes)
-    which = case(theta_f, beta, pp)
-    arc, patch = (switch.find_function(name)(theta_f, sl, beta, pp)
-                  for name in ("lateral_arc", "lateral_patch"))
-    y = ca.if_else(which == NO_SLIP_ANGLE, 0, ca.if_else(which == LATERAL_PATCH, patch, arc))
+    args = [z, sl, beta, pp]
+    case_fn = ca.Function("lateral_case", args, [case(theta_f, beta, pp)])
+    forms = tuple(ca.Function(f"lateral_{name}", args, [switch.find_function(
+        f"lateral_{name}")(theta_f, sl, beta, pp)]) for name in ("none", "arc", "patch"))
+    return case_fn, forms
+
+
+@lru_cache(maxsize=4)
+def lateral_export(nodes: tuple[int, int] = DEFAULT_NODES) -> ca.Function:
+    """The quasi-static lateral contact as one plain SX Function of LATERAL_INPUTS, for code
+    that is not CasADi's (the Modelica library): :func:`lateral_kernels`, the switch a select
+    (both forms evaluated)."""
+    z, sl, beta, pp = (ca.SX.sym("sinkage"), ca.SX.sym("slip"), ca.SX.sym("slip_angle"),
+                       ca.SX.sym("p", len(NAMES)))
+    case, (_, arc, patch) = lateral_kernels(nodes)
+    which = case(z, sl, beta, pp)
+    y = ca.if_else(which == NO_SLIP_ANGLE, 0, ca.if_else(
+        which == LATERAL_PATCH, patch(z, sl, beta, pp), arc(z, sl, beta, pp)))
     return ca.Function("lateral", [z, sl, beta, pp], [y], list(LATERAL_INPUTS), ["y"],
                        {"cse": True})
 
@@ -1168,17 +1184,19 @@ def plastic_rate(z, z_rate, plastic, speed, P: Params, target, smooth=None):
     return ca.if_else(P["model.soil_memory"] == 1, rate, 0)
 
 
-def plastic_update(z, plastic, speed, P: Params, h, target):
+def plastic_update(z, plastic, speed, P: Params, h, mean_pressure, exponent):
     """The wheel's plastic sinkage z_p after a co-simulation step of ``h`` s with the sinkage
     ``z`` and carriage speed ``speed`` held: the wheel yields the soil at once to z_y = max(z_p,
     z) (the step's start), and the imprint under it is replaced by the soil ahead as the wheel
     rolls, z_p -> z_t + (z_y - z_t)*exp(-|V|*h/l), l the contact length at z_y, z_t
-    (``target``, :func:`imprint_target` at the step's start) the wheel's sinkage or the sinkage
-    at which the soil ahead carries the wheel's present force (``model.imprint_relaxation``).
-    The rut of earlier passes is the ground's
-    (``soil.rut_depth``), not this state's. ``plastic`` unchanged with ``model.soil_memory`` =
-    0."""
+    (:func:`imprint_target` at the step's start, from the contact's ``mean_pressure`` and
+    sinkage ``exponent`` there) the wheel's sinkage or the sinkage at which the soil ahead
+    carries the wheel's present force (``model.imprint_relaxation``). The rut of earlier passes
+    is the ground's (``soil.rut_depth``), not this state's. ``plastic`` unchanged with
+    ``model.soil_memory`` = 0."""
     yielded = ca.fmax(plastic, z)
+    target = imprint_target(z, yielded, unloading_share(z, yielded, mean_pressure, P), exponent,
+                            P)
     relaxed = target + (yielded - target) * ca.exp(-_imprint_decay(yielded, speed, P) * h)
     return ca.if_else(P["model.soil_memory"] == 1, relaxed, plastic)
 

@@ -20,14 +20,13 @@ from wheelterrain.model.contact import (
     DEFAULT_NODES,
     FORCES,
     LATERAL_INPUTS,
+    LATERAL_MEMORY_INPUTS,
     LATERAL_OUTPUTS,
     MEMORY_OUTPUTS,
     contact_at,
-    imprint_target,
     lateral_at,
     plastic_rate,
     plastic_update,
-    unloading_share,
 )
 from wheelterrain.model.soil import Params
 from wheelterrain.model.solve import STEADY_INPUTS, STEADY_OUTPUTS
@@ -137,11 +136,9 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
     contact_memory = _contact_memory("contact_memory", z, z_rate, slip, angle, plastic, speed,
                                      p, nodes, None)
     pressure, exponent = ca.MX.sym("mean_pressure"), ca.MX.sym("sinkage_exponent")
-    yielded = ca.fmax(plastic, z)
-    target = imprint_target(z, yielded, unloading_share(z, yielded, pressure, P), exponent, P)
     plastic_step = ca.Function(
         "plastic_step", [z, plastic, speed, pressure, exponent, p, h],
-        [plastic_update(z, plastic, speed, P, h, target)],
+        [plastic_update(z, plastic, speed, P, h, pressure, exponent)],
         ["sinkage", "plastic_sinkage", "carriage_speed", "mean_pressure", "sinkage_exponent",
          "p", "h"], ["plastic_sinkage_next"])
 
@@ -188,13 +185,11 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
         "lateral_jacobian", [z, slip, angle_of_slip, p],
         [ca.jacobian(pair, ca.vertcat(z, slip, angle_of_slip))], list(LATERAL_INPUTS),
         ["d_state"])
-    pressure = ca.MX.sym("mean_pressure")
     held_side = lateral_at(z, slip, angle_of_slip, P, nodes, plastic=plastic,
                            mean_pressure=pressure)
     lateral_memory = ca.Function(
         "lateral_memory", [z, slip, angle_of_slip, plastic, pressure, p],
-        [held_side[k] for k in LATERAL_OUTPUTS],
-        ["sinkage", "slip", "slip_angle", "plastic_sinkage", "mean_pressure", "p"],
+        [held_side[k] for k in LATERAL_OUTPUTS], list(LATERAL_MEMORY_INPUTS),
         list(LATERAL_OUTPUTS))
     return ModelFunctions(contact, contact_memory, plastic_step, contact_jacobian, sinkage_solve,
                           capacity_fn, steady, solve.steady_from(steady, nodes), steady_jacobian,

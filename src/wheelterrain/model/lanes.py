@@ -406,53 +406,36 @@ def _declarations(source: str) -> str:
     return "\n".join(lines)
 
 
-def contact_source(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> str:
-    """The C of ``wt_contact(n, in, shared, out)``: the contact at n points."""
-    case, forms = _contact.lane_kernels(nodes)
-    kernels = [kernel_c(case, "k_case")] + [kernel_c(f, f"k_{f.name()}") for f in forms]
+def _cases_source(entry: str, case: ca.Function, forms: tuple, prefix: str = "") -> str:
+    """The C of ``entry(n, in, shared, out)``: the SX Functions ``forms`` at n points, each
+    point by the form its ``case`` picks (:func:`kernel_c`'s kernels, ``prefix`` on the case
+    kernel's name)."""
+    case_name = f"k_{prefix}case"
+    kernels = [kernel_c(case, case_name)] + [kernel_c(f, f"k_{f.name()}") for f in forms]
     names = ", ".join(f"k_{f.name()}" for f in forms)
-    entry = f"""
-int wt_contact(long n, const double* const* in, const long* shared, double* const* out) {{
+    body = "\n".join(kernels) + f"""
+int {entry}(long n, const double* const* in, const long* shared, double* const* out) {{
   static const wt_kernel forms[{len(forms)}] = {{{names}}};
   long js[{case.n_in()}], is[{case.n_in()}];
   wt_strides(n, {case.n_in()}, shared, js, is);
-  wt_cases(n, NULL, in, js, is, out, n, k_case, forms, {len(forms)});
+  wt_cases(n, NULL, in, js, is, out, n, {case_name}, forms, {len(forms)});
   return 0;
 }}
 """
-    body = "\n".join(kernels) + entry
     return _PRELUDE.format(lanes=LANES, declarations=_declarations(body),
                            args=_KERNEL_ARGS) + body
+
+
+def contact_source(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> str:
+    """The C of ``wt_contact(n, in, shared, out)``: the contact at n points."""
+    return _cases_source("wt_contact", *_contact.lane_kernels(nodes))
 
 
 def lateral_source(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> str:
     """The C of ``wt_lateral(n, in, shared, out)``: the side force (LATERAL_OUTPUTS) at n points
-    of (sinkage, slip, slip_angle, p), each by the kernel of its case (no slip angle, arc,
-    patch: :func:`wheelterrain.model.contact.lateral_switch`' own), as ``build().lateral``."""
-    z, sl, beta = ca.SX.sym("sinkage"), ca.SX.sym("slip"), ca.SX.sym("slip_angle")
-    pp = ca.SX.sym("p", len(_contact.NAMES))
-    P = _contact.Params(pp)
-    theta_f = _contact.entry_angle(z - _contact.rut_surface(P), P)
-    case, switch = _contact.lateral_switch(nodes)
-    args = [z, sl, beta, pp]
-    case_fn = ca.Function("lateral_case", args, [case(theta_f, beta, pp)])
-    forms = [ca.Function(f"lateral_{name}", args, [switch.find_function(f"lateral_{name}")(
-        theta_f, sl, beta, pp)]) for name in ("none", "arc", "patch")]
-    kernels = [kernel_c(case_fn, "k_lateral_case")] + [kernel_c(f, f"k_{f.name()}")
-                                                       for f in forms]
-    names = ", ".join(f"k_{f.name()}" for f in forms)
-    entry = f"""
-int wt_lateral(long n, const double* const* in, const long* shared, double* const* out) {{
-  static const wt_kernel forms[{len(forms)}] = {{{names}}};
-  long js[{len(args)}], is[{len(args)}];
-  wt_strides(n, {len(args)}, shared, js, is);
-  wt_cases(n, NULL, in, js, is, out, n, k_lateral_case, forms, {len(forms)});
-  return 0;
-}}
-"""
-    body = "\n".join(kernels) + entry
-    return _PRELUDE.format(lanes=LANES, declarations=_declarations(body),
-                           args=_KERNEL_ARGS) + body
+    of (sinkage, slip, slip_angle, p), each by the kernel of its case
+    (:func:`wheelterrain.model.contact.lateral_kernels`), as ``build().lateral``."""
+    return _cases_source("wt_lateral", *_contact.lateral_kernels(nodes), prefix="lateral_")
 
 
 # glibc's vector math (libmvec) first, then its pre-2.35 subset; else the same C, scalar calls.
