@@ -104,7 +104,8 @@ def main(argv: list[str] | None = None) -> None:
                              args.repeats) / n
     contact_in = [ca.DM(x) for x in (z, zeros, slip, zeros, P)]
     beta = np.radians(rng.uniform(5.0, 30.0, n))  # the side force, at slip angles
-    lateral_in = [ca.DM(x) for x in (z, slip, beta, P)]
+    no_turn = np.zeros(n)  # the side force of a wheel that does not yaw (turn slip 0)
+    lateral_in = [ca.DM(x) for x in (z, slip, beta, no_turn, P)]
     solve_in = [ca.DM(x) for x in (load, slip, P)]
     figures = {"points": n, "repeats": args.repeats, "input_conversion_s": conversion}
 
@@ -198,8 +199,9 @@ def main(argv: list[str] | None = None) -> None:
             c_lateral = compile_external(lateral_map, Path(tmp))
             tc_lateral = median_time(lambda: c_lateral(*lateral_in), args.repeats) / n
         lane_lateral = lanes.compiled_lateral()
-        tl_lateral = median_time(lambda: lane_lateral(z, slip, beta, P), args.repeats) / n
-        lateral_check = np.max(np.abs(lane_lateral(z, slip, beta, P)
+        tl_lateral = median_time(lambda: lane_lateral(z, slip, beta, no_turn, P),
+                                 args.repeats) / n
+        lateral_check = np.max(np.abs(lane_lateral(z, slip, beta, no_turn, P)
                                       - np.array(lateral_map(*lateral_in)).reshape(-1, n)))
         figures.update(lateral_eval_s=tl_lateral, lateral_eval_how="lane-parallel C",
                        lateral_eval_casadi_c_s=tc_lateral)

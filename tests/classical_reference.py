@@ -143,6 +143,64 @@ class Classical:
                                  tf, br, eps)
         return {"lateral_force": sign * force, "aligning_moment": sign * moment}
 
+    def turning(self, z: float, i: float, beta: float, turn: float, K_y: float,
+                side: bool = True) -> dict[str, float]:
+        """:meth:`lateral` with a turn slip ``turn`` = r/V [rad/m] (r the wheel's yaw rate,
+        counter-clockwise from above), a driven wheel (0 <= i < 1), the wheel element's
+        kinematics, written from the brush model of turn slip (Pacejka, *Tire and Vehicle
+        Dynamics*, ch. 3) on Ishigami et al.'s side force: an element at x = R*sin(t) ahead of
+        the axle slides sideways at V*(tan(beta) + turn*x), so in the time it has been in
+        contact, (tf - t)/omega, j_y = R*(1 - i)*(tan(beta)*(tf - t) + turn*R*(cos(t) -
+        cos(tf))); the lateral stress -(c + sigma*tan(phi))*sign(j_y)*(1 - exp(-|j_y|/K_y)).
+        The moment about the vertical adds the longitudinal shear across the width b: a tread
+        element at y (to the left) has slipped j + turn*y*R*(1 - i)*(tf - t) longitudinally,
+        so M_width = -R*int (c + sigma*tan(phi))*cos(t)*int_{-b/2}^{b/2} y*g(j + ...) dy dt,
+        both integrals by adaptive quadrature split at every sign change of the
+        displacement. Returns lateral_force, aligning_moment and turning_moment (the sum)."""
+        tf, sigma, _tau, br, eps = self._parts(z, i)
+        x = math.pi / 4 - self.phi / 2
+        d1 = 1 / math.tan(x) + math.tan(x + self.phi)
+        d2 = 1 / math.tan(x) + math.tan(self.phi) / math.tan(x) ** 2
+        v = self.R * (1.0 - i)
+
+        def jy(t: float) -> float:
+            return v * (math.tan(beta) * (tf - t) + turn * self.R * (math.cos(t) - math.cos(tf)))
+
+        def g(j: float, K: float) -> float:
+            return math.copysign(1.0 - math.exp(-abs(j) / K), j)
+
+        def lateral(t: float) -> float:  # the side force per radian, against the displacement
+            h = self.R * (math.cos(t) - math.cos(tf))
+            rb = d1 * (self.c * h + d2 * self.gamma * h**2 / 2) if side else 0.0
+            strip = self.R * self.b * (self.c + sigma(t) * math.tan(self.phi))
+            return -(strip + rb * (self.R - h * math.cos(t))) * g(jy(t), K_y)
+
+        breaks = list(br)
+        lo, hi = 1e-14 * tf, tf * (1 - 1e-14)
+        if jy(lo) * jy(hi) < 0:
+            breaks = sorted([*breaks, brentq(jy, lo, hi, xtol=1e-16, rtol=1e-15)])
+        force = self._integrate(lateral, tf, breaks, eps)
+        aligning = self._integrate(lambda t: lateral(t) * self.R * math.sin(t), tf, breaks, eps)
+
+        def j_long(t: float) -> float:  # the classical wheel element's j (driving)
+            return self.R * ((tf - t) - (1.0 - i) * (math.sin(tf) - math.sin(t)))
+
+        def across(t: float) -> float:  # int y*g(j + turn*D*y) dy over the width
+            j0, spread = j_long(t), turn * v * (tf - t)
+            half = self.b / 2
+            points = [] if spread == 0 else [-j0 / spread]
+            points = [p for p in points if -half < p < half]
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", IntegrationWarning)
+                value, _ = quad(lambda y: y * g(j0 + spread * y, self.K), -half, half,
+                                points=points or None, epsabs=1e-15, epsrel=1e-11, limit=200)
+            return value
+
+        width = self._integrate(lambda t: -self.R * (self.c + sigma(t) * math.tan(self.phi))
+                                * math.cos(t) * across(t), tf, br, eps * self.b**2)
+        return {"lateral_force": force, "aligning_moment": aligning,
+                "turning_moment": aligning + width}
+
     def sinkage(self, load: float, i: float) -> float:
         """Sinkage [m] at which the normal force equals ``load`` (Brent, z in (0, R])."""
         return brentq(lambda z: self.forces(z, i)["normal_force"] - load, 1e-12, self.R,

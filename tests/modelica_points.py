@@ -63,4 +63,5 @@ def vector_seed(name: str, size: int) -> np.ndarray:
 COLUMN = {name: k for k, name in enumerate(contact.EXPORT_INPUTS[True][:-1])}
 COLUMN.update(wheel_speed=2, slip_paper=2)  # the slips' inputs: taken from columns of X
 COLUMN.update(slip_angle=3)  # the wheel angle's column: 0.3 rad, a slip angle of 17 deg
+COLUMN.update(turn_slip=3)  # and 0.3 rad/m of turn slip: the turn kernels, both forms
 COLUMN.update(mean_pressure=6)  # 20 kPa: lifted by 0.4 mm, a share of the contact left

@@ -20,11 +20,11 @@ RTOL = 1e-6
 ANGLES = (math.radians(3.0), math.radians(20.0), math.radians(-35.0))
 
 
-def _lateral(ps, z, slip, beta):
-    out = functions.build().lateral(z, slip, beta, ps.vector())
+def _lateral(ps, z, slip, beta, turn=0.0):
+    out = functions.build().lateral(z, slip, beta, turn, ps.vector())
     return {k: float(v) for k, v in zip(("lateral_force", "aligning_moment",
-                                         "lateral_shear_force", "side_bulldozing"), out,
-                                        strict=True)}
+                                         "lateral_shear_force", "side_bulldozing",
+                                         "turning_moment"), out, strict=True)}
 
 
 @pytest.mark.parametrize("row", SOILS, ids=[s[0] for s in SOILS])
@@ -101,11 +101,11 @@ def test_the_exact_jacobian_in_the_slip_angle_matches_finite_differences(preset)
     z = model.steady_state(ps, 62.0, 0.25)["sinkage"]
     fns = functions.build()
     for beta in (math.radians(0.5), math.radians(12.0), math.radians(-40.0)):
-        jac = np.array(fns.lateral_jacobian(z, 0.25, beta, ps.vector()))
+        jac = np.array(fns.lateral_jacobian(z, 0.25, beta, 0.0, ps.vector()))[:2, :3]
         for col, (dz, ds, db) in enumerate(((1e-7, 0, 0), (0, 1e-6, 0), (0, 0, 1e-7))):
-            up = np.array([float(v) for v in fns.lateral(z + dz, 0.25 + ds, beta + db,
+            up = np.array([float(v) for v in fns.lateral(z + dz, 0.25 + ds, beta + db, 0.0,
                                                           ps.vector())[:2]])
-            down = np.array([float(v) for v in fns.lateral(z - dz, 0.25 - ds, beta - db,
+            down = np.array([float(v) for v in fns.lateral(z - dz, 0.25 - ds, beta - db, 0.0,
                                                             ps.vector())[:2]])
             fd = (up - down) / (2 * (dz + ds + db))
             assert np.allclose(jac[:, col], fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max()), (
@@ -249,7 +249,8 @@ def test_the_patch_moment_of_the_shear_is_its_quadrature_on_both_sides_of_the_se
 
 def test_the_modelica_export_is_the_models_lateral_contact():
     """contact.lateral_export (what the Modelica library's Functions.lateral reproduces)
-    against build().lateral, every preset, both signs of the slip angle, 0: within 1e-12."""
+    against build().lateral, every preset, both signs of the slip angle, 0, with and without a
+    turn slip: within 1e-12."""
     from wheelterrain.model import contact
 
     export, model_fn = contact.lateral_export(), functions.build().lateral
@@ -257,8 +258,9 @@ def test_the_modelica_export_is_the_models_lateral_contact():
         v = presets.load(name).vector()
         for z in (0.0, 1e-7, 0.006, 0.04):
             for slip in (-0.6, 0.3, 0.8):
-                for beta in (0.0, 0.3, -0.5):
-                    a = np.array(export(z, slip, beta, v)).ravel()
-                    b = np.array([float(x) for x in model_fn(z, slip, beta, v)])
+                for beta, turn in ((0.0, 0.0), (0.3, 0.0), (-0.5, 0.0), (0.0, 3.0),
+                                   (-0.5, -6.0)):
+                    a = np.array(export(z, slip, beta, turn, v)).ravel()
+                    b = np.array([float(x) for x in model_fn(z, slip, beta, turn, v)])
                     assert np.all(np.abs(a - b) <= 1e-12 * np.maximum(np.abs(b), 1e-300)), (
-                        name, z, slip, beta, a, b)
+                        name, z, slip, beta, turn, a, b)

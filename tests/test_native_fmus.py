@@ -78,7 +78,7 @@ def test_same_model_description_as_the_pythonfmu_flavour(flavours, name):
 
 
 def _random_terrain_values(rng):
-    return {"soil.phi": rng.uniform(0.3, 0.6), "soil.n1": rng.uniform(0, 1.5),
+    values = {"soil.phi": rng.uniform(0.3, 0.6), "soil.n1": rng.uniform(0, 1.5),
             "soil.k_phi": rng.uniform(40, 400), "wheel.width": rng.uniform(0.05, 0.2),
             "ripple.phase": rng.uniform(-3, 3), "model.shear_model": int(rng.integers(0, 2)),
             "model.exit_ratio": rng.uniform(0, 0.9), "grouser.height": rng.uniform(0, 0.02),
@@ -95,14 +95,18 @@ def _random_terrain_values(rng):
             "sinkage": rng.uniform(0.0, 0.04), "sinkage_rate": rng.uniform(-0.05, 0.05),
             "wheel_speed": rng.uniform(0.2, 1.0), "carriage_speed": rng.uniform(0.0, 0.03),
             "load": rng.uniform(5, 60)}
+    # a turn slip within the range (yaw_rate/carriage_speed), or none
+    values["yaw_rate"] = rng.choice([0.0, rng.uniform(-9, 9)]) * values["carriage_speed"]
+    return values
 
 
 # the reasons WheelTerrain refuses a step with, the edges of its domain (fmu_src/README.md)
 DOMAIN_REASONS = ("outside the model's domain", "beyond full burial",
-                  "exceeds what the wheel can carry fully buried")
+                  "exceeds what the wheel can carry fully buried",
+                  "outside the lateral contact's range")  # a yaw rate beyond 10 rad/m x speed
 TERRAIN_OUT = ("normal_force", "drawbar_pull", "torque", "contact_sinkage", "slip", "slip_paper",
                "entry_angle", "exit_angle", "contact_length", "wheel_angle", "lateral_force",
-               "aligning_moment")
+               "aligning_moment", "turning_moment")
 
 
 @pytest.mark.parametrize("contact_form", [0, 1], ids=["arc", "patch"])
@@ -137,10 +141,12 @@ def test_flavours_agree_on_wheelterrain(flavours, quasi_static, contact_form):
                 ps = presets.load(presets.DEFAULT_PRESET).with_values(
                     {k: v for k, v in values.items() if "." in k})
                 first = dict(zip(TERRAIN_OUT, out[1][0], strict=True))
+                turn = values["yaw_rate"] / max(values["carriage_speed"], 1e-9)
                 ref = model.steady_state(ps, values["load"], first["slip"], "unified",
-                                         slip_angle=values["slip_angle"])
+                                         slip_angle=values["slip_angle"], turn_slip=turn)
                 assert first["contact_sinkage"] == pytest.approx(ref["sinkage"], rel=1e-9)
-                for key in ("drawbar_pull", "lateral_force", "aligning_moment"):
+                for key in ("drawbar_pull", "lateral_force", "aligning_moment",
+                            "turning_moment"):
                     assert first[key] == pytest.approx(ref[key], rel=1e-9, abs=1e-9), key
     assert checked >= 15
 
@@ -169,6 +175,45 @@ def test_the_slip_angle_is_an_input_that_starts_at_zero_and_is_checked(flavours,
         with pytest.raises(FMICallException):
             beyond()
         assert any("slip angle" in m or "slip_angle" in m for m in t.errors()), t.log
+    finally:
+        t.close()
+
+
+@pytest.mark.parametrize("flavour", ["pythonfmu", "native", "fmi3"])
+def test_the_yaw_rate_is_an_input_that_starts_at_zero_and_is_checked(flavours, flavour):
+    """WheelTerrain's yaw_rate input: unset (its start, 0) the turning moment is the aligning
+    moment (0 driven straight); set, it resists the yawing and is the core's at the turn slip
+    yaw_rate/carriage_speed; a turn slip beyond TURN_SLIP_LIMIT, or a yaw rate at rest, is
+    refused with the reason (FMI 2 and 3)."""
+    from wheelterrain import model
+    from wheelterrain.parameters import TURN_SLIP_LIMIT
+
+    root = flavours["root"] / ("native/fmi3" if flavour == "fmi3" else flavour)
+    values = {"quasi_static": True, "load": 40.0, "wheel_speed": 0.6, "carriage_speed": 0.024}
+    t = Instance(root / "WheelTerrain.fmu", flavours["unzip"][(flavour, "WheelTerrain")],
+                 "yaw", log=True).start(values)
+    names = ("turning_moment", "aligning_moment", "lateral_force", "drawbar_pull", "slip")
+    try:
+        straight = t.get(names)
+        assert straight[:3] == [0.0, 0.0, 0.0]
+        t.set({"yaw_rate": 0.1})  # 4.2 rad/m
+        t.fmu.doStep(0.0, 1e-3)
+        yawing = dict(zip(names, t.get(names), strict=True))
+        assert yawing["turning_moment"] < 0
+        assert yawing["turning_moment"] != yawing["aligning_moment"]
+        assert yawing["drawbar_pull"] == pytest.approx(straight[3], rel=1e-12)
+        want = model.steady_state(presets.load(), 40.0, yawing["slip"], "unified",
+                                  turn_slip=0.1 / 0.024)
+        for key in names[:3]:
+            assert yawing[key] == pytest.approx(want[key], rel=1e-9, abs=1e-12), key
+
+        def beyond():  # refused where the FMU checks: setting the input, or the step
+            t.set({"yaw_rate": 1.01 * TURN_SLIP_LIMIT * 0.024})
+            t.fmu.doStep(1e-3, 1e-3)
+
+        with pytest.raises(FMICallException):
+            beyond()
+        assert any("turn slip" in m for m in t.errors()), t.log
     finally:
         t.close()
 

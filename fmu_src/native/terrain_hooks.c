@@ -83,6 +83,11 @@ static int model_refresh(Instance *c, double *dx, char *message) {
         snprintf(message, MAX_MESSAGE, MESSAGE_ANGLE, c->b.v[VR_SLIP_ANGLE], info, info);
         return 1;
     }
+    if (status == STATUS_TURN) {
+        snprintf(message, MAX_MESSAGE, MESSAGE_TURN, c->b.v[VR_YAW_RATE],
+                 c->b.v[VR_CARRIAGE_SPEED], info, info);
+        return 1;
+    }
     if (status == STATUS_NONFINITE) {
         snprintf(message, MAX_MESSAGE, MESSAGE_NONFINITE, c->b.v[VR_SINKAGE],
                  c->b.v[VR_WHEEL_SPEED], c->b.v[VR_CARRIAGE_SPEED], c->b.v[VR_LOAD]);

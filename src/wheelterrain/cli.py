@@ -35,6 +35,7 @@ from wheelterrain.parameters import (
     ROWS,
     SLIP_ANGLE_LIMIT,
     TABLE,
+    TURN_SLIP_LIMIT,
     parse_assignments,
     rover_lookup,
 )
@@ -338,17 +339,25 @@ def params(preset: str, assignments: tuple[str, ...], json_target: str | None) -
                    "to the left), aligning_moment [N.m] (about the vertical through the "
                    "centre, positive counter-clockwise from above), lateral_shear_force and "
                    "side_bulldozing [N] (Ishigami et al. 2007's side force: lateral shear on "
-                   "the rim and the side face's bulldozing).")
+                   "the rim and the side face's bulldozing) and turning_moment [N.m] (the "
+                   "soil's whole moment about that vertical).")
+@click.option("--turn-slip", "turn_slip", type=float, default=None, metavar="PER_M",
+              help="Turn slip [rad/m]: the wheel's yaw rate over its forward speed (positive "
+                   f"counter-clockwise from above; |turn slip| <= {TURN_SLIP_LIMIT:g}, a path "
+                   "no tighter than 0.1 m), e.g. 2/track for a skid-steered rover's point "
+                   "turn: adds the lateral outputs as --slip-angle, turning_moment [N.m] then "
+                   "also the moment of the longitudinal shear across the tread's width that "
+                   "resists the yawing.")
 @json_option("One object (the contract's keys, with `preset`)")
 def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definition: str,
-           load: float, interval: bool, slip_angle_deg: float | None,
+           load: float, interval: bool, slip_angle_deg: float | None, turn_slip: float | None,
            json_target: str | None) -> None:
     """Quasi-static operating point: solve the sinkage that carries LOAD at SLIP.
 
     Prints sinkage [m], drawbar_pull [N], normal_force [N], torque [N.m], both slips, the entry,
     exit and max-stress angles [rad], gross thrust, compaction resistance, contact length and mean
-    pressure; with --slip-angle also the lateral force and moments. Values are grouser-period
-    means (ripple-free) at zero sinkage rate.
+    pressure; with --slip-angle or --turn-slip also the lateral force and moments. Values are
+    grouser-period means (ripple-free) at zero sinkage rate.
     """
     _check_file_target(json_target)
     ps = _load(preset, assignments)
@@ -357,9 +366,15 @@ def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definiti
                                            and abs(slip_angle_deg) <= limit):
         _usage_error(f"--slip-angle {slip_angle_deg:g}: valid range [-{limit:g}, {limit:g}] deg "
                      "(a wheel moving sideways has no heading to slip along)")
+    if turn_slip is not None and not (math.isfinite(turn_slip)
+                                      and abs(turn_slip) <= TURN_SLIP_LIMIT):
+        _usage_error(f"--turn-slip {turn_slip:g}: valid range [-{TURN_SLIP_LIMIT:g}, "
+                     f"{TURN_SLIP_LIMIT:g}] rad/m (the wheel's path no tighter than a 0.1 m "
+                     "radius; a wheel yawing on the spot is outside the model)")
     beta = None if slip_angle_deg is None else math.radians(slip_angle_deg)
     try:
-        result = model.steady_state(ps, load, slip, slip_definition, slip_angle=beta)
+        result = model.steady_state(ps, load, slip, slip_definition, slip_angle=beta,
+                                    turn_slip=turn_slip)
         if interval:
             from wheelterrain.fit import crosswheel, datasets
 
@@ -384,8 +399,9 @@ def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definiti
         extra = f"   ({value / DEG:.3f} deg)" if unit == "rad" else ""
         extra = f"   ({value * 1e3:.3f} mm)" if key == "sinkage" else extra
         click.echo(f"{key:22} {value:14.6g} {unit}{extra}")
-    if beta is not None:
-        lateral = {"slip_angle": "rad", "lateral_force": "N", "aligning_moment": "N.m",
+    if "slip_angle" in result:
+        lateral = {"slip_angle": "rad", "turn_slip": "rad/m", "lateral_force": "N",
+                   "aligning_moment": "N.m", "turning_moment": "N.m",
                    "lateral_shear_force": "N", "side_bulldozing": "N"}
         for key, unit in lateral.items():
             extra = f"   ({result[key] / DEG:.3f} deg)" if unit == "rad" else ""

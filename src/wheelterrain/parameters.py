@@ -385,6 +385,13 @@ SLIP_ANGLE_LIMIT = math.radians(80.0)
 """rad: the largest |slip angle| the lateral contact takes, in every face (the API, the FMU's
 input, a sweep's axis, a test file's column): tan(beta), the sideways travel per metre
 forward, is 5.7 there; a wheel moving sideways, 90 deg, has no heading to slip along."""
+TURN_SLIP_LIMIT = 10.0
+"""rad/m: the largest |turn slip| (a wheel's yaw rate over its forward speed, the curvature of
+its path) the lateral contact takes, in every face: a path no tighter than a 0.1 m radius. The
+contact's shear is the displacement accumulated since the soil entered it (:class:`
+wheelterrain.model.contact._Sideways`), right while the yaw's share of it is not far past the
+shear modulus; the Rashid rover's point turn asks about 2/track (5 rad/m for a 0.4 m track),
+and a wheel yawing on the spot (infinite turn slip) is outside the model."""
 GRAVITY = {"earth": 9.81, "moon": 1.62}
 """m/s2: the gravities a rover runs in (``wheelterrain rover --gravity``; the rover.gravity
 row's default is the Earth's) and the Earth's of the shipped wheel tests' soil weights."""

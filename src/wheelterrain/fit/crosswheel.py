@@ -123,7 +123,7 @@ def lateral(form: Form, point: Point, constants: dict[str, float] | None, state:
     steady ``state`` (the slip angle does not move the sinkage)."""
     ps = parameters(form, point, constants)
     side = model_functions.build().lateral(state["sinkage"], state["slip"], point.slip_angle,
-                                           ps.vector())
+                                           0.0, ps.vector())
     return float(side[0])
 
 

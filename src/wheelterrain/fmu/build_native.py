@@ -160,7 +160,8 @@ def _hook_config(model: str, vr: dict[str, int]) -> list[str]:
         lines = [f"#define N_IN {len(inputs)}"]
         lines += [f"#define VR_{name.upper()} {vr[name]}" for name in
                   ("quasi_static", "warm_start", "wheel_angle", "plastic_sinkage", "sinkage",
-                   "wheel_speed", "carriage_speed", "load", "contact_sinkage", "slip_angle")]
+                   "wheel_speed", "carriage_speed", "load", "contact_sinkage", "slip_angle",
+                   "yaw_rate")]
         # soil_from_inputs: the ground.* inputs replace the soil's entries of p
         lines += [f"#define VR_SOIL_FROM_INPUTS {vr['soil_from_inputs']}",
                   f"#define N_GROUND {len(GROUND)}",
@@ -170,10 +171,11 @@ def _hook_config(model: str, vr: dict[str, int]) -> list[str]:
                   f"{_int_list(INDEX[p.name] for p in SOIL_ROWS)};"]
         lines += [f"#define STATUS_{key} {c_double(getattr(fmu_model, f'STATUS_{key}'))}"
                   for key in ("OK", "SLIP", "LOAD", "UNCONVERGED", "BURIED", "NONFINITE",
-                              "ANGLE")]
+                              "ANGLE", "TURN")]
         lines += [f"#define MESSAGE_{key} "
                   f"{c_string(fmu_model.STATUS_MESSAGES[getattr(fmu_model, f'STATUS_{key}')])}"
-                  for key in ("SLIP", "LOAD", "UNCONVERGED", "BURIED", "NONFINITE", "ANGLE")]
+                  for key in ("SLIP", "LOAD", "UNCONVERGED", "BURIED", "NONFINITE", "ANGLE",
+                              "TURN")]
     else:
         m = fmu_model.STATE_MODELS[model]
         inputs, outputs, params = m.inputs, m.outputs, list(m.parameters)

@@ -15,7 +15,9 @@ WheelTerrain
     output), 0 for a cold solve (``model_functions.build().steady_from``). ``status``: STATUS_OK,
     STATUS_SLIP (the wheel or the carriage moving backward, or the slip outside [-1, 1];
     ``info`` is the slip), STATUS_ANGLE (the slip_angle input beyond SLIP_ANGLE_LIMIT; ``info``
-    is the limit), STATUS_LOAD (load beyond the capacity; ``info`` is the capacity),
+    is the limit), STATUS_TURN (the yaw_rate input over the carriage speed beyond
+    TURN_SLIP_LIMIT; ``info`` is the limit), STATUS_LOAD (load beyond the capacity; ``info``
+    is the capacity),
     STATUS_UNCONVERGED (the solve's convergence check failed), STATUS_BURIED (dynamic mode:
     sinkage beyond full burial, R_c; ``info`` is R_c), STATUS_NONFINITE (an output is NaN or
     infinite: a last guard, so that no non-finite value is served). On a status other than OK the
@@ -48,7 +50,7 @@ from wheelterrain.fmu.variables import (
 from wheelterrain.model import contact, ground, rig, rover, soil, solve
 from wheelterrain.model import functions as model_functions
 from wheelterrain.model.slip import reference_radius
-from wheelterrain.parameters import INDEX, NAMES, SLIP_ANGLE_LIMIT
+from wheelterrain.parameters import INDEX, NAMES, SLIP_ANGLE_LIMIT, TURN_SLIP_LIMIT
 
 if RIG_INPUTS != rig.INPUTS:  # the FMU's inputs are the rig model's, in the same order
     raise ImportError(f"SingleWheelRig's inputs {RIG_INPUTS} differ from the rig model's "
@@ -60,7 +62,7 @@ if ROVER_INPUTS != rover.INPUTS:
 SPEED_FLOOR = 1e-9  # m/s: below this the wheel and the carriage are both at rest (slip 0)
 STATUS_OK, STATUS_SLIP, STATUS_LOAD, STATUS_UNCONVERGED, STATUS_BURIED, STATUS_NONFINITE = (
     0, 1, 2, 3, 4, 5)
-STATUS_ANGLE = 6
+STATUS_ANGLE, STATUS_TURN = 6, 7
 FINITE_LIMIT = 1e300  # |y| at or above this (or NaN) is not a finite output
 # What each status tells the user, as printf templates that both FMU flavours fill (the
 # pythonfmu slaves with %, the native wrapper with snprintf), so both print one sentence.
@@ -82,6 +84,10 @@ STATUS_MESSAGES = {
                        "rad/s, carriage speed %g m/s, load %g N"),
     STATUS_ANGLE: ("slip angle %g rad is outside the lateral contact's range [-%.6g, %.6g] "
                    "rad (80 deg): a wheel moving sideways has no heading to slip along"),
+    STATUS_TURN: ("yaw rate %g rad/s at carriage speed %g m/s is a turn slip (yaw rate over "
+                  "speed) outside the lateral contact's range [-%.6g, %.6g] rad/m: the wheel's "
+                  "path may curve no tighter than a 0.1 m radius; a wheel yawing on the spot "
+                  "or at rest is outside the model"),
 }
 
 
@@ -100,6 +106,8 @@ def status_message(status: int, info: float, u) -> str:
                                           v["load"])
     if status == STATUS_ANGLE:
         return STATUS_MESSAGES[status] % (v["slip_angle"], info, info)
+    if status == STATUS_TURN:
+        return STATUS_MESSAGES[status] % (v["yaw_rate"], v["carriage_speed"], info, info)
     return STATUS_MESSAGES[STATUS_UNCONVERGED] % v["load"]
 
 
@@ -198,21 +206,26 @@ def terrain_functions(smooth: float | None = None
     beta = named["slip_angle"]
     angle_bad = ca.fabs(beta) > SLIP_ANGLE_LIMIT
     safe_beta = ca.if_else(angle_bad, 0, beta)  # only used when the status is OK
+    yaw = named["yaw_rate"]  # turn slip yaw/V; a wheel at rest or backing has none in range
+    turn_bad = ca.fabs(yaw) > TURN_SLIP_LIMIT * ca.fmax(speed, 0)
+    turn_slip = ca.if_else(turn_bad, 0, yaw / ca.fmax(speed, SPEED_FLOOR))
     held = (fns.contact_memory if smooth is None
             else model_functions.contact_memory_smooth(smooth))
     out = dict(zip((*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS),
                    held(sinkage, rate, safe_slip, angle, plastic, speed, p), strict=True))
     out.update(zip(contact.LATERAL_OUTPUTS, fns.lateral_memory(
-        sinkage, safe_slip, safe_beta, plastic, out["mean_pressure"], p), strict=True))
+        sinkage, safe_slip, safe_beta, turn_slip, plastic, out["mean_pressure"], p),
+        strict=True))
     out.update(contact_sinkage=sinkage, slip=unified, slip_paper=paper)
     y = ca.vertcat(*(out[k] for k in TERRAIN_OUTPUTS))
     # sinkage R_c below the surface the contact begins at (a rut's): the soil at the axle
     full_burial = contact.radii(soil.Params(p))[0] + soil.rut_surface(soil.Params(p))
     status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(
-        angle_bad, STATUS_ANGLE, ca.if_else(
+        angle_bad, STATUS_ANGLE, ca.if_else(turn_bad, STATUS_TURN, ca.if_else(
             sinkage > full_burial, STATUS_BURIED, ca.if_else(
-                _finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE))))
-    info = ca.if_else(slip_bad, unified, ca.if_else(angle_bad, SLIP_ANGLE_LIMIT, full_burial))
+                _finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE)))))
+    info = ca.if_else(slip_bad, unified, ca.if_else(angle_bad, SLIP_ANGLE_LIMIT, ca.if_else(
+        turn_bad, TURN_SLIP_LIMIT, full_burial)))
     dynamic = ca.Function("terrain_dynamic", [u, angle, plastic, given],
                           [y, status, info, out["plastic_rate"]],
                           ["u", "angle", "plastic", "p"], ["y", "status", "info", "plastic_rate"])
@@ -237,15 +250,17 @@ def terrain_functions(smooth: float | None = None
     steady.update(contact_sinkage=steady["sinkage"], slip=unified, slip_paper=paper,
                   ripple_amplitude=0)
     steady.update(zip(contact.LATERAL_OUTPUTS, fns.lateral(steady["sinkage"], safe_slip,
-                                                           safe_beta, p), strict=True))
+                                                           safe_beta, turn_slip, p),
+                      strict=True))
     y = ca.vertcat(*(steady[k] for k in TERRAIN_OUTPUTS))
     too_heavy = load > steady["capacity"]
     converged = solve.solve_converged(steady["residual"], steady["last_step"])
     status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(angle_bad, STATUS_ANGLE, ca.if_else(
-        too_heavy, STATUS_LOAD, ca.if_else(converged, ca.if_else(
-            _finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE), STATUS_UNCONVERGED))))
-    info = ca.if_else(slip_bad, unified, ca.if_else(angle_bad, SLIP_ANGLE_LIMIT,
-                                                    steady["capacity"]))
+        turn_bad, STATUS_TURN, ca.if_else(too_heavy, STATUS_LOAD, ca.if_else(
+            converged, ca.if_else(_finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE),
+            STATUS_UNCONVERGED)))))
+    info = ca.if_else(slip_bad, unified, ca.if_else(angle_bad, SLIP_ANGLE_LIMIT, ca.if_else(
+        turn_bad, TURN_SLIP_LIMIT, steady["capacity"])))
     quasi = ca.Function("terrain_quasi_static", [u, given, guess], [y, status, info],
                         ["u", "p", "guess"], ["y", "status", "info"])
     return dynamic, quasi, memory

@@ -28,6 +28,7 @@ from wheelterrain.parameters import (
     ROWS,
     SLIP_ANGLE_LIMIT,
     TERRAIN_FMU,
+    TURN_SLIP_LIMIT,
     Parameter,
 )
 
@@ -115,6 +116,11 @@ _SLIP_ANGLE = Var("slip_angle", "input", "Slip angle between the wheel's heading
                   "the speeds along the heading. 0: a wheel driven straight (no lateral "
                   "force)", "rad", "Angle", "deg", start=0.0, min=-SLIP_ANGLE_LIMIT,
                   max=SLIP_ANGLE_LIMIT)
+_YAW_RATE = Var("yaw_rate", "input", "Yaw rate of the wheel about the vertical through its "
+                "centre, positive counter-clockwise seen from above; with carriage_speed, the "
+                "turn slip yaw_rate/carriage_speed (rad/m, the curvature of the wheel's path), "
+                f"|turn slip| <= {TURN_SLIP_LIMIT:g} rad/m. 0: a wheel that does not yaw",
+                "rad/s", "AngularVelocity", start=0.0, min=-1.0e3, max=1.0e3)
 
 TERRAIN_IO: tuple[Var, ...] = (
     Var("quasi_static", "parameter",
@@ -189,11 +195,20 @@ TERRAIN_IO: tuple[Var, ...] = (
         Var("lateral_force", "output", "Lateral force of the soil on the wheel, along its "
             "axle, positive to the wheel's left (Ishigami et al. 2007's side force: lateral "
             "shear on the rim and the side face's bulldozing; grouser-period mean); 0 at "
-            "slip_angle 0", "N", "Force"),
+            "slip_angle and yaw_rate 0", "N", "Force"),
         Var("aligning_moment", "output", "Moment of the lateral force about the vertical "
             "through the wheel's centre, positive counter-clockwise seen from above (the "
-            "self-aligning moment); 0 at slip_angle 0", "N.m", "Torque"),
-    ], (*_TERRAIN_INPUTS, *GROUND, "slip_angle")),
+            "self-aligning moment); 0 at slip_angle and yaw_rate 0", "N.m", "Torque"),
+    ], (*_TERRAIN_INPUTS, *GROUND, "slip_angle", "yaw_rate")),
+    # a wheel that yaws: after the slip angle's variables, for the same reason
+    _YAW_RATE,
+    *_outputs([
+        Var("turning_moment", "output", "The soil's whole moment on the wheel about the "
+            "vertical through its centre, positive counter-clockwise seen from above (M_z: "
+            "aligning_moment plus the moment of the longitudinal shear across the tread's "
+            "width that a yawing wheel meets; grouser-period mean); equal to aligning_moment "
+            "at yaw_rate 0, 0 at slip_angle and yaw_rate 0", "N.m", "Torque"),
+    ], (*_TERRAIN_INPUTS, *GROUND, "slip_angle", "yaw_rate")),
 )
 
 RIG_IO: tuple[Var, ...] = (
@@ -353,7 +368,7 @@ def _names(rows: tuple[Var, ...], causality: str, computed: bool = False) -> tup
                  if v.causality == causality and not (computed and v.integrated))
 
 
-TERRAIN_INPUTS = (*_TERRAIN_INPUTS, "slip_angle")
+TERRAIN_INPUTS = (*_TERRAIN_INPUTS, "slip_angle", "yaw_rate")
 """The order of the terrain Functions' ``u`` (terrain_dynamic, terrain_quasi_static). The
 ground.* inputs (:data:`GROUND`) are not in it: with soil_from_inputs they replace the soil's
 entries of the Functions' ``p`` (:func:`soil_from_ground`)."""

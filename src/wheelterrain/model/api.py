@@ -26,7 +26,7 @@ from wheelterrain.model.slip import (
     to_unified,
 )
 from wheelterrain.model.solve import RESIDUAL_TOLERANCE, STEP_TOLERANCE  # noqa: F401 (public)
-from wheelterrain.parameters import SLIP_ANGLE_LIMIT, ParameterSet
+from wheelterrain.parameters import SLIP_ANGLE_LIMIT, TURN_SLIP_LIMIT, ParameterSet
 
 
 def _params(params: Mapping[str, float] | ParameterSet) -> ParameterSet:
@@ -85,7 +85,8 @@ def capacity(params: Mapping[str, float] | ParameterSet, slip: float,
 
 def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: float,
                  slip_definition: str = DEFAULT_DEFINITION,
-                 slip_angle: float | None = None) -> dict[str, float]:
+                 slip_angle: float | None = None,
+                 turn_slip: float | None = None) -> dict[str, float]:
     """Quasi-static operating point: the sinkage at which the static normal force carries ``load``.
 
     load [N] >= 0 (0 gives zero sinkage and zero forces). The result is the grouser-period mean
@@ -96,7 +97,9 @@ def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: 
     moves toward its left), ``slip`` then the slip along its heading; the result adds
     ``slip_angle`` and ``contact.LATERAL_OUTPUTS`` at the solved sinkage (the longitudinal
     results are those without it, bit for bit: the slip angle does not change the normal
-    stress or the longitudinal shear).
+    stress or the longitudinal shear). ``turn_slip`` [rad/m], |phi| <= TURN_SLIP_LIMIT: the
+    wheel's yaw rate over its forward speed (positive counter-clockwise seen from above); with
+    either given, the other is taken as 0 and the result adds both and LATERAL_OUTPUTS.
 
     Raises LoadTooLargeError if the wheel cannot carry the load fully buried, SolveError if the
     solve did not reach RESIDUAL_TOLERANCE (never observed; it is checked, not assumed).
@@ -106,6 +109,8 @@ def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: 
     i = to_unified(slip, slip_definition)
     beta = None if slip_angle is None else _finite("slip_angle", slip_angle,
                                                    -SLIP_ANGLE_LIMIT, SLIP_ANGLE_LIMIT)
+    phi = None if turn_slip is None else _finite("turn_slip", turn_slip, -TURN_SLIP_LIMIT,
+                                                 TURN_SLIP_LIMIT)
     out = _named(_functions.build().steady(w, i, ps.vector()), _solve.STEADY_OUTPUTS)
     if w > out["capacity"]:
         raise LoadTooLargeError(w, out["capacity"], contact_radius(ps))
@@ -113,9 +118,10 @@ def steady_state(params: Mapping[str, float] | ParameterSet, load: float, slip: 
         raise SolveError(f"sinkage solve did not converge for load {w:g} N, slip {i:g}: "
                          + _unconverged(out["residual"], out["last_step"]))
     out.update(load=w, slip=i, slip_paper=paper_from_unified(i))
-    if beta is not None:
-        side = _functions.build().lateral(out["sinkage"], i, beta, ps.vector())
-        out.update(slip_angle=beta, **_named(side, _contact.LATERAL_OUTPUTS))
+    if beta is not None or phi is not None:
+        beta, phi = beta or 0.0, phi or 0.0
+        side = _functions.build().lateral(out["sinkage"], i, beta, phi, ps.vector())
+        out.update(slip_angle=beta, turn_slip=phi, **_named(side, _contact.LATERAL_OUTPUTS))
     return out
 
 

@@ -656,12 +656,22 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, ripp
 
 # --- lateral mechanics: a wheel at a slip angle ------------------------------------------------
 
-LATERAL_INPUTS = ("sinkage", "slip", "slip_angle", "p")
-LATERAL_OUTPUTS = ("lateral_force", "aligning_moment", "lateral_shear_force", "side_bulldozing")
+LATERAL_INPUTS = ("sinkage", "slip", "slip_angle", "turn_slip", "p")
+LATERAL_OUTPUTS = ("lateral_force", "aligning_moment", "lateral_shear_force", "side_bulldozing",
+                   "turning_moment")
 """The lateral contact of :func:`lateral_at`: the soil's force on the wheel along its axle
-(positive to the wheel's left), its moment about the vertical through the wheel's centre
-(positive counter-clockwise seen from above), and the force's two parts: the lateral shear on
-the rim and the side face's bulldozing."""
+(positive to the wheel's left), the moment of the lateral stresses about the vertical through
+the wheel's centre (the self-aligning moment, positive counter-clockwise seen from above), the
+force's two parts (the lateral shear on the rim, the side face's bulldozing), and the soil's
+whole moment about that vertical, the aligning moment plus the moment of the longitudinal shear
+across the tread's width that a yawing wheel meets (:func:`_width_moment`): M_z, what resists
+the wheel's yawing (equal to the aligning moment at turn slip 0)."""
+LATERAL_RESULTANTS = ("lateral_force", "aligning_moment", "turning_moment")
+"""The lateral outputs a vehicle takes (the rest are parts of them); the rows of
+``functions.build().lateral_jacobian``."""
+WIDTH_NODES = 6
+"""Gauss-Legendre nodes over the half width of :func:`_width_moment` (measured against a
+400-point rule in tests/test_turning.py)."""
 
 
 def _lateral_kinematics(slip, slip_angle, Rs, Rref):
@@ -677,6 +687,47 @@ def _lateral_kinematics(slip, slip_angle, Rs, Rref):
     _, v, _ = _kinematics(slip, Rs, Rref)
     tan_b = ca.tan(slip_angle)
     return tan_b * v, tan_b
+
+
+class _Sideways:
+    """The lateral shear displacement j_y of a wheel at slip angle beta and turn slip phi
+    (``turn_slip`` [rad/m]: its yaw rate r over its forward speed V, the curvature of its path
+    in the wheel's frame; Pacejka's turn slip without camber). A contact element at x [m] ahead
+    of the axle moves sideways at V*(tan(beta) + phi*x), so per metre the wheel travels it
+    slips tan(beta) + phi*x, and the displacement it accumulated since it entered the soil (as
+    the longitudinal shear counts it, Wong & Reece 1967; for the yaw part, the brush model of
+    turn slip, Pacejka, *Tire and Vehicle Dynamics*, ch. 3) is, x_f = R_c*sin(theta_f):
+
+    - wheel element (``model.shear_kinematics`` 0), time counted by the wheel's turning (per
+      distance travelled braking, :func:`_kinematics`' v):
+      j_y = v*[tan(beta)*(theta_f - theta) + phi*R_c*(cos(theta) - cos(theta_f))];
+    - soil element (1), sheared while the wheel passes it, s = x_f - x the distance passed:
+      j_y = tan(beta)*s + phi*s*(x_f + x)/2.
+
+    With ``turn`` False the phi terms are not formed (a kernel at turn slip 0: the slip angle's
+    expressions as they were, bit for bit)."""
+
+    def __init__(self, slip, slip_angle, turn_slip, P: Params, turn: bool) -> None:
+        Rc, Rs, Rref = radii(P)
+        _, self.v, _ = _kinematics(slip, Rs, Rref)
+        self.per_radian, self.per_metre = _lateral_kinematics(slip, slip_angle, Rs, Rref)
+        self.kin, self.Rc, self.phi, self.turn = P["model.shear_kinematics"], Rc, turn_slip, turn
+
+    def at(self, o: dict, sin_f) -> ca.SX:
+        """j_y at the nodes of an :func:`_offset_trig` dict (``sin_f`` = sin(theta_f))."""
+        wheel = self.per_radian * o["x"]
+        passed = self.Rc * o["sin_drop"]  # s = x_f - x
+        soil = self.per_metre * passed
+        if self.turn:
+            wheel = wheel + self.phi * self.v * self.Rc * o["cos_drop"]
+            soil = soil + self.phi * passed * self.Rc * (sin_f + o["sin"]) / 2
+        return (1 - self.kin) * wheel + self.kin * soil
+
+    def width_rate(self, o: dict) -> ca.SX:
+        """D at the nodes: the longitudinal displacement per metre of lateral offset y per unit
+        turn slip (a tread element at y, to the wheel's left, slips backward faster by r*y:
+        j_x(y) = j_x + phi*y*D); D = v*(theta_f - theta) (wheel element), s (soil element)."""
+        return (1 - self.kin) * self.v * o["x"] + self.kin * self.Rc * o["sin_drop"]
 
 
 def _lateral_modulus(length, P: Params):
@@ -715,36 +766,73 @@ def _side_bulldozing(nodes_weights, j_y, K_y, P: Params, Rc):
     return share * force, share * moment
 
 
-def _lateral_arc(theta_f, slip, slip_angle, P: Params, nodes: tuple[int, int]) -> dict:
+def _width_moment(law, centre, spread, b):
+    """int_{-b/2}^{b/2} y*law(centre + spread*y) dy [m2 times law's unit] for an odd ``law``
+    (the mobilised shear fraction of a tread element at lateral offset y): the first moment
+    across the width, as int_0^{b/2} y*(law(centre + spread*y) - law(centre - spread*y)) dy by
+    WIDTH_NODES-point Gauss-Legendre. ``centre``, ``spread``: one value or a column per node;
+    exactly 0 at spread 0."""
+    x, w = np.polynomial.legendre.leggauss(WIDTH_NODES)
+    half = b / 2
+    total = 0
+    for u, wk in zip((x + 1.0) / 2.0, w / 2.0, strict=True):
+        y = half * float(u)
+        total = total + half * float(wk) * y * (law(centre + spread * y)
+                                                - law(centre - spread * y))
+    return total
+
+
+def _lateral_arc(theta_f, slip, slip_angle, turn_slip, P: Params, nodes: tuple[int, int],
+                 turn: bool = False) -> dict:
     """The arc form's lateral contact (LATERAL_OUTPUTS) at entry angle ``theta_f``, ripple-free
     (the grouser-period mean): the lateral shear stress -(c + sigma*tan(phi))*g(j_y; K_y) on
-    the rim, sigma the arc's own normal stress at each node (:class:`_ArcNodes`), plus the side
-    face's bulldozing (:func:`_side_bulldozing`). Ishigami et al. 2007's side force with the
-    lateral shear law kept apart from the longitudinal one, as they do (the two are not
-    combined into one resultant limited by Coulomb's strength: at a large slip angle and slip
-    both can be near full, a known limit of the form)."""
-    Rc, Rs, Rref = radii(P)
+    the rim, sigma the arc's own normal stress at each node (:class:`_ArcNodes`), j_y of
+    :class:`_Sideways`, plus the side face's bulldozing (:func:`_side_bulldozing`). Ishigami
+    et al. 2007's side force with the lateral shear law kept apart from the longitudinal one, as
+    they do (the two are not combined into one resultant limited by Coulomb's strength: at a
+    large slip angle and slip both can be near full, a known limit of the form).
+
+    ``turn``: with the turn slip's terms (:class:`_Sideways`) and the moment of the
+    longitudinal shear across the width: a tread element at y slips longitudinally by
+    j_x + phi*y*D (:meth:`_Sideways.width_rate`), so the shear's moment about the vertical is
+    -R_s*int (c + sigma*tan(phi))*cos(theta)*int y*g(j_x + phi*y*D; K) dy dtheta
+    (:func:`_width_moment`; j_x the centre line's ripple-free displacement). Without it the
+    turning moment is the aligning moment."""
+    Rc, Rs, _ = radii(P)
     b = P["wheel.width"]
     c, tan_phi = shear_strength(P)
     arc = _ArcNodes(theta_f, slip, P, nodes, reversal=False)  # j_y keeps its sign
-    per_radian, per_metre = _lateral_kinematics(slip, slip_angle, Rs, Rref)
-    kin = P["model.shear_kinematics"]
-
-    def j_y(o):
-        return (1 - kin) * per_radian * o["x"] + kin * per_metre * Rc * o["sin_drop"]
-
-    K_y = _lateral_modulus(_contact_length(theta_f, P), P)
+    side = _Sideways(slip, slip_angle, turn_slip, P, turn)
+    sin_f = arc.displacement.sin_f
+    length = _contact_length(theta_f, P)
+    K_y = _lateral_modulus(length, P)
     strength = c + arc.sigma0 * tan_phi  # the rear nodes carry the front nodes' stress
-    j_front, j_rear = j_y(arc.front), j_y(arc.rear)
+    j_front, j_rear = side.at(arc.front, sin_f), side.at(arc.rear, sin_f)
     tau_f = -strength * shear_function(j_front, P, K_y)
     tau_r = -strength * shear_function(j_rear, P, K_y)
     shear = b * Rs * (ca.dot(arc.w_front, tau_f) + ca.dot(arc.w_rear, tau_r))
     moment = b * Rs * Rc * (ca.dot(arc.w_front, tau_f * arc.front["sin"])
                             + ca.dot(arc.w_rear, tau_r * arc.rear["sin"]))
-    side, side_moment = _side_bulldozing(((arc.front, arc.w_front), (arc.rear, arc.w_rear)),
-                                         (j_front, j_rear), K_y, P, Rc)
-    return {"lateral_force": shear + side, "aligning_moment": moment + side_moment,
-            "lateral_shear_force": shear, "side_bulldozing": side}
+    side_force, side_moment = _side_bulldozing(((arc.front, arc.w_front),
+                                                (arc.rear, arc.w_rear)),
+                                               (j_front, j_rear), K_y, P, Rc)
+    aligning = moment + side_moment
+    turning = aligning
+    if turn:
+        K = effective_shear_modulus(length, P)
+
+        def law(j):
+            return shear_function(j, P, K)
+
+        width = 0
+        for o, w in ((arc.front, arc.w_front), (arc.rear, arc.w_rear)):
+            first = _width_moment(law, arc.displacement.at(o), turn_slip * side.width_rate(o),
+                                  b)
+            width = width + ca.dot(w, strength * o["cos"] * first)
+        turning = aligning - Rs * width
+    return {"lateral_force": shear + side_force, "aligning_moment": aligning,
+            "lateral_shear_force": shear, "side_bulldozing": side_force,
+            "turning_moment": turning}
 
 
 SMALL_CENTRED = 0.05
@@ -781,7 +869,8 @@ def patch_shear_centred_moment(a, P: Params):
     return ca.sign(a) * ((1 - hump) * janosi + hump * wong)
 
 
-def _lateral_patch(theta_f, slip, slip_angle, P: Params, nodes: tuple[int, int]) -> dict:
+def _lateral_patch(theta_f, slip, slip_angle, turn_slip, P: Params, nodes: tuple[int, int],
+                   turn: bool = False) -> dict:
     """The patch form's lateral contact (LATERAL_OUTPUTS): Bekker's patch shear turned
     sideways, -(c*b*l + Fz_static*tan(phi))*m(y*l/K_y), y the lateral displacement per metre
     of the patch (:func:`_lateral_kinematics` over R_s, the rim's speed past the soil, as the
@@ -789,7 +878,15 @@ def _lateral_patch(theta_f, slip, slip_angle, P: Params, nodes: tuple[int, int])
     first moment of the same distribution about the patch's middle
     (:func:`patch_shear_centred_moment`, free of cancellation) and the middle's position
     R_c*(sin(theta_f) + sin(theta_r))/2; the side face's bulldozing as in the arc form, over
-    the same arc's geometry."""
+    the same arc's geometry.
+
+    ``turn``: at a turn slip phi the displacement s metres behind the patch's front is
+    f*(tan(beta)*s + phi*s*(x_f + x)/2) (:class:`_Sideways` on the patch, f the factor above),
+    no longer linear in s, so the uniform stress's mean and moment are taken by the arc
+    quadrature's nodes over the patch (ds = R_c*cos(theta)*dtheta), and the turning moment adds
+    the moment of the longitudinal shear across the width: a strip at y shears by
+    (x_s + phi*f*y)*s, so it carries (c*l + Fz_static*tan(phi)/b)*m((x_s + phi*f*y)*l/K) per
+    metre of width and the moment is -(that)*int y*m(...) dy (:func:`_width_moment`)."""
     Rc, Rs, Rref = radii(P)
     b = P["wheel.width"]
     c, tan_phi = shear_strength(P)
@@ -799,64 +896,100 @@ def _lateral_patch(theta_f, slip, slip_angle, P: Params, nodes: tuple[int, int])
     kin = P["model.shear_kinematics"]
     rate = (1 - kin) * per_radian / Rs + kin * per_metre  # j_y per metre of the patch
     K_y = _lateral_modulus(length, P)
-    a = rate * length / K_y
     full = c * b * length + normal * tan_phi
-    mean = patch_shear_mean(a, P)
-    shear = -full * mean
     theta_r = static["exit_angle"]
-    middle = Rc * (ca.sin(theta_f) + ca.sin(theta_r)) / 2  # the patch's middle, ahead of the axle
-    moment = -full * (middle * mean - length * patch_shear_centred_moment(a, P))
     g, w = _panel_rule(nodes[0])
     trig_f = ca.sin(theta_f), ca.cos(theta_f)
     arc = _offset_trig(*trig_f, (theta_f - theta_r) * g)
-    j_y = rate * Rc * arc["sin_drop"]
-    side, side_moment = _side_bulldozing((((arc, (theta_f - theta_r) * w)),), (j_y,), K_y, P, Rc)
-    return {"lateral_force": shear + side, "aligning_moment": moment + side_moment,
-            "lateral_shear_force": shear, "side_bulldozing": side}
+    weights = (theta_f - theta_r) * w
+    passed = Rc * arc["sin_drop"]  # s, metres behind the patch's front
+    j_y = rate * passed
+    if turn:
+        a_long, v, soil_ratio = _kinematics(slip, Rs, Rref)
+        factor = (1 - kin) * v / Rs + kin
+        j_y = j_y + factor * turn_slip * passed * Rc * (trig_f[0] + arc["sin"]) / 2
+        mobilised = shear_function(j_y, P, K_y)
+        along = weights * Rc * arc["cos"]  # ds
+        stress = b * (c + static["mean_pressure"] * tan_phi)  # full/l, per metre of the patch
+        shear = -stress * ca.dot(along, mobilised)
+        moment = -stress * ca.dot(along, mobilised * Rc * arc["sin"])
+    else:
+        a = rate * length / K_y
+        mean = patch_shear_mean(a, P)
+        shear = -full * mean
+        middle = Rc * (ca.sin(theta_f) + ca.sin(theta_r)) / 2  # the patch's middle
+        moment = -full * (middle * mean - length * patch_shear_centred_moment(a, P))
+    side, side_moment = _side_bulldozing((((arc, weights)),), (j_y,), K_y, P, Rc)
+    aligning = moment + side_moment
+    turning = aligning
+    if turn:
+        K = effective_shear_modulus(length, P)
+        x_s = (1 - kin) * (a_long - v / Rs) + kin * (soil_ratio - 1)  # as _patch_form's
+
+        def law(a):
+            return patch_shear_mean(a, P)
+
+        width = _width_moment(law, x_s * length / K, turn_slip * factor * length / K, b)
+        turning = aligning - full / b * width
+    return {"lateral_force": shear + side, "aligning_moment": aligning,
+            "lateral_shear_force": shear, "side_bulldozing": side,
+            "turning_moment": turning}
 
 
-NO_SLIP_ANGLE, LATERAL_ARC, LATERAL_PATCH = 0, 1, 2  # the cases of the lateral switch
+LATERAL_FORMS = ("none", "arc", "patch", "turn_arc", "turn_patch")
+"""The cases of the lateral switch, in case order: nothing (slip angle and turn slip 0), each
+form at a slip angle alone, each form with the turn slip's terms."""
+NO_SLIP_ANGLE, LATERAL_ARC, LATERAL_PATCH, TURN_ARC, TURN_PATCH = range(len(LATERAL_FORMS))
+
+
+def _lateral_symbols():
+    """Symbols of LATERAL_INPUTS (the first the sinkage or, for the switch, the entry angle)."""
+    return [ca.SX.sym(n) for n in LATERAL_INPUTS[:-1]] + [ca.SX.sym("p", len(NAMES))]
 
 
 @lru_cache(maxsize=8)
 def lateral_switch(nodes: tuple[int, int]) -> tuple[ca.Function, ca.Function]:
     """``(case, switch)``: the lateral contact (LATERAL_OUTPUTS) at an entry angle, evaluating
-    only what applies: zeros at slip angle 0 (NO_SLIP_ANGLE: nothing computed, so a wheel
-    driven straight pays nothing for it), else the arc's or the patch's kernel.
-    ``case(theta_f, slip_angle, p)``, ``switch(case, theta_f, slip, slip_angle, p)``."""
-    th, sl, beta, pp = (ca.SX.sym("theta_f"), ca.SX.sym("slip"), ca.SX.sym("slip_angle"),
-                        ca.SX.sym("p", len(NAMES)))
+    only what applies: zeros at slip angle and turn slip 0 (NO_SLIP_ANGLE: nothing computed,
+    so a wheel driven straight pays nothing for it), the arc's or the patch's kernel at a slip
+    angle alone, their turn-slip kernels (the width moment's extra shear laws) otherwise.
+    ``case(theta_f, slip_angle, turn_slip, p)``,
+    ``switch(case, theta_f, slip, slip_angle, turn_slip, p)``."""
+    th, sl, beta, phi, pp = _lateral_symbols()
     P = Params(pp)
 
     def kernel(name: str, out: dict) -> ca.Function:
-        return ca.Function(name, [th, sl, beta, pp],
+        return ca.Function(f"lateral_{name}", [th, sl, beta, phi, pp],
                            [ca.vertcat(*(out[k] for k in LATERAL_OUTPUTS))], {"cse": True})
 
-    zero = kernel("lateral_none", dict.fromkeys(LATERAL_OUTPUTS, ca.SX(0)))
-    arc = kernel("lateral_arc", _lateral_arc(th, sl, beta, P, nodes))
-    patch = kernel("lateral_patch", _lateral_patch(th, sl, beta, P, nodes))
-    case = ca.Function("lateral_case", [th, beta, pp], [ca.if_else(
-        beta == 0, NO_SLIP_ANGLE, ca.if_else(P["model.contact_form"] == 1, LATERAL_PATCH,
-                                             LATERAL_ARC))])
-    return case, ca.Function.conditional("lateral_form", [zero, arc], patch)
+    kernels = [kernel("none", dict.fromkeys(LATERAL_OUTPUTS, ca.SX(0)))]
+    for turn in (False, True):
+        kernels.append(kernel("turn_arc" if turn else "arc",
+                              _lateral_arc(th, sl, beta, phi, P, nodes, turn)))
+        kernels.append(kernel("turn_patch" if turn else "patch",
+                              _lateral_patch(th, sl, beta, phi, P, nodes, turn)))
+    patch = P["model.contact_form"] == 1
+    case = ca.Function("lateral_case", [th, beta, phi, pp], [ca.if_else(
+        ca.logic_and(beta == 0, phi == 0), NO_SLIP_ANGLE,
+        ca.if_else(phi == 0, ca.if_else(patch, LATERAL_PATCH, LATERAL_ARC),
+                   ca.if_else(patch, TURN_PATCH, TURN_ARC)))])
+    return case, ca.Function.conditional("lateral_form", kernels[:-1], kernels[-1])
 
 
 @lru_cache(maxsize=4)
 def lateral_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> tuple[ca.Function, tuple]:
     """The lateral contact as plain SX Functions of LATERAL_INPUTS, for code generators:
-    ``(case, forms)``, ``case`` giving :func:`lateral_switch`' case at each point
-    (NO_SLIP_ANGLE, LATERAL_ARC, LATERAL_PATCH) and ``forms[case]`` that case's kernel, the
-    entry angle from the sinkage as :func:`lateral_at` takes it (the lane kernels of
+    ``(case, forms)``, ``case`` giving :func:`lateral_switch`' case at each point (the index
+    into LATERAL_FORMS) and ``forms[case]`` that case's kernel, the entry angle from the
+    sinkage as :func:`lateral_at` takes it (the lane kernels of
     :mod:`wheelterrain.model.lanes`; :func:`lateral_export` selects among them)."""
-    z, sl, beta, pp = (ca.SX.sym("sinkage"), ca.SX.sym("slip"), ca.SX.sym("slip_angle"),
-                       ca.SX.sym("p", len(NAMES)))
+    z, sl, beta, phi, pp = args = _lateral_symbols()
     P = Params(pp)
     theta_f = entry_angle(z - rut_surface(P), P)
     case, switch = lateral_switch(nodes)
-    args = [z, sl, beta, pp]
-    case_fn = ca.Function("lateral_case", args, [case(theta_f, beta, pp)])
+    case_fn = ca.Function("lateral_case", args, [case(theta_f, beta, phi, pp)])
     forms = tuple(ca.Function(f"lateral_{name}", args, [switch.find_function(
-        f"lateral_{name}")(theta_f, sl, beta, pp)]) for name in ("none", "arc", "patch"))
+        f"lateral_{name}")(theta_f, sl, beta, phi, pp)]) for name in LATERAL_FORMS)
     return case_fn, forms
 
 
@@ -864,19 +997,18 @@ def lateral_kernels(nodes: tuple[int, int] = DEFAULT_NODES) -> tuple[ca.Function
 def lateral_export(nodes: tuple[int, int] = DEFAULT_NODES) -> ca.Function:
     """The quasi-static lateral contact as one plain SX Function of LATERAL_INPUTS, for code
     that is not CasADi's (the Modelica library): :func:`lateral_kernels`, the switch a select
-    (both forms evaluated)."""
-    z, sl, beta, pp = (ca.SX.sym("sinkage"), ca.SX.sym("slip"), ca.SX.sym("slip_angle"),
-                       ca.SX.sym("p", len(NAMES)))
-    case, (_, arc, patch) = lateral_kernels(nodes)
-    which = case(z, sl, beta, pp)
-    y = ca.if_else(which == NO_SLIP_ANGLE, 0, ca.if_else(
-        which == LATERAL_PATCH, patch(z, sl, beta, pp), arc(z, sl, beta, pp)))
-    return ca.Function("lateral", [z, sl, beta, pp], [y], list(LATERAL_INPUTS), ["y"],
-                       {"cse": True})
+    (every form evaluated)."""
+    args = _lateral_symbols()
+    case, forms = lateral_kernels(nodes)
+    which = case(*args)
+    y = ca.SX.zeros(len(LATERAL_OUTPUTS))  # NO_SLIP_ANGLE
+    for k in range(len(LATERAL_FORMS) - 1, 0, -1):
+        y = ca.if_else(which == k, forms[k](*args), y)
+    return ca.Function("lateral", args, [y], list(LATERAL_INPUTS), ["y"], {"cse": True})
 
 
-LATERAL_MEMORY_INPUTS = ("sinkage", "slip", "slip_angle", "plastic_sinkage", "mean_pressure",
-                         "p")
+LATERAL_MEMORY_INPUTS = ("sinkage", "slip", "slip_angle", "turn_slip", "plastic_sinkage",
+                         "mean_pressure", "p")
 """The inputs of :func:`lateral_memory_export`: the lateral contact on the soil with memory."""
 
 
@@ -887,13 +1019,13 @@ def lateral_memory_export(nodes: tuple[int, int] = DEFAULT_NODES) -> ca.Function
     the longitudinal forces (``mean_pressure``: the contact's, as ``contact_memory`` gives it
     at the same state), one plain SX Function of LATERAL_MEMORY_INPUTS for the Modelica
     library's wheels."""
-    z, sl, beta, plastic, pressure = (ca.SX.sym(n) for n in LATERAL_MEMORY_INPUTS[:-1])
+    z, sl, beta, phi, plastic, pressure = (ca.SX.sym(n) for n in LATERAL_MEMORY_INPUTS[:-1])
     pp = ca.SX.sym("p", len(NAMES))
     P = Params(pp)
     yielded = _yield_sinkage(z, plastic, P)
-    y = lateral_export(nodes)(yielded, sl, beta, pp)
+    y = lateral_export(nodes)(yielded, sl, beta, phi, pp)
     y = unloading_share(z, yielded, pressure, P) * y  # as lateral_at scales it
-    return ca.Function("lateralMemory", [z, sl, beta, plastic, pressure, pp], [y],
+    return ca.Function("lateralMemory", [z, sl, beta, phi, plastic, pressure, pp], [y],
                        list(LATERAL_MEMORY_INPUTS), ["y"], {"cse": True})
 
 
@@ -928,15 +1060,17 @@ def unloading_share(z, yielded, mean_pressure, P: Params, smooth=None):
     return soft_max(ca.fmax(kept, -1), 0, SHARE_WIDTH)
 
 
-def lateral_at(z, slip, slip_angle, P: Params, nodes: tuple[int, int] = DEFAULT_NODES,
-               plastic=None, mean_pressure=None) -> dict:
+def lateral_at(z, slip, slip_angle, turn_slip, P: Params,
+               nodes: tuple[int, int] = DEFAULT_NODES, plastic=None, mean_pressure=None) -> dict:
     """The lateral contact (LATERAL_OUTPUTS) of a wheel at sinkage ``z`` [m] (from the original
     surface; its contact begins at the rut's surface as the longitudinal one's), the model's
-    slip ``slip`` along its heading and the slip angle ``slip_angle`` [rad] between its heading
-    and its velocity (positive: the wheel moves toward its left), in the form
-    ``model.contact_form`` selects, ripple-free (the grouser-period mean). 0 at slip angle 0,
-    exactly; odd in the slip angle. The longitudinal contact is not changed by the slip angle
-    (the slip is the one along the heading, the normal stress the same).
+    slip ``slip`` along its heading, the slip angle ``slip_angle`` [rad] between its heading
+    and its velocity (positive: the wheel moves toward its left) and the turn slip
+    ``turn_slip`` [rad/m] (its yaw rate over its forward speed, positive counter-clockwise
+    seen from above; :class:`_Sideways`), in the form ``model.contact_form`` selects,
+    ripple-free (the grouser-period mean). 0 at slip angle and turn slip 0, exactly; odd in
+    the pair (slip angle, turn slip). The longitudinal contact is not changed by either (the
+    slip is the one along the heading, the normal stress the same).
 
     ``plastic`` (with ``mean_pressure``, the longitudinal contact's at the yield sinkage, as
     :func:`contact_at` gives it): the wheel's plastic sinkage; the lateral contact is then
@@ -945,7 +1079,8 @@ def lateral_at(z, slip, slip_angle, P: Params, nodes: tuple[int, int] = DEFAULT_
     yielded = _yield_sinkage(z, plastic, P)
     theta_f = entry_angle(yielded - rut_surface(P), P)
     case, switch = lateral_switch(nodes)
-    values = switch(case(theta_f, slip_angle, P.p), theta_f, slip, slip_angle, P.p)
+    values = switch(case(theta_f, slip_angle, turn_slip, P.p), theta_f, slip, slip_angle,
+                    turn_slip, P.p)
     out = {k: values[i] for i, k in enumerate(LATERAL_OUTPUTS)}
     if plastic is not None:
         share = unloading_share(z, yielded, mean_pressure, P)

@@ -22,6 +22,7 @@ from wheelterrain.model.contact import (
     LATERAL_INPUTS,
     LATERAL_MEMORY_INPUTS,
     LATERAL_OUTPUTS,
+    LATERAL_RESULTANTS,
     MEMORY_OUTPUTS,
     contact_at,
     lateral_at,
@@ -60,12 +61,13 @@ class ModelFunctions:
     - ``steady_jacobian(load, slip, p, sinkage)`` -> ``d_inputs`` (4x2: sinkage, normal_force,
       drawbar_pull, torque by load, slip) and ``d_params`` (4 x len(p)), by the implicit function
       theorem at a solved ``sinkage``.
-    - ``lateral(sinkage, slip, slip_angle, p)`` -> LATERAL_OUTPUTS: a wheel at a slip angle
-      (:func:`wheelterrain.model.contact.lateral_at`), quasi-static, ripple-free.
-    - ``lateral_jacobian(sinkage, slip, slip_angle, p)`` -> ``d_state`` (2x3: lateral_force,
-      aligning_moment by sinkage, slip, slip_angle), exact.
-    - ``lateral_memory(sinkage, slip, slip_angle, plastic_sinkage, mean_pressure, p)`` ->
-      LATERAL_OUTPUTS: the same at the yield sinkage with the elastic unloading of the soil
+    - ``lateral(sinkage, slip, slip_angle, turn_slip, p)`` -> LATERAL_OUTPUTS: a wheel at a
+      slip angle and a turn slip (:func:`wheelterrain.model.contact.lateral_at`),
+      quasi-static, ripple-free.
+    - ``lateral_jacobian(sinkage, slip, slip_angle, turn_slip, p)`` -> ``d_state`` (3x4:
+      LATERAL_RESULTANTS by sinkage, slip, slip_angle, turn_slip), exact.
+    - ``lateral_memory(sinkage, slip, slip_angle, turn_slip, plastic_sinkage, mean_pressure,
+      p)`` -> LATERAL_OUTPUTS: the same at the yield sinkage with the elastic unloading of the soil
       with memory (``mean_pressure``: ``contact_memory``'s output at the same state).
 
     All are MX graphs over the SX Functions of :func:`form_switch`: the contact is a called switch,
@@ -175,20 +177,20 @@ def build(nodes: tuple[int, int] = DEFAULT_NODES) -> ModelFunctions:
     d_params = ca.vertcat(dz_dp, ca.jacobian(ys, p) + dy_dz @ dz_dp)
     steady_jacobian = ca.Function("steady_jacobian", [load, slip, p, z], [d_inputs, d_params],
                                   [*STEADY_INPUTS, "sinkage"], ["d_inputs", "d_params"])
-    angle_of_slip = ca.MX.sym("slip_angle")
-    side = lateral_at(z, slip, angle_of_slip, P, nodes)
-    lateral = ca.Function("lateral", [z, slip, angle_of_slip, p],
+    angle_of_slip, turn_slip = ca.MX.sym("slip_angle"), ca.MX.sym("turn_slip")
+    side = lateral_at(z, slip, angle_of_slip, turn_slip, P, nodes)
+    lateral = ca.Function("lateral", [z, slip, angle_of_slip, turn_slip, p],
                           [side[k] for k in LATERAL_OUTPUTS], list(LATERAL_INPUTS),
                           list(LATERAL_OUTPUTS))
-    pair = ca.vertcat(side["lateral_force"], side["aligning_moment"])
+    resultants = ca.vertcat(*(side[k] for k in LATERAL_RESULTANTS))
     lateral_jacobian = ca.Function(
-        "lateral_jacobian", [z, slip, angle_of_slip, p],
-        [ca.jacobian(pair, ca.vertcat(z, slip, angle_of_slip))], list(LATERAL_INPUTS),
-        ["d_state"])
-    held_side = lateral_at(z, slip, angle_of_slip, P, nodes, plastic=plastic,
+        "lateral_jacobian", [z, slip, angle_of_slip, turn_slip, p],
+        [ca.jacobian(resultants, ca.vertcat(z, slip, angle_of_slip, turn_slip))],
+        list(LATERAL_INPUTS), ["d_state"])
+    held_side = lateral_at(z, slip, angle_of_slip, turn_slip, P, nodes, plastic=plastic,
                            mean_pressure=pressure)
     lateral_memory = ca.Function(
-        "lateral_memory", [z, slip, angle_of_slip, plastic, pressure, p],
+        "lateral_memory", [z, slip, angle_of_slip, turn_slip, plastic, pressure, p],
         [held_side[k] for k in LATERAL_OUTPUTS], list(LATERAL_MEMORY_INPUTS),
         list(LATERAL_OUTPUTS))
     return ModelFunctions(contact, contact_memory, plastic_step, contact_jacobian, sinkage_solve,

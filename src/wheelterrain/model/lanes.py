@@ -49,6 +49,7 @@ from wheelterrain.model import contact as _contact
 from wheelterrain.model import solve as _solve
 
 LANES = 8  # points per kernel call; 8 measured faster than 4 and 16 (two AVX2 vectors)
+MAX_FORMS = 8  # the most forms a switch of lane kernels dispatches among (wt_cases' queues)
 
 _BINARY = {
     ca.OP_ADD: "{a}+{b}", ca.OP_SUB: "{a}-{b}", ca.OP_MUL: "{a}*{b}", ca.OP_DIV: "{a}/{b}",
@@ -155,8 +156,8 @@ static void wt_each(long m, const long* idx, wt_kernel kernel, const double* con
 static void wt_cases(long m, const long* idx, const double* const* in, const long* js,
                      const long* is, double* const* out, long os, wt_kernel case_kernel,
                      const wt_kernel* forms, int n_forms) {{
-  long queue[8][WT_LANES], ix[WT_LANES], lane[WT_LANES];
-  int count[8] = {{0}}, l, k;
+  long queue[{max_forms}][WT_LANES], ix[WT_LANES], lane[WT_LANES];
+  int count[{max_forms}] = {{0}}, l, k;
   double cases[WT_LANES];
   double* case_out[1] = {{cases}};
   for (l = 0; l < WT_LANES; ++l) lane[l] = l;
@@ -168,8 +169,10 @@ static void wt_cases(long m, const long* idx, const double* const* in, const lon
     }}
     case_kernel(ix, c, in, js, is, case_out, lane, 0);
     for (l = 0; l < c; ++l) {{
-      /* CasADi's conditional: a case out of range takes the default, the last form */
-      k = cases[l] == 0 ? 0 : (cases[l] == 1 && n_forms > 2 ? 1 : n_forms - 1);
+      /* CasADi's conditional: case k < n_forms - 1 takes form k; any other value (out of
+         range, not an integer) the default, the last form */
+      k = n_forms - 1;
+      for (int f = 0; f < n_forms - 1; ++f) if (cases[l] == f) k = f;
       queue[k][count[k]++] = ix[l];
       if (count[k] == WT_LANES) {{
         forms[k](queue[k], WT_LANES, in, js, is, out, queue[k], os);
@@ -387,7 +390,7 @@ int wt_scan_ends(long n, const double* const* in, const long* shared, double* co
 }}
 """
     body = "\n".join(kernels) + entry
-    return _PRELUDE.format(lanes=LANES, declarations=_declarations(body),
+    return _PRELUDE.format(lanes=LANES, max_forms=MAX_FORMS, declarations=_declarations(body),
                            args=_KERNEL_ARGS) + body
 
 
@@ -410,6 +413,8 @@ def _cases_source(entry: str, case: ca.Function, forms: tuple, prefix: str = "")
     """The C of ``entry(n, in, shared, out)``: the SX Functions ``forms`` at n points, each
     point by the form its ``case`` picks (:func:`kernel_c`'s kernels, ``prefix`` on the case
     kernel's name)."""
+    if len(forms) > MAX_FORMS:  # wt_cases' queues
+        raise ValueError(f"{entry}: {len(forms)} forms, at most {MAX_FORMS}")
     case_name = f"k_{prefix}case"
     kernels = [kernel_c(case, case_name)] + [kernel_c(f, f"k_{f.name()}") for f in forms]
     names = ", ".join(f"k_{f.name()}" for f in forms)
@@ -422,7 +427,7 @@ int {entry}(long n, const double* const* in, const long* shared, double* const* 
   return 0;
 }}
 """
-    return _PRELUDE.format(lanes=LANES, declarations=_declarations(body),
+    return _PRELUDE.format(lanes=LANES, max_forms=MAX_FORMS, declarations=_declarations(body),
                            args=_KERNEL_ARGS) + body
 
 
@@ -433,7 +438,7 @@ def contact_source(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> str:
 
 def lateral_source(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> str:
     """The C of ``wt_lateral(n, in, shared, out)``: the side force (LATERAL_OUTPUTS) at n points
-    of (sinkage, slip, slip_angle, p), each by the kernel of its case
+    of (sinkage, slip, slip_angle, turn_slip, p), each by the kernel of its case
     (:func:`wheelterrain.model.contact.lateral_kernels`), as ``build().lateral``."""
     return _cases_source("wt_lateral", *_contact.lateral_kernels(nodes), prefix="lateral_")
 
@@ -586,8 +591,8 @@ def compiled_scan_ends(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> LaneF
 
 @lru_cache(maxsize=4)
 def compiled_lateral(nodes: tuple[int, int] = _contact.DEFAULT_NODES) -> LaneFunction:
-    """``lateral(sinkage, slip, slip_angle, p)`` -> LATERAL_OUTPUTS (``build().lateral``'s),
-    compiled on first use and cached."""
+    """``lateral(sinkage, slip, slip_angle, turn_slip, p)`` -> LATERAL_OUTPUTS
+    (``build().lateral``'s), compiled on first use and cached."""
     library, vector_math = compile_source(lateral_source(nodes), "lateral_lanes")
     return LaneFunction(library, "wt_lateral", _contact.LATERAL_OUTPUTS, vector_math,
                         len(_contact.NAMES))

@@ -48,7 +48,7 @@ from wheelterrain import __version__, presets
 from wheelterrain.model import contact, ground, rover
 from wheelterrain.modelica import external, reference, translate
 from wheelterrain.modelica.translate import Port
-from wheelterrain.parameters import NAMES, RIG_TABLE, TABLE, Parameter
+from wheelterrain.parameters import NAMES, RIG_TABLE, TABLE, TURN_SLIP_LIMIT, Parameter
 
 LIBRARY = "WheelTerrain"
 MSL_VERSION = "4.1.0"
@@ -148,6 +148,8 @@ INPUT_DOC = {
     "slip_paper": "the paper's slip s = (omega*R_ref - V)/V [1]",
     "slip_angle": "the slip angle between the wheel's heading and its velocity, positive when "
                   "it moves toward its left [rad]",
+    "turn_slip": "the turn slip, the wheel's yaw rate over its forward speed, positive "
+                 "counter-clockwise seen from above [rad/m]",
     "mean_pressure": "the contact's mean pressure at the yield sinkage (contact's output "
                      "mean_pressure at the same state) [Pa]",
     "p": "the parameters in table order (Data, Records.parameterVector)",
@@ -605,12 +607,13 @@ def _components(lib: Library) -> None:
     rows = len(contact.CONTACT_OUTPUTS)
     lateral_rows = len(contact.LATERAL_OUTPUTS)
     _class_file(lib, where, "QuasiStaticWheel", _template(
-        "QuasiStaticWheel", N=len(NAMES), QUASI_ROWS=rows, LATERAL_ROWS=lateral_rows))
+        "QuasiStaticWheel", N=len(NAMES), QUASI_ROWS=rows, LATERAL_ROWS=lateral_rows,
+        TURN_SLIP_LIMIT=f"{TURN_SLIP_LIMIT:g}"))
     _class_file(lib, where, "Contact", _template(
         "Contact", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS)))
     _class_file(lib, where, "PartialWheel", _template(
         "PartialWheel", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS),
-        LATERAL_ROWS=lateral_rows))
+        LATERAL_ROWS=lateral_rows, TURN_SLIP_LIMIT=f"{TURN_SLIP_LIMIT:g}"))
     _class_file(lib, where, "Wheel", _template("Wheel", N=len(NAMES)))
     soil = [NAMES.index(n) for n in ground.SOIL_NAMES]
     in_map = [ground.NAMES.index(n) for n in ground.SOIL_NAMES]
@@ -730,7 +733,8 @@ def _rover_example(name: str = "Rover") -> str:
                   f"  {w}.sinkage_rate = chassis.sinkage_rate[{k}];",
                   f"  {w}.wheel_speed = chassis.wheel_speed[{k}];",
                   f"  {w}.carriage_speed = chassis.carriage_speed[{k}];",
-                  f"  {w}.slip_angle = 0;  // the chassis drives straight"]
+                  f"  {w}.slip_angle = 0;  // the chassis drives straight",
+                  f"  {w}.yaw_rate = 0;"]
         if mapped:  # rover.wheel_position: the axle ahead of or behind the reference point
             lines.append(f"  {w}.position = chassis.position "
                          f"{'+' if w in rover.FRONT else '-'} {half};")

@@ -9,6 +9,10 @@ partial block PartialWheel "The WheelTerrain FMU's contact as a block (its model
   input Real carriage_speed(unit="m/s") "the axle's forward speed";
   input Real slip_angle(unit="rad")
     "between the wheel's heading and its velocity, + moving toward its left (0: driven straight)";
+  input Real yaw_rate(unit="rad/s")
+    "the wheel's yaw rate about the vertical, + counter-clockwise from above (0: it does not yaw)";
+  Real turn_slip(unit="rad/m") = if abs(yaw_rate) > 0 then yaw_rate/max(carriage_speed, 1e-9) else 0
+    "the turn slip yaw_rate/carriage_speed, the curvature of the wheel's path";
   output Real normal_force(unit="N") "the soil's force on the wheel, up";
   output Real drawbar_pull(unit="N") "the soil's net force on the wheel, forward";
   output Real torque(unit="N.m") "the torque the soil resists the wheel's turning with";
@@ -17,7 +21,8 @@ partial block PartialWheel "The WheelTerrain FMU's contact as a block (its model
   Real wheel_angle(unit="rad", start=0, fixed=true) "the grouser ripple's phase";
   Real plastic_sinkage(unit="m", start=0, fixed=true) "the deepest the wheel has pressed the soil under it";
   output Real lateral_force(unit="N") "the soil's force on the wheel along its axle, + to its left";
-  output Real aligning_moment(unit="N.m") "the soil's moment about the vertical through the centre, + counter-clockwise from above";
+  output Real aligning_moment(unit="N.m") "the lateral stresses' moment about the vertical through the centre, + counter-clockwise from above";
+  output Real turning_moment(unit="N.m") "the soil's whole moment about that vertical (M_z): aligning_moment and the longitudinal shear's across the width";
   output Real y[${CONTACT_ROWS}] "every output of Functions.contact, Functions.Index order";
   output Real y_lateral[${LATERAL_ROWS}] "every output of Functions.lateralMemory, Functions.Index.Lateral order";
 equation
@@ -30,9 +35,11 @@ equation
   drawbar_pull = y[WheelTerrain.Functions.Index.drawbar_pull];
   torque = y[WheelTerrain.Functions.Index.torque];
   rut_left = y[WheelTerrain.Functions.Index.rut_left];
-  y_lateral = WheelTerrain.Functions.lateralMemory(sinkage, slip, slip_angle, plastic_sinkage,
+  assert(abs(yaw_rate) <= ${TURN_SLIP_LIMIT}*max(carriage_speed, 0), "Wheel: |yaw_rate|/carriage_speed beyond ${TURN_SLIP_LIMIT} rad/m, the lateral contact's range (a wheel yawing on the spot or at rest is outside the model)");
+  y_lateral = WheelTerrain.Functions.lateralMemory(sinkage, slip, slip_angle, turn_slip, plastic_sinkage,
     y[WheelTerrain.Functions.Index.mean_pressure], pk);
   lateral_force = y_lateral[WheelTerrain.Functions.Index.Lateral.lateral_force];
   aligning_moment = y_lateral[WheelTerrain.Functions.Index.Lateral.aligning_moment];
-  annotation(Documentation(info="<html><p>The WheelTerrain FMU's model exchange as a block: the same inputs, the same contact, its states wheel_angle and plastic_sinkage; at a slip angle, the lateral force and the aligning moment of the soil with memory (Functions.lateralMemory, the FMU's own, the grouser-period mean). Wheel gives it one parameter vector, MapWheel the soil of a terrain map at the wheel's position.</p></html>"));
+  turning_moment = y_lateral[WheelTerrain.Functions.Index.Lateral.turning_moment];
+  annotation(Documentation(info="<html><p>The WheelTerrain FMU's model exchange as a block: the same inputs, the same contact, its states wheel_angle and plastic_sinkage; at a slip angle and a yaw rate, the lateral force and the moments of the soil with memory (Functions.lateralMemory, the FMU's own, the grouser-period mean). Wheel gives it one parameter vector, MapWheel the soil of a terrain map at the wheel's position.</p></html>"));
 end PartialWheel;

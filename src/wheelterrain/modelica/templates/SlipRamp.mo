@@ -1,6 +1,6 @@
 model SlipRamp "The quasi-static wheel at ${steady_load} N as its slip ramps from ${ramp_start} by ${ramp_rate} per second (no Modelica Standard Library needed)"
   WheelTerrain.Components.QuasiStaticWheel wheel(load=${steady_load}, slip=${ramp_start} + ${ramp_rate}*time,
-    slip_angle=0);
+    slip_angle=0, turn_slip=0);
   Real sinkage(unit="m") = wheel.sinkage;
   Real drawbar_pull(unit="N") = wheel.drawbar_pull;
   annotation(experiment(StartTime=0, StopTime=1, Interval=0.05),
