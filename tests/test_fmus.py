@@ -175,8 +175,7 @@ def test_braking_and_driving_use_the_contact_models_slip(fmus, slip):
 
 @pytest.mark.parametrize(("omega", "speed", "slip"), [
     (-0.6, 0.01, "-4"),  # the wheel turning backward under a carriage moving forward
-    (0.6, -0.02, "1.66667"),  # the carriage moving backward
-    (-0.6, -0.02, "-1e+07"),  # rolling backward
+    (0.6, -0.02, "1.66667"),  # the carriage moving backward under a wheel turning forward
 ])
 def test_speeds_outside_the_slip_domain_are_refused_with_the_reason(fmus, omega, speed, slip):
     t = terrain(fmus, sinkage=0.02, wheel_speed=omega, carriage_speed=speed)

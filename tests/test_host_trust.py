@@ -70,7 +70,8 @@ def outputs(name: str) -> list[str]:
 
 def test_outputs_with_no_valid_operating_point_yet_are_a_warning_that_says_so(fmu_dir,
                                                                               unzipped):
-    """carriage_speed = -100 m/s (rolling backward) set in initialisation mode: the model
+    """carriage_speed = -100 m/s (backward, the wheel turning forward) set in initialisation
+    mode: the model
     refuses the point and has never had a valid one. Before: NaN with fmi2OK, in
     initialisation mode, after it and after the refused step, and with logging off the host
     learnt nothing."""
@@ -250,7 +251,8 @@ def test_a_step_the_host_asks_for_wrongly_is_an_error(fmu_dir, unzipped, t, h, n
 
 
 def test_a_refused_step_the_next_inputs_recover_from_does_not_terminate(fmu_dir, unzipped):
-    """An input-driven refusal (the carriage rolling backward: outside the slip domain) set
+    """An input-driven refusal (the carriage moving backward under a wheel turning forward:
+    outside the slip domain) set
     fmi2Terminated = true although the next step, with inputs back in the domain,
     succeeds (native: false)."""
     inst = instance(fmu_dir, unzipped, "WheelTerrain").start({})

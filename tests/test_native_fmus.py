@@ -179,6 +179,52 @@ def test_the_slip_angle_is_an_input_that_starts_at_zero_and_is_checked(flavours,
         t.close()
 
 
+@pytest.mark.parametrize("quasi_static", [False, True])
+@pytest.mark.parametrize("flavour", ["pythonfmu", "native", "fmi3"])
+def test_rolling_backward_is_the_mirror_image_of_rolling_forward(flavours, flavour,
+                                                                 quasi_static):
+    """Both speeds negated (the slip angle and the yaw rate too, as a reflection x -> -x takes
+    them): every output is the forward wheel's, the MIRRORED ones negated, bit for bit, over
+    driving, braking and the locked wheel, at a slip angle and a yaw rate; a wheel turning
+    against its carriage's motion is still refused with the reason (FMI 2 and 3). Dynamic
+    mode with the grouser ripple off: its phase follows the wheel's own angle, which runs
+    backward, so there the mirror holds up to the ripple's phase."""
+    from wheelterrain.fmu.functions import MIRRORED
+    from wheelterrain.parameters import NO_RIPPLE
+
+    root = flavours["root"] / ("native/fmi3" if flavour == "fmi3" else flavour)
+    names = variables.TERRAIN_OUTPUTS  # every computed output
+    for k, (omega, speed, beta, yaw) in enumerate(((0.6, 0.024, 0.2, 0.05),
+                                                   (0.3, 0.03, -0.1, 0.0),
+                                                   (0.0, 0.02, 0.0, -0.1))):
+        got = []
+        for sign in (1, -1):
+            t = Instance(root / "WheelTerrain.fmu", flavours["unzip"][(flavour, "WheelTerrain")],
+                         f"mirror{k}{sign}", log=True).start({
+                             **({} if quasi_static else NO_RIPPLE),
+                             "quasi_static": quasi_static, "load": 40.0, "sinkage": 0.012,
+                             "wheel_speed": sign * omega, "carriage_speed": sign * speed,
+                             "slip_angle": sign * beta, "yaw_rate": sign * yaw})
+            try:
+                t.fmu.doStep(0.0, 1e-3)
+                got.append(dict(zip(names, t.get(names), strict=True)))
+            finally:
+                t.close()
+        forward, back = got
+        for name in names:
+            want = -forward[name] if name in MIRRORED else forward[name]
+            assert back[name] == want, (name, forward[name], back[name])
+        assert forward["drawbar_pull"] != 0
+    t = Instance(root / "WheelTerrain.fmu", flavours["unzip"][(flavour, "WheelTerrain")],
+                 "against", log=True).start({"wheel_speed": -0.6, "carriage_speed": 0.02})
+    try:
+        with pytest.raises(FMICallException):
+            t.fmu.doStep(0.0, 1e-3)
+        assert any("outside the model's domain" in m for m in t.errors()), t.log
+    finally:
+        t.close()
+
+
 @pytest.mark.parametrize("flavour", ["pythonfmu", "native", "fmi3"])
 def test_the_yaw_rate_is_an_input_that_starts_at_zero_and_is_checked(flavours, flavour):
     """WheelTerrain's yaw_rate input: unset (its start, 0) the turning moment is the aligning
@@ -1324,7 +1370,7 @@ def test_native_outputs_with_no_valid_point_yet_say_so_with_logging_off(flavours
         t.fmu.setDebugLogging(False, [])
         t.fmu.setupExperiment(startTime=0.0)
         t.fmu.enterInitializationMode()
-        t.set({"carriage_speed": -100.0})  # rolling backward: outside the domain
+        t.set({"carriage_speed": -100.0})  # backward under a wheel turning forward: outside
         refs = t.refs(["normal_force", "drawbar_pull"])
         out = (ctypes.c_double * 2)()
         status = t.fmu.fmi2GetReal(t.fmu.component, (ctypes.c_uint * 2)(*refs), 2, out)

@@ -13,7 +13,9 @@ WheelTerrain
     TERRAIN_OUTPUTS (without wheel_angle and plastic_sinkage, the wrapper's states); ``guess``
     the sinkage [m] the solve starts Newton from (``warm_start``: the last contact_sinkage
     output), 0 for a cold solve (``model_functions.build().steady_from``). ``status``: STATUS_OK,
-    STATUS_SLIP (the wheel or the carriage moving backward, or the slip outside [-1, 1];
+    STATUS_SLIP (the wheel and the carriage moving in opposite directions, or the slip
+    outside [-1, 1]; a wheel rolling backward is the mirror image of one rolling forward,
+    MIRRORED;
     ``info`` is the slip), STATUS_ANGLE (the slip_angle input beyond SLIP_ANGLE_LIMIT; ``info``
     is the limit), STATUS_TURN (the yaw_rate input over the carriage speed beyond
     TURN_SLIP_LIMIT; ``info`` is the limit), STATUS_LOAD (load beyond the capacity; ``info``
@@ -71,9 +73,10 @@ FINITE_LIMIT = 1e300  # |y| at or above this (or NaN) is not a finite output
 # carriage_speed, load.
 STATUS_MESSAGES = {
     STATUS_SLIP: ("wheel speed %g rad/s with carriage speed %g m/s gives slip %g, outside "
-                  "the model's domain: the model covers forward rolling (wheel and carriage "
-                  "speeds >= 0), its slip (omega*R_ref - V)/max(omega*R_ref, V) in [-1, 1], "
-                  "from a locked wheel (-1) to spinning in place (1)"),
+                  "the model's domain: the model covers rolling forward or backward (wheel "
+                  "and carriage speeds not of opposite signs), its slip (omega*R_ref - "
+                  "V)/max(omega*R_ref, V) along the rolling in [-1, 1], from a locked wheel "
+                  "(-1) to spinning in place (1)"),
     STATUS_LOAD: ("load %g N exceeds what the wheel can carry fully buried (%.6g N); valid range "
                   "[0, %.6g] N"),
     STATUS_UNCONVERGED: "sinkage solve did not converge for load %g N",
@@ -119,6 +122,27 @@ def _finite(y, names):
         if name not in UNDEFINED_OUTPUTS:
             finite = ca.logic_and(finite, ca.fabs(y[k]) < FINITE_LIMIT)
     return finite
+
+
+MIRRORED = ("drawbar_pull", "torque", "gross_thrust", "compaction_resistance", "entry_angle",
+            "exit_angle", "max_stress_angle", "aligning_moment", "turning_moment")
+"""The WheelTerrain outputs that change sign for a wheel rolling backward: it is the mirror
+image (x -> -x) of the wheel rolling forward at the speeds' magnitudes, its slip angle negated
+(atan(v_y/v_x) with v_x < 0) and its yaw rate negated (a reflection reverses rotations about the
+vertical; the turn slip r/V is unchanged). Its forces along x, its torque, the contact's angles
+(the contact begins behind the axle) and its moments about the vertical change sign; the
+normal and lateral forces, the sinkage and the rut do not. The resistances keep the balance
+drawbar_pull = gross_thrust - compaction_resistance - bulldozing (each along x, forward
+positive). The slip output is the slip relative to the direction of rolling."""
+
+
+def backward(wheel_speed, carriage_speed, slip_radius):
+    """True where the wheel rolls backward: neither speed above SPEED_FLOOR and one below
+    -SPEED_FLOOR (the rim's omega*R and the carriage's V; plain arithmetic on floats or CasADi
+    symbols)."""
+    rim = wheel_speed * slip_radius
+    return ca.logic_and(ca.logic_and(rim < SPEED_FLOOR, carriage_speed < SPEED_FLOOR),
+                        ca.logic_or(rim < -SPEED_FLOOR, carriage_speed < -SPEED_FLOOR))
 
 
 def slips(wheel_speed, carriage_speed, slip_radius):
@@ -199,14 +223,17 @@ def terrain_functions(smooth: float | None = None
     sinkage, rate, omega, speed, load = (named[n] for n in (
         "sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "load"))
     p = with_rut_met(given, named["rut_met"])  # the rut met: the parameter's or the input's
+    # rolling backward (both speeds <= 0): the mirror image of rolling forward (MIRRORED)
+    sign = ca.if_else(backward(omega, speed, slip_radius(p)), -1, 1)
+    omega, speed = sign * omega, sign * speed
     unified, paper, forward = slips(omega, speed, slip_radius(p))
     slip_bad = ca.logic_or(ca.logic_not(forward), ca.logic_or(unified < -1, unified > 1))
     safe_slip = ca.fmin(ca.fmax(unified, -1), 1)  # only used when the status is OK
 
-    beta = named["slip_angle"]
+    beta = sign * named["slip_angle"]
     angle_bad = ca.fabs(beta) > SLIP_ANGLE_LIMIT
     safe_beta = ca.if_else(angle_bad, 0, beta)  # only used when the status is OK
-    yaw = named["yaw_rate"]  # turn slip yaw/V; a wheel at rest or backing has none in range
+    yaw = sign * named["yaw_rate"]  # turn slip yaw/V; a wheel at rest has none in range
     turn_bad = ca.fabs(yaw) > TURN_SLIP_LIMIT * ca.fmax(speed, 0)
     turn_slip = ca.if_else(turn_bad, 0, yaw / ca.fmax(speed, SPEED_FLOOR))
     held = (fns.contact_memory if smooth is None
@@ -217,6 +244,7 @@ def terrain_functions(smooth: float | None = None
         sinkage, safe_slip, safe_beta, turn_slip, plastic, out["mean_pressure"], p),
         strict=True))
     out.update(contact_sinkage=sinkage, slip=unified, slip_paper=paper)
+    out.update({k: sign * out[k] for k in MIRRORED})
     y = ca.vertcat(*(out[k] for k in TERRAIN_OUTPUTS))
     # sinkage R_c below the surface the contact begins at (a rut's): the soil at the axle
     full_burial = contact.radii(soil.Params(p))[0] + soil.rut_surface(soil.Params(p))
@@ -252,6 +280,7 @@ def terrain_functions(smooth: float | None = None
     steady.update(zip(contact.LATERAL_OUTPUTS, fns.lateral(steady["sinkage"], safe_slip,
                                                            safe_beta, turn_slip, p),
                       strict=True))
+    steady.update({k: sign * steady[k] for k in MIRRORED})
     y = ca.vertcat(*(steady[k] for k in TERRAIN_OUTPUTS))
     too_heavy = load > steady["capacity"]
     converged = solve.solve_converged(steady["residual"], steady["last_step"])
