@@ -215,12 +215,19 @@ def test_rolling_backward_is_the_mirror_image_of_rolling_forward(flavours, flavo
             want = -forward[name] if name in MIRRORED else forward[name]
             assert back[name] == want, (name, forward[name], back[name])
         assert forward["drawbar_pull"] != 0
-    t = Instance(root / "WheelTerrain.fmu", flavours["unzip"][(flavour, "WheelTerrain")],
-                 "against", log=True).start({"wheel_speed": -0.6, "carriage_speed": 0.02})
+    _assert_step_refused(Instance(
+        root / "WheelTerrain.fmu", flavours["unzip"][(flavour, "WheelTerrain")], "against",
+        log=True).start({"wheel_speed": -0.6, "carriage_speed": 0.02}),
+        "outside the model's domain")
+
+
+def _assert_step_refused(t, reason: str) -> None:
+    """The next step of the instance ``t`` is refused, with ``reason`` in an error it logged;
+    ``t`` is closed."""
     try:
         with pytest.raises(FMICallException):
             t.fmu.doStep(0.0, 1e-3)
-        assert any("outside the model's domain" in m for m in t.errors()), t.log
+        assert any(reason in m for m in t.errors()), t.log
     finally:
         t.close()
 
@@ -678,14 +685,9 @@ def test_native_steps_must_continue_and_states_must_be_their_own(flavours):
 
 
 def test_pythonfmu_refuses_a_step_before_initialisation(flavours):
-    t = Instance(flavours["root"] / "pythonfmu" / "WheelTerrain.fmu",
-                 flavours["unzip"][("pythonfmu", "WheelTerrain")], "early", log=True)
-    try:
-        with pytest.raises(FMICallException):
-            t.fmu.doStep(0.0, 1e-3)
-        assert any("illegal call sequence" in m for m in t.errors()), t.log
-    finally:
-        t.close()
+    _assert_step_refused(Instance(flavours["root"] / "pythonfmu" / "WheelTerrain.fmu",
+                                  flavours["unzip"][("pythonfmu", "WheelTerrain")], "early",
+                                  log=True), "illegal call sequence")
 
 
 def test_wrong_guid_and_wrong_call_sequence_are_rejected(flavours):
