@@ -156,7 +156,11 @@ class Classical:
         element at y (to the left) has slipped j + turn*y*R*(1 - i)*(tf - t) longitudinally,
         so M_width = -R*int (c + sigma*tan(phi))*cos(t)*int_{-b/2}^{b/2} y*g(j + ...) dy dt,
         both integrals by adaptive quadrature split at every sign change of the
-        displacement. Returns lateral_force, aligning_moment and turning_moment (the sum)."""
+        displacement. The overturning moment M_x: each element's lateral force times its
+        depth below the centre, R*cos(t) on the rim, and for the side face the depth of the
+        resultant of Hegedus's pressure, R*cos(tf) + h*(c/2 + D2*gamma*h/3)/(c +
+        D2*gamma*h/2). Returns lateral_force, aligning_moment, turning_moment (the sum) and
+        overturning_moment."""
         tf, sigma, _tau, br, eps = self._parts(z, i)
         x = math.pi / 4 - self.phi / 2
         d1 = 1 / math.tan(x) + math.tan(x + self.phi)
@@ -169,11 +173,23 @@ class Classical:
         def g(j: float, K: float) -> float:
             return math.copysign(1.0 - math.exp(-abs(j) / K), j)
 
-        def lateral(t: float) -> float:  # the side force per radian, against the displacement
+        def parts(t: float) -> tuple[float, float, float]:  # rim, side face, side's depth
             h = self.R * (math.cos(t) - math.cos(tf))
             rb = d1 * (self.c * h + d2 * self.gamma * h**2 / 2) if side else 0.0
             strip = self.R * self.b * (self.c + sigma(t) * math.tan(self.phi))
-            return -(strip + rb * (self.R - h * math.cos(t))) * g(jy(t), K_y)
+            mobilised = g(jy(t), K_y)
+            below = self.c + d2 * self.gamma * h / 2
+            depth = h * (self.c / 2 + d2 * self.gamma * h / 3) / below if below > 0 else 0.0
+            return (-strip * mobilised, -rb * (self.R - h * math.cos(t)) * mobilised,
+                    self.R * math.cos(tf) + depth)
+
+        def lateral(t: float) -> float:  # the side force per radian, against the displacement
+            rim, face, _ = parts(t)
+            return rim + face
+
+        def overturning(t: float) -> float:
+            rim, face, depth = parts(t)
+            return rim * self.R * math.cos(t) + face * depth
 
         breaks = list(br)
         lo, hi = 1e-14 * tf, tf * (1 - 1e-14)
@@ -198,8 +214,9 @@ class Classical:
 
         width = self._integrate(lambda t: -self.R * (self.c + sigma(t) * math.tan(self.phi))
                                 * math.cos(t) * across(t), tf, br, eps * self.b**2)
+        over = self._integrate(overturning, tf, breaks, eps * self.R)
         return {"lateral_force": force, "aligning_moment": aligning,
-                "turning_moment": aligning + width}
+                "turning_moment": aligning + width, "overturning_moment": over}
 
     def sinkage(self, load: float, i: float) -> float:
         """Sinkage [m] at which the normal force equals ``load`` (Brent, z in (0, R])."""

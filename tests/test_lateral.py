@@ -14,7 +14,7 @@ from classical_reference import Classical
 from conftest import classical_set
 from test_classical import SOILS
 from wheelterrain import model, presets
-from wheelterrain.model import functions
+from wheelterrain.model import contact, functions
 
 RTOL = 1e-6
 ANGLES = (math.radians(3.0), math.radians(20.0), math.radians(-35.0))
@@ -22,9 +22,7 @@ ANGLES = (math.radians(3.0), math.radians(20.0), math.radians(-35.0))
 
 def _lateral(ps, z, slip, beta, turn=0.0):
     out = functions.build().lateral(z, slip, beta, turn, ps.vector())
-    return {k: float(v) for k, v in zip(("lateral_force", "aligning_moment",
-                                         "lateral_shear_force", "side_bulldozing",
-                                         "turning_moment"), out, strict=True)}
+    return {k: float(v) for k, v in zip(contact.LATERAL_OUTPUTS, out, strict=True)}
 
 
 @pytest.mark.parametrize("row", SOILS, ids=[s[0] for s in SOILS])

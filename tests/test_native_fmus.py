@@ -106,7 +106,7 @@ DOMAIN_REASONS = ("outside the model's domain", "beyond full burial",
                   "outside the lateral contact's range")  # a yaw rate beyond 10 rad/m x speed
 TERRAIN_OUT = ("normal_force", "drawbar_pull", "torque", "contact_sinkage", "slip", "slip_paper",
                "entry_angle", "exit_angle", "contact_length", "wheel_angle", "lateral_force",
-               "aligning_moment", "turning_moment")
+               "aligning_moment", "turning_moment", "overturning_moment")
 
 
 @pytest.mark.parametrize("contact_form", [0, 1], ids=["arc", "patch"])
@@ -146,7 +146,7 @@ def test_flavours_agree_on_wheelterrain(flavours, quasi_static, contact_form):
                                          slip_angle=values["slip_angle"], turn_slip=turn)
                 assert first["contact_sinkage"] == pytest.approx(ref["sinkage"], rel=1e-9)
                 for key in ("drawbar_pull", "lateral_force", "aligning_moment",
-                            "turning_moment"):
+                            "turning_moment", "overturning_moment"):
                     assert first[key] == pytest.approx(ref[key], rel=1e-9, abs=1e-9), key
     assert checked >= 15
 

@@ -21,10 +21,10 @@ from wheelterrain.model import contact, functions
 from wheelterrain.parameters import TURN_SLIP_LIMIT
 
 CASES = ((0.0, 0.2), (0.0, -0.5), (math.radians(10.0), 0.3), (math.radians(-20.0), 0.5),
-         (math.radians(5.0), -1.0))
+         (math.radians(5.0), -1.0), (math.radians(15.0), 0.0))
 """(slip angle [rad], turn slip times the wheel radius): yawing alone both ways, with a slip
 angle of the same sign and of the opposite sign (the lateral displacement then reverses on the
-arc)."""
+arc), a slip angle alone."""
 
 
 def _lateral(ps, z, slip, beta, turn):
@@ -35,8 +35,8 @@ def _lateral(ps, z, slip, beta, turn):
 @pytest.mark.parametrize("row", SOILS, ids=[s[0] for s in SOILS])
 @pytest.mark.parametrize("slip", [0.0, 0.2, 0.7])
 def test_the_arc_form_is_the_brush_model_of_turn_slip(row, slip):
-    """Classical wheel (every extension off), driving: the side force, the aligning moment and
-    the turning moment match the reference's adaptive quadrature over sinkages from 5 % to 70 %
+    """Classical wheel (every extension off), driving: the side force, the aligning, turning
+    and overturning moments match the reference's adaptive quadrature over sinkages from 5 % to 70 %
     of the radius and CASES. The tolerances are the core's quadrature error, measured: the
     arc's rule is not split where the lateral displacement reverses (a kink of the odd shear
     law), 1.7e-5 of the lateral strength at most there, 3e-7 elsewhere; the width's 6-point
@@ -59,6 +59,8 @@ def test_the_arc_form_is_the_brush_model_of_turn_slip(row, slip):
             assert abs(got["lateral_force"] - want["lateral_force"]) <= tol, (z, beta, turn)
             assert abs(got["aligning_moment"] - want["aligning_moment"]) <= tol * R, (
                 z, beta, turn)
+            assert abs(got["overturning_moment"] - want["overturning_moment"]) <= tol * R, (
+                z, beta, turn, got["overturning_moment"], want["overturning_moment"])
             width = want["turning_moment"] - want["aligning_moment"]
             got_width = got["turning_moment"] - got["aligning_moment"]
             assert abs(got_width - width) <= 3e-4 * abs(width) + 1e-6 * scale * R, (
@@ -167,3 +169,27 @@ def test_the_declared_ranges_hold_to_the_locked_wheel(form):
                     assert all(math.isfinite(v) for v in out.values()), (z, slip, turn, beta)
                     if beta == 0.0 and z > 0 and abs(out["turning_moment"]) > 1e-15:
                         assert out["turning_moment"] * turn < 0, (z, slip, turn, out)
+
+
+@pytest.mark.parametrize("form", [0, 1], ids=["arc", "patch"])
+def test_the_overturning_moment_is_the_side_force_at_a_depth_within_the_contact(form):
+    """M_x over F_y, the depth below the centre the side force acts at, lies between the
+    surface the contact begins at (R_c*cos(theta_f)) and the rim's lowest point (R_c), at slip
+    angles and turn slips of either sign, driving and braking; M_x is 0 at slip angle and turn
+    slip 0 and odd in the pair, as the lateral force is."""
+    from wheelterrain.model import contact as c
+
+    ps = presets.load().with_values({"model.contact_form": form})
+    Rc = float(ps["wheel.radius"] + ps["model.contact_radius_factor"] * ps["grouser.height"])
+    for load, slip in ((62.0, 0.2), (24.5, -0.4), (40.0, 0.7)):
+        st = model.steady_state(ps, load, slip)
+        z = st["sinkage"]
+        top = Rc * math.cos(st["entry_angle"])
+        assert _lateral(ps, z, slip, 0.0, 0.0)["overturning_moment"] == 0.0
+        for beta, turn in ((0.3, 0.0), (-0.6, 2.0), (0.0, -5.0), (1.2, 9.0)):
+            out = _lateral(ps, z, slip, beta, turn)
+            depth = out["overturning_moment"] / out["lateral_force"]
+            assert top - 1e-9 <= depth <= Rc + 1e-9, (slip, beta, turn, top, depth, Rc)
+            assert _lateral(ps, z, slip, -beta, -turn)["overturning_moment"] == (
+                -out["overturning_moment"])
+    assert "overturning_moment" in c.LATERAL_RESULTANTS

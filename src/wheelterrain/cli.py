@@ -339,8 +339,9 @@ def params(preset: str, assignments: tuple[str, ...], json_target: str | None) -
                    "to the left), aligning_moment [N.m] (about the vertical through the "
                    "centre, positive counter-clockwise from above), lateral_shear_force and "
                    "side_bulldozing [N] (Ishigami et al. 2007's side force: lateral shear on "
-                   "the rim and the side face's bulldozing) and turning_moment [N.m] (the "
-                   "soil's whole moment about that vertical).")
+                   "the rim and the side face's bulldozing), turning_moment [N.m] (the "
+                   "soil's whole moment about that vertical) and overturning_moment [N.m] "
+                   "(the lateral stresses' moment about the heading axis).")
 @click.option("--turn-slip", "turn_slip", type=float, default=None, metavar="PER_M",
               help="Turn slip [rad/m]: the wheel's yaw rate over its forward speed (positive "
                    f"counter-clockwise from above; |turn slip| <= {TURN_SLIP_LIMIT:g}, a path "
@@ -402,6 +403,7 @@ def steady(preset: str, assignments: tuple[str, ...], slip: float, slip_definiti
     if "slip_angle" in result:
         lateral = {"slip_angle": "rad", "turn_slip": "rad/m", "lateral_force": "N",
                    "aligning_moment": "N.m", "turning_moment": "N.m",
+                   "overturning_moment": "N.m",
                    "lateral_shear_force": "N", "side_bulldozing": "N"}
         for key, unit in lateral.items():
             extra = f"   ({result[key] / DEG:.3f} deg)" if unit == "rad" else ""

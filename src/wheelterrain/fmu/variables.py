@@ -208,6 +208,11 @@ TERRAIN_IO: tuple[Var, ...] = (
             "aligning_moment plus the moment of the longitudinal shear across the tread's "
             "width that a yawing wheel meets; grouser-period mean); equal to aligning_moment "
             "at yaw_rate 0, 0 at slip_angle and yaw_rate 0", "N.m", "Torque"),
+        Var("overturning_moment", "output", "Moment of the lateral stresses about the wheel's "
+            "heading axis (x, forward) through its centre, positive by the right-hand rule "
+            "(a lateral force to the left acting below the centre gives a positive moment): "
+            "each element's force times its depth below the centre (grouser-period mean); 0 "
+            "at slip_angle and yaw_rate 0", "N.m", "Torque"),
     ], (*_TERRAIN_INPUTS, *GROUND, "slip_angle", "yaw_rate")),
 )
 

@@ -658,15 +658,19 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, ripp
 
 LATERAL_INPUTS = ("sinkage", "slip", "slip_angle", "turn_slip", "p")
 LATERAL_OUTPUTS = ("lateral_force", "aligning_moment", "lateral_shear_force", "side_bulldozing",
-                   "turning_moment")
+                   "turning_moment", "overturning_moment")
 """The lateral contact of :func:`lateral_at`: the soil's force on the wheel along its axle
 (positive to the wheel's left), the moment of the lateral stresses about the vertical through
 the wheel's centre (the self-aligning moment, positive counter-clockwise seen from above), the
 force's two parts (the lateral shear on the rim, the side face's bulldozing), and the soil's
 whole moment about that vertical, the aligning moment plus the moment of the longitudinal shear
 across the tread's width that a yawing wheel meets (:func:`_width_moment`): M_z, what resists
-the wheel's yawing (equal to the aligning moment at turn slip 0)."""
-LATERAL_RESULTANTS = ("lateral_force", "aligning_moment", "turning_moment")
+the wheel's yawing (equal to the aligning moment at turn slip 0); and the lateral stresses'
+moment about the wheel's heading axis x through its centre, M_x (positive by the right-hand
+rule, x forward: a force to the left acting below the centre gives a positive M_x), each
+element's force times its depth below the centre (:func:`_side_bulldozing` for the side
+face's)."""
+LATERAL_RESULTANTS = ("lateral_force", "aligning_moment", "turning_moment", "overturning_moment")
 """The lateral outputs a vehicle takes (the rest are parts of them); the rows of
 ``functions.build().lateral_jacobian``."""
 WIDTH_NODES = 6
@@ -749,21 +753,39 @@ def _hegedus(h, P: Params):
     return d1 * (c * depth + d2 * gamma * depth**2 / 2)
 
 
+def _hegedus_depth(h, P: Params):
+    """Depth [m] below the surface of the resultant of Hegedus's pressure on a face buried
+    ``h`` deep (c uniform, gamma growing with depth): h*(c/2 + D2*gamma*h/3)/(c + D2*gamma*h/2),
+    the pressure's first moment over its resultant (any value at h = 0, where it is 0)."""
+    phi, c, gamma = P["soil.phi"], P["soil.cohesion"], P["soil.gamma"]
+    x = math.pi / 4 - phi / 2
+    cot = 1 / ca.tan(x)
+    d2 = cot + cot**2 * ca.tan(phi)
+    depth = ca.fmax(h, 0)
+    below = c + d2 * gamma * depth / 2
+    share = (c / 2 + d2 * gamma * depth / 3) / ca.if_else(below > 0, below, 1)
+    return depth * share
+
+
 def _side_bulldozing(nodes_weights, j_y, K_y, P: Params, Rc):
-    """(force, moment) of the side face's bulldozing over the contact arc (Ishigami et al.
-    2007: int R_b(h)*(R - h*cos(theta)) dtheta, h = R_c*(cos(theta) - cos(theta_f))), each
-    element mobilised like the lateral shear at its node, g(j_y), and opposing the sideways
-    motion; the moment's lever the element's position along the wheel, R_c*sin(theta).
-    ``nodes_weights``: ((node dict, weights), ...) of :func:`_offset_trig` nodes; ``j_y``: the
-    lateral displacement at each, in the same order."""
-    force = moment = 0
+    """(force, moment, overturning) of the side face's bulldozing over the contact arc
+    (Ishigami et al. 2007: int R_b(h)*(R - h*cos(theta)) dtheta, h = R_c*(cos(theta) -
+    cos(theta_f))), each element mobilised like the lateral shear at its node, g(j_y), and
+    opposing the sideways motion; the moment's lever the element's position along the wheel,
+    R_c*sin(theta); the overturning moment's its resultant's depth below the centre,
+    R_c*cos(theta_f) + :func:`_hegedus_depth` (the surface's depth and the pressure's
+    centre below it). ``nodes_weights``: ((node dict, weights), ...) of :func:`_offset_trig`
+    nodes; ``j_y``: the lateral displacement at each, in the same order."""
+    force = moment = overturning = 0
     for (o, w), j in zip(nodes_weights, j_y, strict=True):
         h = Rc * o["cos_drop"]
         element = -_hegedus(h, P) * (Rc - h * o["cos"]) * shear_function(j, P, K_y)
         force = force + ca.dot(w, element)
         moment = moment + ca.dot(w, element * Rc * o["sin"])
+        surface = Rc * (o["cos"] - o["cos_drop"])  # R_c*cos(theta_f)
+        overturning = overturning + ca.dot(w, element * (surface + _hegedus_depth(h, P)))
     share = P["model.side_bulldozing"]
-    return share * force, share * moment
+    return share * force, share * moment, share * overturning
 
 
 def _width_moment(law, centre, spread, b):
@@ -813,9 +835,11 @@ def _lateral_arc(theta_f, slip, slip_angle, turn_slip, P: Params, nodes: tuple[i
     shear = b * Rs * (ca.dot(arc.w_front, tau_f) + ca.dot(arc.w_rear, tau_r))
     moment = b * Rs * Rc * (ca.dot(arc.w_front, tau_f * arc.front["sin"])
                             + ca.dot(arc.w_rear, tau_r * arc.rear["sin"]))
-    side_force, side_moment = _side_bulldozing(((arc.front, arc.w_front),
-                                                (arc.rear, arc.w_rear)),
-                                               (j_front, j_rear), K_y, P, Rc)
+    overturning = b * Rs * Rc * (ca.dot(arc.w_front, tau_f * arc.front["cos"])
+                                 + ca.dot(arc.w_rear, tau_r * arc.rear["cos"]))
+    side_force, side_moment, side_over = _side_bulldozing(((arc.front, arc.w_front),
+                                                           (arc.rear, arc.w_rear)),
+                                                          (j_front, j_rear), K_y, P, Rc)
     aligning = moment + side_moment
     turning = aligning
     if turn:
@@ -832,7 +856,7 @@ def _lateral_arc(theta_f, slip, slip_angle, turn_slip, P: Params, nodes: tuple[i
         turning = aligning - Rs * width
     return {"lateral_force": shear + side_force, "aligning_moment": aligning,
             "lateral_shear_force": shear, "side_bulldozing": side_force,
-            "turning_moment": turning}
+            "turning_moment": turning, "overturning_moment": overturning + side_over}
 
 
 SMALL_CENTRED = 0.05
@@ -904,13 +928,13 @@ def _lateral_patch(theta_f, slip, slip_angle, turn_slip, P: Params, nodes: tuple
     weights = (theta_f - theta_r) * w
     passed = Rc * arc["sin_drop"]  # s, metres behind the patch's front
     j_y = rate * passed
+    along = weights * Rc * arc["cos"]  # ds
+    stress = b * (c + static["mean_pressure"] * tan_phi)  # full/l, per metre of the patch
     if turn:
         a_long, v, soil_ratio = _kinematics(slip, Rs, Rref)
         factor = (1 - kin) * v / Rs + kin
         j_y = j_y + factor * turn_slip * passed * Rc * (trig_f[0] + arc["sin"]) / 2
         mobilised = shear_function(j_y, P, K_y)
-        along = weights * Rc * arc["cos"]  # ds
-        stress = b * (c + static["mean_pressure"] * tan_phi)  # full/l, per metre of the patch
         shear = -stress * ca.dot(along, mobilised)
         moment = -stress * ca.dot(along, mobilised * Rc * arc["sin"])
     else:
@@ -919,7 +943,10 @@ def _lateral_patch(theta_f, slip, slip_angle, turn_slip, P: Params, nodes: tuple
         shear = -full * mean
         middle = Rc * (ca.sin(theta_f) + ca.sin(theta_r)) / 2  # the patch's middle
         moment = -full * (middle * mean - length * patch_shear_centred_moment(a, P))
-    side, side_moment = _side_bulldozing((((arc, weights)),), (j_y,), K_y, P, Rc)
+    # M_x: the same stress at each point of the patch times its depth, R_c*cos(theta), by the
+    # quadrature's nodes in both cases (the patch lies on the arc's chord of nodes)
+    overturning = -stress * ca.dot(along, shear_function(j_y, P, K_y) * Rc * arc["cos"])
+    side, side_moment, side_over = _side_bulldozing((((arc, weights)),), (j_y,), K_y, P, Rc)
     aligning = moment + side_moment
     turning = aligning
     if turn:
@@ -933,7 +960,7 @@ def _lateral_patch(theta_f, slip, slip_angle, turn_slip, P: Params, nodes: tuple
         turning = aligning - full / b * width
     return {"lateral_force": shear + side, "aligning_moment": aligning,
             "lateral_shear_force": shear, "side_bulldozing": side,
-            "turning_moment": turning}
+            "turning_moment": turning, "overturning_moment": overturning + side_over}
 
 
 LATERAL_FORMS = ("none", "arc", "patch", "turn_arc", "turn_patch")

@@ -23,6 +23,7 @@ partial block PartialWheel "The WheelTerrain FMU's contact as a block (its model
   output Real lateral_force(unit="N") "the soil's force on the wheel along its axle, + to its left";
   output Real aligning_moment(unit="N.m") "the lateral stresses' moment about the vertical through the centre, + counter-clockwise from above";
   output Real turning_moment(unit="N.m") "the soil's whole moment about that vertical (M_z): aligning_moment and the longitudinal shear's across the width";
+  output Real overturning_moment(unit="N.m") "the lateral stresses' moment about the heading axis x through the centre (M_x), + by the right-hand rule";
   output Real y[${CONTACT_ROWS}] "every output of Functions.contact, Functions.Index order";
   output Real y_lateral[${LATERAL_ROWS}] "every output of Functions.lateralMemory, Functions.Index.Lateral order";
 equation
@@ -41,5 +42,6 @@ equation
   lateral_force = y_lateral[WheelTerrain.Functions.Index.Lateral.lateral_force];
   aligning_moment = y_lateral[WheelTerrain.Functions.Index.Lateral.aligning_moment];
   turning_moment = y_lateral[WheelTerrain.Functions.Index.Lateral.turning_moment];
+  overturning_moment = y_lateral[WheelTerrain.Functions.Index.Lateral.overturning_moment];
   annotation(Documentation(info="<html><p>The WheelTerrain FMU's model exchange as a block: the same inputs, the same contact, its states wheel_angle and plastic_sinkage; at a slip angle and a yaw rate, the lateral force and the moments of the soil with memory (Functions.lateralMemory, the FMU's own, the grouser-period mean). Wheel gives it one parameter vector, MapWheel the soil of a terrain map at the wheel's position.</p></html>"));
 end PartialWheel;

@@ -21,6 +21,7 @@ block QuasiStaticWheel "A wheel at steady state on the soil: the sinkage at whic
   output Real lateral_force(unit="N") "the soil's force on the wheel along its axle, + to its left";
   output Real aligning_moment(unit="N.m") "the lateral stresses' moment about the vertical through the centre, + counter-clockwise from above";
   output Real turning_moment(unit="N.m") "the soil's whole moment about that vertical (M_z): aligning_moment and the longitudinal shear's across the width";
+  output Real overturning_moment(unit="N.m") "the lateral stresses' moment about the heading axis x through the centre (M_x), + by the right-hand rule";
   output Real y[${QUASI_ROWS}] "every output of quasiStatic, Functions.Index order";
   output Real y_lateral[${LATERAL_ROWS}] "every output of Functions.lateral, Functions.Index.Lateral order";
 equation
@@ -35,5 +36,6 @@ equation
   lateral_force = y_lateral[WheelTerrain.Functions.Index.Lateral.lateral_force];
   aligning_moment = y_lateral[WheelTerrain.Functions.Index.Lateral.aligning_moment];
   turning_moment = y_lateral[WheelTerrain.Functions.Index.Lateral.turning_moment];
+  overturning_moment = y_lateral[WheelTerrain.Functions.Index.Lateral.overturning_moment];
   annotation(Documentation(info="<html><p>The quasi-static wheel of <code>wheelterrain steady</code>: an implicit equation for the sinkage, solved by the tool. The contact is ripple-free with no sinkage rate and no memory. At a slip angle and a turn slip the lateral force and the moments are Functions.lateral's (Ishigami et al. 2007's side force, the turn slip's brush kinematics); the longitudinal outputs do not change with them.</p></html>"));
 end QuasiStaticWheel;
