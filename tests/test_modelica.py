@@ -366,7 +366,9 @@ def quasi_static(built):
         f"  {ROOT}.Components.QuasiStaticWheel side(load=62, slip=0.2, slip_angle=0.3, "
         "turn_slip=2);\n"
         f"  {ROOT}.Components.Wheel w(sinkage=0.012, sinkage_rate=0, wheel_speed=0.25, "
-        "carriage_speed=0.02, slip_angle=-0.2, yaw_rate=0.04);\nend Run;\n", model="Run")
+        "carriage_speed=0.02, slip_angle=-0.2, yaw_rate=0.04);\n"
+        f"  {ROOT}.Components.Wheel back(sinkage=0.012, sinkage_rate=0, wheel_speed=-0.25, "
+        "carriage_speed=-0.02, slip_angle=0.2, yaw_rate=-0.04);\nend Run;\n", model="Run")
     assert model.structure().is_balanced
     return model.simulate((0.0, 1.0), dt=0.05)
 
@@ -406,6 +408,21 @@ def test_the_wheels_at_a_slip_angle_give_the_models_side_force(quasi_static):
     assert quasi_static["w.turning_moment"][0] == pytest.approx(want[turning], rel=1e-10)
     assert want[turning] != want[1]
     assert want[0] > 0  # moving toward its right: pushed to its left
+
+
+@pytest.mark.slow
+def test_the_wheel_rolling_backward_is_the_mirror_image_of_the_wheel_rolling_forward(
+        quasi_static):
+    """Wheel at (-omega, -V) with the slip angle and yaw rate negated (a reflection x -> -x):
+    the forward wheel's outputs at the start, those along x and about the vertical negated,
+    bit for bit (the FMU's MIRRORED)."""
+    for key, sign in (("normal_force", 1), ("drawbar_pull", -1), ("torque", -1), ("slip", 1),
+                      ("rut_left", 1), ("lateral_force", 1), ("aligning_moment", -1),
+                      ("turning_moment", -1), ("overturning_moment", 1)):
+        forward, back = quasi_static[f"w.{key}"][0], quasi_static[f"back.{key}"][0]
+        assert back == sign * forward, (key, forward, back)
+    assert quasi_static["w.drawbar_pull"][0] != 0
+    assert quasi_static["back.rolling"][0] == -1
 
 
 @pytest.mark.slow

@@ -236,19 +236,29 @@ def exported() -> tuple[Exported, ...]:
                         "(omega*R_ref - V)/max(omega*R_ref, V), the traction slip driving, the "
                         "skid braking, -1 a locked wheel (0 with both at rest)",
                         _derivative(f, names)))
+    f = ca.Function("rollingSign", [wheel_speed, carriage_speed, p], [ca.if_else(
+        fmu_functions.backward(wheel_speed, carriage_speed, fmu_functions.slip_radius(p)), -1,
+        1)], {"cse": True})
+    out.append(Exported("rollingSign", f, names, (Port("sign", description="[1]"),),
+                        "-1 for a wheel rolling backward (both speeds <= 0, one below "
+                        "-1e-9 m/s): the mirror image of one rolling forward; else 1",
+                        _derivative(f, names)))
     s = ca.SX.sym("slip_paper")
     f = ca.Function("slipFromPaper", [s], [ca.if_else(s < 0, s, s / (1 + s))], {"cse": True})
     out.append(Exported("slipFromPaper", f, ("slip_paper",),
                         (Port("slip", description="the model's slip: s/(1 + s) driving, s "
                               "braking [1]"),),
                         "The model's slip from the paper's slip", _derivative(f, ("slip_paper",))))
-    side = "lateral force, aligning moment and the force's two parts"
+    side = ("lateral force, aligning moment, the force's two parts, turning moment and "
+            "overturning moment")
     for name, f, names, what in (
             ("lateral", contact.lateral_export(), contact.LATERAL_INPUTS,
-             "The quasi-static lateral contact of a wheel at a slip angle (Ishigami et al. "
-             f"2007's side force): {side}, 0 at slip angle 0"),
+             "The quasi-static lateral contact of a wheel at a slip angle and a turn slip "
+             f"(Ishigami et al. 2007's side force, the brush model of turn slip): {side}, 0 at "
+             "slip angle and turn slip 0"),
             ("lateralMemory", contact.lateral_memory_export(), contact.LATERAL_MEMORY_INPUTS,
-             f"The lateral contact of a wheel at a slip angle on the soil with memory: {side} "
+             f"The lateral contact of a wheel at a slip angle and a turn slip on the soil with "
+             f"memory: {side} "
              "of lateral at the yield sinkage max(plastic_sinkage, sinkage), scaled by the "
              "longitudinal forces' elastic unloading (mean_pressure: contact's output at the "
              "same state)")):

@@ -11,12 +11,14 @@ partial block PartialWheel "The WheelTerrain FMU's contact as a block (its model
     "between the wheel's heading and its velocity, + moving toward its left (0: driven straight)";
   input Real yaw_rate(unit="rad/s")
     "the wheel's yaw rate about the vertical, + counter-clockwise from above (0: it does not yaw)";
-  Real turn_slip(unit="rad/m") = if abs(yaw_rate) > 0 then yaw_rate/max(carriage_speed, 1e-9) else 0
+  Real rolling(unit="1")
+    "-1 rolling backward (both speeds <= 0): the mirror image of rolling forward; else 1";
+  Real turn_slip(unit="rad/m") = if abs(yaw_rate) > 0 then rolling*yaw_rate/max(rolling*carriage_speed, 1e-9) else 0
     "the turn slip yaw_rate/carriage_speed, the curvature of the wheel's path";
   output Real normal_force(unit="N") "the soil's force on the wheel, up";
   output Real drawbar_pull(unit="N") "the soil's net force on the wheel, forward";
   output Real torque(unit="N.m") "the torque the soil resists the wheel's turning with";
-  output Real slip(unit="1") "the model's slip: traction driving, skid braking (-1 locked)";
+  output Real slip(unit="1") "the model's slip along the rolling: traction driving, skid braking (-1 locked)";
   output Real rut_left(unit="m") "the rut the wheel leaves";
   Real wheel_angle(unit="rad", start=0, fixed=true) "the grouser ripple's phase";
   Real plastic_sinkage(unit="m", start=0, fixed=true) "the deepest the wheel has pressed the soil under it";
@@ -24,24 +26,27 @@ partial block PartialWheel "The WheelTerrain FMU's contact as a block (its model
   output Real aligning_moment(unit="N.m") "the lateral stresses' moment about the vertical through the centre, + counter-clockwise from above";
   output Real turning_moment(unit="N.m") "the soil's whole moment about that vertical (M_z): aligning_moment and the longitudinal shear's across the width";
   output Real overturning_moment(unit="N.m") "the lateral stresses' moment about the heading axis x through the centre (M_x), + by the right-hand rule";
-  output Real y[${CONTACT_ROWS}] "every output of Functions.contact, Functions.Index order";
+  output Real y[${CONTACT_ROWS}] "every output of Functions.contact, Functions.Index order (rolling backward: the mirror image's)";
   output Real y_lateral[${LATERAL_ROWS}] "every output of Functions.lateralMemory, Functions.Index.Lateral order";
 equation
+  // an equation, not a binding: rumoca 0.10 miscounts the equations where a binding's call is
+  // multiplied into other calls' arguments
+  rolling = WheelTerrain.Functions.rollingSign(wheel_speed, carriage_speed, pk);
   der(wheel_angle) = wheel_speed;
-  slip = WheelTerrain.Functions.slipFromSpeeds(wheel_speed, carriage_speed, pk);
-  assert(slip >= -1 and slip <= 1, "Wheel: the slip left the model's range [-1, 1] (a wheel or axle moving backward)");
-  y = contactFunction(sinkage, sinkage_rate, slip, wheel_angle, plastic_sinkage, carriage_speed, pk);
+  slip = WheelTerrain.Functions.slipFromSpeeds(rolling*wheel_speed, rolling*carriage_speed, pk);
+  assert(slip >= -1 and slip <= 1, "Wheel: the slip left the model's range [-1, 1] (the wheel turning against its axle's motion)");
+  y = contactFunction(sinkage, sinkage_rate, slip, wheel_angle, plastic_sinkage, rolling*carriage_speed, pk);
   der(plastic_sinkage) = y[WheelTerrain.Functions.Index.plastic_rate];
   normal_force = y[WheelTerrain.Functions.Index.normal_force];
-  drawbar_pull = y[WheelTerrain.Functions.Index.drawbar_pull];
-  torque = y[WheelTerrain.Functions.Index.torque];
+  drawbar_pull = rolling*y[WheelTerrain.Functions.Index.drawbar_pull];
+  torque = rolling*y[WheelTerrain.Functions.Index.torque];
   rut_left = y[WheelTerrain.Functions.Index.rut_left];
-  assert(abs(yaw_rate) <= ${TURN_SLIP_LIMIT}*max(carriage_speed, 0), "Wheel: |yaw_rate|/carriage_speed beyond ${TURN_SLIP_LIMIT} rad/m, the lateral contact's range (a wheel yawing on the spot or at rest is outside the model)");
-  y_lateral = WheelTerrain.Functions.lateralMemory(sinkage, slip, slip_angle, turn_slip, plastic_sinkage,
+  assert(abs(yaw_rate) <= ${TURN_SLIP_LIMIT}*max(rolling*carriage_speed, 0), "Wheel: |yaw_rate|/carriage_speed beyond ${TURN_SLIP_LIMIT} rad/m, the lateral contact's range (a wheel yawing on the spot or at rest is outside the model)");
+  y_lateral = WheelTerrain.Functions.lateralMemory(sinkage, slip, rolling*slip_angle, turn_slip, plastic_sinkage,
     y[WheelTerrain.Functions.Index.mean_pressure], pk);
   lateral_force = y_lateral[WheelTerrain.Functions.Index.Lateral.lateral_force];
-  aligning_moment = y_lateral[WheelTerrain.Functions.Index.Lateral.aligning_moment];
-  turning_moment = y_lateral[WheelTerrain.Functions.Index.Lateral.turning_moment];
+  aligning_moment = rolling*y_lateral[WheelTerrain.Functions.Index.Lateral.aligning_moment];
+  turning_moment = rolling*y_lateral[WheelTerrain.Functions.Index.Lateral.turning_moment];
   overturning_moment = y_lateral[WheelTerrain.Functions.Index.Lateral.overturning_moment];
-  annotation(Documentation(info="<html><p>The WheelTerrain FMU's model exchange as a block: the same inputs, the same contact, its states wheel_angle and plastic_sinkage; at a slip angle and a yaw rate, the lateral force and the moments of the soil with memory (Functions.lateralMemory, the FMU's own, the grouser-period mean). Wheel gives it one parameter vector, MapWheel the soil of a terrain map at the wheel's position.</p></html>"));
+  annotation(Documentation(info="<html><p>The WheelTerrain FMU's model exchange as a block: the same inputs, the same contact, its states wheel_angle and plastic_sinkage; at a slip angle and a yaw rate, the lateral force and the moments of the soil with memory (Functions.lateralMemory, the FMU's own, the grouser-period mean). Rolling backward (both speeds &lt;= 0) is the mirror image of rolling forward, as in the FMU: the contact of the speeds' magnitudes, the slip angle and the yaw rate negated, and the forces along x, the torque and the moments about the vertical negated (<code>rolling</code>, Functions.rollingSign); a wheel turning against its axle's motion stops the simulation on the slip's assert. Wheel gives it one parameter vector, MapWheel the soil of a terrain map at the wheel's position.</p></html>"));
 end PartialWheel;
