@@ -223,10 +223,11 @@ def terrain_functions(smooth: float | None = None
     sinkage, rate, omega, speed, load = (named[n] for n in (
         "sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "load"))
     p = with_rut_met(given, named["rut_met"])  # the rut met: the parameter's or the input's
+    radius = slip_radius(p)
     # rolling backward (both speeds <= 0): the mirror image of rolling forward (MIRRORED)
-    sign = ca.if_else(backward(omega, speed, slip_radius(p)), -1, 1)
+    sign = ca.if_else(backward(omega, speed, radius), -1, 1)
     omega, speed = sign * omega, sign * speed
-    unified, paper, forward = slips(omega, speed, slip_radius(p))
+    unified, paper, forward = slips(omega, speed, radius)
     slip_bad = ca.logic_or(ca.logic_not(forward), ca.logic_or(unified < -1, unified > 1))
     safe_slip = ca.fmin(ca.fmax(unified, -1), 1)  # only used when the status is OK
 

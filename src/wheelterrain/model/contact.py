@@ -571,6 +571,17 @@ def _maker_angle(ground: Rut, P: Params) -> ca.SX:
     return entry_angle(depth, P)
 
 
+def _patch_shear_slip(slip: ca.SX, P: Params) -> ca.SX:
+    """The slip of the shearing surface that the patch's shear displacement counts,
+    j = x*(distance from the patch's front), by ``model.shear_kinematics`` (see
+    :func:`_patch_form`): 0, the wheel element's a - v/R_s; 1, the soil element's R_s/v - 1
+    (:func:`_kinematics`)."""
+    _, Rs, Rref = radii(P)
+    a, v, soil_ratio = _kinematics(slip, Rs, Rref)
+    kinematics = P["model.shear_kinematics"]
+    return (1 - kinematics) * (a - v / Rs) + kinematics * (soil_ratio - 1)
+
+
 def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, ripple: bool) -> dict:
     """The patch form (``model.contact_form`` = 1): all contact quantities for a given entry
     angle (no damping), the keys of :func:`_arc_form`.
@@ -598,7 +609,7 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, ripp
     (a0, a1) have no meaning on a uniform patch and are not used (max_stress_angle is reported
     as 0).
     """
-    Rc, Rs, Rref = radii(P)
+    Rc, Rs, _ = radii(P)
     b = P["wheel.width"]
     c, tan_phi = shear_strength(P)
     n, modulus = reece(slip, P)
@@ -623,9 +634,7 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, ripp
         normal = b * length * ca.fmax(pressure + amplitude * ca.sin(phase), 0)
     else:
         normal = normal_static
-    a, v, soil_ratio = _kinematics(slip, Rs, Rref)
-    kinematics = P["model.shear_kinematics"]
-    x = (1 - kinematics) * (a - v / Rs) + kinematics * (soil_ratio - 1)
+    x = _patch_shear_slip(slip, P)
     K = effective_shear_modulus(length, P)
     mobilised = patch_shear_mean(x * length / K, P)
     # model.rut_shear: the share of j0 = x*(its contact length) that the rut's maker, at this
@@ -674,8 +683,9 @@ LATERAL_RESULTANTS = ("lateral_force", "aligning_moment", "turning_moment", "ove
 """The lateral outputs a vehicle takes (the rest are parts of them); the rows of
 ``functions.build().lateral_jacobian``."""
 WIDTH_NODES = 6
-"""Gauss-Legendre nodes over the half width of :func:`_width_moment` (measured against a
-400-point rule in tests/test_turning.py)."""
+"""Gauss-Legendre nodes over the half width of :func:`_width_moment` (measured against the
+reference's adaptive quadrature in tests/test_turning.py: 1.0e-4 of the width's moment at
+most, at slip 0 where the longitudinal displacement changes sign across the tread)."""
 
 
 def _lateral_kinematics(slip, slip_angle, Rs, Rref):
@@ -739,16 +749,21 @@ def _lateral_modulus(length, P: Params):
     return P["model.lateral_shear_ratio"] * effective_shear_modulus(length, P)
 
 
+def _hegedus_factors(P: Params) -> tuple[ca.SX, ca.SX]:
+    """Hegedus's (D1, D2): D1 = cot(X) + tan(X + phi), D2 = cot(X) + cot(X)**2*tan(phi),
+    X = pi/4 - phi/2 the soil's destructive angle."""
+    phi = P["soil.phi"]
+    x = math.pi / 4 - phi / 2
+    cot = 1 / ca.tan(x)
+    return cot + ca.tan(x + phi), cot + cot**2 * ca.tan(phi)
+
+
 def _hegedus(h, P: Params):
     """Bulldozing resistance [N/m] of the side face at depth ``h`` [m] below the surface it
     meets (Hegedus 1960, as Ishigami et al. 2007 apply it to a wheel's side):
-    D1*(c*h + D2*gamma*h**2/2), D1 = cot(X) + tan(X + phi), D2 = cot(X) + cot(X)**2*tan(phi),
-    X = pi/4 - phi/2 the soil's destructive angle."""
-    phi, c, gamma = P["soil.phi"], P["soil.cohesion"], P["soil.gamma"]
-    x = math.pi / 4 - phi / 2
-    cot = 1 / ca.tan(x)
-    d1 = cot + ca.tan(x + phi)
-    d2 = cot + cot**2 * ca.tan(phi)
+    D1*(c*h + D2*gamma*h**2/2) (:func:`_hegedus_factors`)."""
+    c, gamma = P["soil.cohesion"], P["soil.gamma"]
+    d1, d2 = _hegedus_factors(P)
     depth = ca.fmax(h, 0)
     return d1 * (c * depth + d2 * gamma * depth**2 / 2)
 
@@ -757,10 +772,8 @@ def _hegedus_depth(h, P: Params):
     """Depth [m] below the surface of the resultant of Hegedus's pressure on a face buried
     ``h`` deep (c uniform, gamma growing with depth): h*(c/2 + D2*gamma*h/3)/(c + D2*gamma*h/2),
     the pressure's first moment over its resultant (any value at h = 0, where it is 0)."""
-    phi, c, gamma = P["soil.phi"], P["soil.cohesion"], P["soil.gamma"]
-    x = math.pi / 4 - phi / 2
-    cot = 1 / ca.tan(x)
-    d2 = cot + cot**2 * ca.tan(phi)
+    c, gamma = P["soil.cohesion"], P["soil.gamma"]
+    _, d2 = _hegedus_factors(P)
     depth = ca.fmax(h, 0)
     below = c + d2 * gamma * depth / 2
     share = (c / 2 + d2 * gamma * depth / 3) / ca.if_else(below > 0, below, 1)
@@ -931,10 +944,11 @@ def _lateral_patch(theta_f, slip, slip_angle, turn_slip, P: Params, nodes: tuple
     along = weights * Rc * arc["cos"]  # ds
     stress = b * (c + static["mean_pressure"] * tan_phi)  # full/l, per metre of the patch
     if turn:
-        a_long, v, soil_ratio = _kinematics(slip, Rs, Rref)
-        factor = (1 - kin) * v / Rs + kin
+        _, v, _ = _kinematics(slip, Rs, Rref)
+        factor = (1 - kin) * v / Rs + kin  # j per metre of the patch per unit tan(beta)
         j_y = j_y + factor * turn_slip * passed * Rc * (trig_f[0] + arc["sin"]) / 2
-        mobilised = shear_function(j_y, P, K_y)
+    mobilised = shear_function(j_y, P, K_y)  # at the nodes
+    if turn:
         shear = -stress * ca.dot(along, mobilised)
         moment = -stress * ca.dot(along, mobilised * Rc * arc["sin"])
     else:
@@ -945,18 +959,18 @@ def _lateral_patch(theta_f, slip, slip_angle, turn_slip, P: Params, nodes: tuple
         moment = -full * (middle * mean - length * patch_shear_centred_moment(a, P))
     # M_x: the same stress at each point of the patch times its depth, R_c*cos(theta), by the
     # quadrature's nodes in both cases (the patch lies on the arc's chord of nodes)
-    overturning = -stress * ca.dot(along, shear_function(j_y, P, K_y) * Rc * arc["cos"])
+    overturning = -stress * ca.dot(along, mobilised * Rc * arc["cos"])
     side, side_moment, side_over = _side_bulldozing((((arc, weights)),), (j_y,), K_y, P, Rc)
     aligning = moment + side_moment
     turning = aligning
     if turn:
         K = effective_shear_modulus(length, P)
-        x_s = (1 - kin) * (a_long - v / Rs) + kin * (soil_ratio - 1)  # as _patch_form's
 
         def law(a):
             return patch_shear_mean(a, P)
 
-        width = _width_moment(law, x_s * length / K, turn_slip * factor * length / K, b)
+        width = _width_moment(law, _patch_shear_slip(slip, P) * length / K,
+                              turn_slip * factor * length / K, b)
         turning = aligning - full / b * width
     return {"lateral_force": shear + side, "aligning_moment": aligning,
             "lateral_shear_force": shear, "side_bulldozing": side,

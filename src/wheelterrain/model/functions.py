@@ -64,7 +64,7 @@ class ModelFunctions:
     - ``lateral(sinkage, slip, slip_angle, turn_slip, p)`` -> LATERAL_OUTPUTS: a wheel at a
       slip angle and a turn slip (:func:`wheelterrain.model.contact.lateral_at`),
       quasi-static, ripple-free.
-    - ``lateral_jacobian(sinkage, slip, slip_angle, turn_slip, p)`` -> ``d_state`` (3x4:
+    - ``lateral_jacobian(sinkage, slip, slip_angle, turn_slip, p)`` -> ``d_state`` (4x4:
       LATERAL_RESULTANTS by sinkage, slip, slip_angle, turn_slip), exact.
     - ``lateral_memory(sinkage, slip, slip_angle, turn_slip, plastic_sinkage, mean_pressure,
       p)`` -> LATERAL_OUTPUTS: the same at the yield sinkage with the elastic unloading of the soil
