@@ -158,6 +158,24 @@ def test_the_plastic_sinkage_yields_at_once_and_is_replaced_over_a_contact_lengt
         0.015 + (zp - 0.015) * math.exp(-1), rel=1e-12)
 
 
+@pytest.mark.parametrize("relaxation", [0, 1])
+def test_a_wheel_out_of_the_soil_leaves_the_imprint_at_the_surface(relaxation):
+    """Lifted out of the soil (z < 0), the imprint relaxes toward the surface, never above it;
+    an imprint at the surface (no contact length) stays, its rate 0, not |V|/0 (it was -2e295
+    m/s, which stopped a wheel dropped onto the soil in model exchange)."""
+    fns = model_functions.build()
+    p = _vector("rashid-patch", model__imprint_relaxation=relaxation)
+    for z, plastic in ((-0.002, 0.0), (-1e-9, 0.0), (-0.002, -0.001)):
+        assert _memory(fns, z, -0.1, 0.2, plastic, p)["plastic_rate"] == 0
+        if plastic == 0:  # the co-simulation step keeps it at the surface too
+            assert _step(fns, z, plastic, 0.03, p, 1e-3) == 0
+    # pressed to 1 mm and lifted 2 mm above the surface: relaxes toward the surface at |V|/l
+    rate = _memory(fns, -0.002, 0.0, 0.2, 0.001, p)["plastic_rate"]
+    length = _memory(fns, 0.001, 0.0, 0.2, 0.001, p)["contact_length"]
+    assert rate == pytest.approx(-0.03 / length * 0.001, rel=1e-12)
+    assert 0.0 < _step(fns, -0.002, 0.001, 0.03, p, length / 0.03) < 0.001
+
+
 @pytest.mark.parametrize("form", FORMS)
 def test_a_rolling_wheel_settles_after_a_load_step_within_a_few_contact_lengths(form):
     """A wheel rolling at 3 cm/s, slip 0.2, its load stepped from 62 N: with

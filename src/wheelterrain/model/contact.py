@@ -1323,8 +1323,9 @@ RATE_WIDTH = 1e-6
 
 def imprint_target(z, yielded, share, exponent, P: Params):
     """z_t [m]: what the imprint under a rolling wheel lifted from where it yielded relaxes
-    toward (``model.imprint_relaxation``). 0: the wheel's sinkage ``z``. 1: the sinkage at which
-    the soil ahead of the wheel, not pressed yet, carries the force the wheel carries now,
+    toward (``model.imprint_relaxation``). 0: the wheel's sinkage ``z`` (the surface, a rut's
+    or 0, where the wheel is out of the soil: it leaves soil it has not pressed). 1: the sinkage
+    at which the soil ahead of the wheel, not pressed yet, carries the force the wheel carries now,
     ``share`` (:func:`unloading_share`) of the contact's at the yield sinkage ``yielded``: a
     rigid wheel's normal force grows with its sinkage below the surface it meets, s (a rut's,
     or 0), as (z - s)**((2*n + 1)/2) (Bekker's rigid-wheel integral of p = k*z**n, Wong, Theory
@@ -1335,7 +1336,8 @@ def imprint_target(z, yielded, share, exponent, P: Params):
     power = 2 / (2 * exponent + 1)
     kept = ca.if_else(share > 0, ca.exp(power * ca.log(ca.fmax(share, 1e-300))), 0)
     fresh = surface + (yielded - surface) * kept
-    return ca.if_else(P["model.imprint_relaxation"] == 1, fresh, z)
+    # a wheel lifted out of the soil (z below its surface) leaves unpressed soil: the surface
+    return ca.if_else(P["model.imprint_relaxation"] == 1, fresh, ca.fmax(z, surface))
 
 
 def plastic_rate(z, z_rate, plastic, speed, P: Params, target, smooth=None):
@@ -1344,7 +1346,8 @@ def plastic_rate(z, z_rate, plastic, speed, P: Params, target, smooth=None):
     down, max(dz/dt, 0); lifted (z < z_p) the wheel rolls onto soil it has not pressed and the
     imprint under it relaxes, -(|V|/l)*(z_p - z_t), l the contact length, z_t (``target``,
     :func:`imprint_target`) the wheel's sinkage or the sinkage at which the soil ahead carries
-    the wheel's present force (``model.imprint_relaxation``). 0 with ``model.soil_memory`` = 0.
+    the wheel's present force (``model.imprint_relaxation``); an imprint at or above the surface
+    (l = 0: nothing pressed) stays. 0 with ``model.soil_memory`` = 0.
     Where the sinkage rate input is not the exact derivative of the sinkage, z_p can drift
     below z: the outputs then yield at z (memory lost, never stiffness added). ``smooth`` (the
     smooth yield of :func:`contact_at`): the two branches blended by (1 + tanh((z -
@@ -1356,7 +1359,10 @@ def plastic_rate(z, z_rate, plastic, speed, P: Params, target, smooth=None):
                 - (1 - pressing) * decay * (plastic - target))
         return ca.if_else(P["model.soil_memory"] == 1, rate, 0)
     decay = _imprint_decay(ca.fmax(plastic, z), speed, P)
-    rate = ca.if_else(z >= plastic, ca.fmax(z_rate, 0), -decay * (plastic - target))
+    # an imprint at or above the surface has no contact length (|V|/l infinite): nothing is
+    # left to relax, the rate is 0
+    lifted = ca.if_else(plastic > rut_surface(P), -decay * (plastic - target), 0)
+    rate = ca.if_else(z >= plastic, ca.fmax(z_rate, 0), lifted)
     return ca.if_else(P["model.soil_memory"] == 1, rate, 0)
 
 
