@@ -187,10 +187,10 @@ def test_rolling_backward_is_the_mirror_image_of_rolling_forward(flavours, flavo
     them): every output is the forward wheel's, the MIRRORED ones negated, bit for bit, over
     driving, braking and the locked wheel, at a slip angle and a yaw rate; a wheel turning
     against its carriage's motion is still refused with the reason (FMI 2 and 3). Dynamic
-    mode with the grouser ripple off: its phase follows the wheel's own angle, which runs
-    backward, so there the mirror holds up to the ripple's phase."""
+    mode with the grouser ripple on: the wheel's angle runs backward, and the contact takes it
+    and the ripple's phase negated (the mirror's grousers; ripple.phase 0 here), so the ripple
+    is mirrored too."""
     from wheelterrain.fmu.functions import MIRRORED
-    from wheelterrain.parameters import NO_RIPPLE
 
     root = flavours["root"] / ("native/fmi3" if flavour == "fmi3" else flavour)
     names = variables.TERRAIN_OUTPUTS  # every computed output
@@ -201,7 +201,6 @@ def test_rolling_backward_is_the_mirror_image_of_rolling_forward(flavours, flavo
         for sign in (1, -1):
             t = Instance(root / "WheelTerrain.fmu", flavours["unzip"][(flavour, "WheelTerrain")],
                          f"mirror{k}{sign}", log=True).start({
-                             **({} if quasi_static else NO_RIPPLE),
                              "quasi_static": quasi_static, "load": 40.0, "sinkage": 0.012,
                              "wheel_speed": sign * omega, "carriage_speed": sign * speed,
                              "slip_angle": sign * beta, "yaw_rate": sign * yaw})

@@ -129,7 +129,8 @@ MIRRORED = ("drawbar_pull", "torque", "gross_thrust", "compaction_resistance", "
 """The WheelTerrain outputs that change sign for a wheel rolling backward: it is the mirror
 image (x -> -x) of the wheel rolling forward at the speeds' magnitudes, its slip angle negated
 (atan(v_y/v_x) with v_x < 0) and its yaw rate negated (a reflection reverses rotations about the
-vertical; the turn slip r/V is unchanged). Its forces along x, its torque, the contact's angles
+vertical; the turn slip r/V is unchanged) and its grousers mirrored (:func:`mirrored_grousers`:
+the ripple's phase negated). Its forces along x, its torque, the contact's angles
 (the contact begins behind the axle) and its moments about the vertical change sign; the
 normal and lateral forces, the sinkage and the rut do not. The resistances keep the balance
 drawbar_pull = gross_thrust - compaction_resistance - bulldozing (each along x, forward
@@ -197,6 +198,15 @@ def with_rut_met(p, rut_met):
     return ca.vertcat(p[:k], ca.fmax(p[k], rut_met), p[k + 1:])
 
 
+def mirrored_grousers(p, angle, sign):
+    """(p, angle) for the contact of a wheel rolling in the direction ``sign`` (1 forward, -1
+    backward): backward, the wheel's angle and its ripple.phase negated, the grousers' positions
+    in the mirror image (the ripple's phase n_g*angle + phase negated), so that the wheel
+    rolling backward is the mirror of one rolling forward over time, not only at an instant."""
+    k = INDEX["ripple.phase"]
+    return ca.vertcat(p[:k], sign * p[k], p[k + 1:]), sign * angle
+
+
 def with_grouser_phase(p, phase):
     """The parameter vector ``p`` (table order) with ``phase`` [rad] added to its
     ripple.phase: a rover wheel's own grouser phase (rover.grouser_phase.<wheel>)."""
@@ -239,8 +249,10 @@ def terrain_functions(smooth: float | None = None
     turn_slip = ca.if_else(turn_bad, 0, yaw / ca.fmax(speed, SPEED_FLOOR))
     held = (fns.contact_memory if smooth is None
             else model_functions.contact_memory_smooth(smooth))
+    rolled, rolled_angle = mirrored_grousers(p, angle, sign)
     out = dict(zip((*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS),
-                   held(sinkage, rate, safe_slip, angle, plastic, speed, p), strict=True))
+                   held(sinkage, rate, safe_slip, rolled_angle, plastic, speed, rolled),
+                   strict=True))
     out.update(zip(contact.LATERAL_OUTPUTS, fns.lateral_memory(
         sinkage, safe_slip, safe_beta, turn_slip, plastic, out["mean_pressure"], p),
         strict=True))

@@ -621,8 +621,10 @@ def _components(lib: Library) -> None:
         TURN_SLIP_LIMIT=f"{TURN_SLIP_LIMIT:g}"))
     _class_file(lib, where, "Contact", _template(
         "Contact", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS)))
+    phase = NAMES.index("ripple.phase") + 1
     _class_file(lib, where, "PartialWheel", _template(
         "PartialWheel", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS),
+        PHASE_BEFORE=phase - 1, PHASE=phase, PHASE_AFTER=phase + 1,
         LATERAL_ROWS=lateral_rows, TURN_SLIP_LIMIT=f"{TURN_SLIP_LIMIT:g}"))
     _class_file(lib, where, "Wheel", _template("Wheel", N=len(NAMES)))
     soil = [NAMES.index(n) for n in ground.SOIL_NAMES]

@@ -35,7 +35,10 @@ equation
   der(wheel_angle) = wheel_speed;
   slip = WheelTerrain.Functions.slipFromSpeeds(rolling*wheel_speed, rolling*carriage_speed, pk);
   assert(slip >= -1 and slip <= 1, "Wheel: the slip left the model's range [-1, 1] (the wheel turning against its axle's motion)");
-  y = contactFunction(sinkage, sinkage_rate, slip, wheel_angle, plastic_sinkage, rolling*carriage_speed, pk);
+  // backward, the grousers of the mirror image: the wheel's angle and the ripple's phase negated
+  // (mirroredGrousers, the FMU's rule)
+  y = contactFunction(sinkage, sinkage_rate, slip, rolling*wheel_angle, plastic_sinkage, rolling*carriage_speed,
+    cat(1, pk[1:${PHASE_BEFORE}], {rolling*pk[${PHASE}]}, pk[${PHASE_AFTER}:${N}]));
   der(plastic_sinkage) = y[WheelTerrain.Functions.Index.plastic_rate];
   normal_force = y[WheelTerrain.Functions.Index.normal_force];
   drawbar_pull = rolling*y[WheelTerrain.Functions.Index.drawbar_pull];
@@ -48,5 +51,5 @@ equation
   aligning_moment = rolling*y_lateral[WheelTerrain.Functions.Index.Lateral.aligning_moment];
   turning_moment = rolling*y_lateral[WheelTerrain.Functions.Index.Lateral.turning_moment];
   overturning_moment = y_lateral[WheelTerrain.Functions.Index.Lateral.overturning_moment];
-  annotation(Documentation(info="<html><p>The WheelTerrain FMU's model exchange as a block: the same inputs, the same contact, its states wheel_angle and plastic_sinkage; at a slip angle and a yaw rate, the lateral force and the moments of the soil with memory (Functions.lateralMemory, the FMU's own, the grouser-period mean). Rolling backward (both speeds &lt;= 0) is the mirror image of rolling forward, as in the FMU: the contact of the speeds' magnitudes, the slip angle and the yaw rate negated, and the forces along x, the torque and the moments about the vertical negated (<code>rolling</code>, Functions.rollingSign); a wheel turning against its axle's motion stops the simulation on the slip's assert. Wheel gives it one parameter vector, MapWheel the soil of a terrain map at the wheel's position.</p></html>"));
+  annotation(Documentation(info="<html><p>The WheelTerrain FMU's model exchange as a block: the same inputs, the same contact, its states wheel_angle and plastic_sinkage; at a slip angle and a yaw rate, the lateral force and the moments of the soil with memory (Functions.lateralMemory, the FMU's own, the grouser-period mean). Rolling backward (both speeds &lt;= 0) is the mirror image of rolling forward, as in the FMU: the contact of the speeds' magnitudes, the slip angle, the yaw rate, the wheel's angle and the ripple's phase negated, and the forces along x, the torque and the moments about the vertical negated (<code>rolling</code>, Functions.rollingSign); a wheel turning against its axle's motion stops the simulation on the slip's assert. Wheel gives it one parameter vector, MapWheel the soil of a terrain map at the wheel's position.</p></html>"));
 end PartialWheel;
