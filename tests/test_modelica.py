@@ -25,7 +25,7 @@ import pytest
 
 import modelica_points as mp
 from wheelterrain import presets
-from wheelterrain.model import api, contact
+from wheelterrain.model import api, contact, rig
 from wheelterrain.model import functions as model_functions
 from wheelterrain.modelica import library, reference, translate
 from wheelterrain.parameters import NAMES
@@ -578,3 +578,124 @@ def test_the_rig_on_msl_components_follows_the_python_models_trajectory(built, m
             got, want = np.asarray(result[key]), ref[column][:n]
             scale = np.max(np.abs(want))
             assert np.max(np.abs(got - want)) <= 1e-8 * scale, (case, key)
+
+
+# ---- the component layer: Terrain and Wheels.PlanarWheel (MSL and PlanarMechanics) -------------
+
+needs_planar = pytest.mark.skipif(
+    reference.find_msl() is None or not (reference.find_msl() / "PlanarMechanics").is_dir(),
+    reason="needs MSL 4.x and PlanarMechanics 1.6 side by side on MODELICAPATH (the shared "
+           "archive unpacks both)")
+
+
+@needs_planar
+def test_the_terrains_shapes_and_soil_are_the_interpolation_and_the_map(msl_root):
+    """Terrain.height and slopeAt on a profile against numpy's interpolation (level beyond the
+    table), on a plane and flat; Terrain.soil with a patch against the Terrain FMU's map
+    (ground.soil_at)."""
+    from wheelterrain.model import ground
+
+    table = [[-0.5, 0.02], [0.0, 0.0], [0.4, 0.1], [1.0, 0.1], [1.3, -0.05]]
+    values = ground.defaults() | {"patch.start": 0.3, "patch.end": 0.9,
+                                  **{f"patch.{k.split('.')[1]}": v for k, v in
+                                     ground.soft_patch(presets.load()).items()}}
+    g = "{" + ", ".join(repr(float(values[n])) for n in ground.NAMES) + "}"
+    rows = "{" + ", ".join(f"{{{x!r}, {h!r}}}" for x, h in table) + "}"
+    model = rumoca.Session(roots=[str(msl_root)]).loads(
+        "model Run\n"
+        f"  inner {ROOT}.Terrain terrain(ground={ROOT}.Types.Ground.profile, profile={rows}, "
+        f"g={g});\n"
+        f"  {ROOT}.Terrain plane(ground={ROOT}.Types.Ground.plane, slope=0.2);\n"
+        f"  {ROOT}.Terrain flat;\n"
+        "  Real x = -1 + time;\n"
+        "  Real h = terrain.height(x);\n  Real a = terrain.slopeAt(x);\n"
+        f"  Real soil[{len(ground.SOIL_NAMES)}] = terrain.soil(x);\n"
+        "  Real h_plane = plane.height(x);\n  Real a_plane = plane.slopeAt(x);\n"
+        "  Real h_flat = flat.height(x);\nend Run;\n", model="Run")
+    result = model.simulate((0.0, 3.0), dt=0.0125)
+    x = np.asarray(result["x"])
+    xs, hs = np.array(table).T
+    assert np.allclose(result["h"], np.interp(x, xs, hs), rtol=0, atol=1e-15)
+    segment = np.clip(np.searchsorted(xs, x, side="right") - 1, 0, len(xs) - 2)
+    slopes = np.arctan(np.diff(hs) / np.diff(xs))[segment]
+    inside = (x > xs[0]) & (x < xs[-1])
+    assert np.allclose(result["a"], np.where(inside, slopes, 0.0), rtol=0, atol=1e-15)
+    assert np.any(result["a"] < 0)
+    assert np.any(result["a"] > 0)
+    assert np.allclose(result["h_plane"], x * math.tan(0.2), rtol=0, atol=1e-15)
+    assert np.all(np.asarray(result["a_plane"]) == 0.2)
+    assert np.all(np.asarray(result["h_flat"]) == 0)
+    params = {n: values[n] for n in ground.NAMES}
+    for k, xk in enumerate(x[::8]):
+        want = [float(v) for v in ground.soil_at(float(xk), params)]
+        got = [result[f"soil[{j + 1}]"][8 * k] for j in range(len(want))]
+        assert got == want, xk
+
+
+@pytest.fixture(scope="module")
+def planar_rig(msl_root):
+    """Examples.PlanarRig compiled once (its slip, inclination, speed and start are parameters
+    rumoca changes between runs)."""
+    model = _load_example([msl_root], "PlanarRig")
+    assert model.structure().is_balanced
+    return model
+
+
+PLANAR_CHECKED = (("sinkage", "sinkage"), ("inertia.w", "wheel_speed"),
+                  ("wheel.plastic_sinkage", "plastic_sinkage"), ("drawbar_pull", "drawbar_pull"),
+                  ("normal_force", "normal_force"))
+
+
+@needs_planar
+@pytest.mark.slow
+@pytest.mark.parametrize("angle_deg", [0.0, 15.0])
+def test_the_planar_wheel_on_its_rig_is_the_rig_level_and_tilted(built, planar_rig, angle_deg):
+    """Examples.PlanarRig (a PlanarWheel on PlanarMechanics' Frame, an inner Terrain, an MSL
+    speed loop) against the Python model's rig (Resources/Reference/Rig<case>.csv, the rig on
+    Components.Contact checks the same files) over the first second of each case: 1e-8 of each
+    quantity's largest value (measured: 1.1e-9 at worst, the plastic sinkage tilted at C4). Tilted
+    by 15 deg (terrain plane and carriage guide together, the load along the normal) the
+    trajectory in the terrain's frame is the level one: the sinkage from the hub's clearance,
+    the speeds along the terrain, the forces turned into the world frame and back."""
+    config = rumoca.SimConfig(solver="rk-like", rtol=1e-12, atol=1e-14)
+    for case, slip_paper in reference.RIG_CASES.items():
+        result = planar_rig.simulate((0.0, 1.0), dt=reference.RIG_INTERVAL, config=config,
+                                     params={"slip_paper": slip_paper,
+                                             "angle": math.radians(angle_deg)})
+        ref = reference.read(built, f"Rig{case}")
+        n = len(result.time)
+        assert n == 101
+        for key, column in PLANAR_CHECKED:
+            got, want = np.asarray(result[key]), ref[column][:n]
+            assert np.max(np.abs(got - want)) <= 1e-8 * np.max(np.abs(want)), (case, key)
+
+
+@needs_planar
+@pytest.mark.slow
+def test_the_planar_wheel_rolls_backward_as_the_mirror_and_lands_from_above(planar_rig):
+    """The rig run backward (rim and carriage speeds negated): the forward run's sinkage and
+    normal force, its pull and wheel speed negated (the FMU's mirror, through PlanarWheel's
+    frames); dropped from 2 mm above the soil the wheel falls, lands and carries the load (the
+    soil's memory out of the soil stays at the surface: before, its rate was -1e295 m/s there)."""
+    config = rumoca.SimConfig(solver="rk-like", rtol=1e-10, atol=1e-12)
+    runs, rim_speed = {}, rig.defaults()["rig.rim_speed"]
+    for sign in (1, -1):
+        runs[sign] = planar_rig.simulate((0.0, 1.0), dt=reference.RIG_INTERVAL, config=config,
+                                         params={"slip_paper": 0.25,
+                                                 "rim_speed": sign * rim_speed})
+    for key, sign in (("sinkage", 1), ("normal_force", 1), ("drawbar_pull", -1),
+                      ("inertia.w", -1), ("wheel.plastic_sinkage", 1)):
+        forward, back = np.asarray(runs[1][key]), np.asarray(runs[-1][key])
+        assert np.max(np.abs(back - sign * forward)) <= 1e-9 * np.max(np.abs(forward)), key
+    assert np.all(np.asarray(runs[-1]["wheel.contact.rolling"])[1:] == -1)
+    dropped = planar_rig.simulate((0.0, 0.5), dt=0.0005, config=rumoca.SimConfig(
+        solver="rk-like", rtol=1e-8, atol=1e-10), params={"slip_paper": 0.25,
+                                                          "sinkage_start": -0.002})
+    sinkage = np.asarray(dropped["sinkage"])
+    air = sinkage < 0
+    assert air[0]
+    assert not air[-1]
+    assert np.all(np.asarray(dropped["normal_force"])[air] == 0)
+    assert np.all(np.asarray(dropped["wheel.plastic_sinkage"])[air] == 0)
+    load = rig.defaults()["rig.load"]
+    assert abs(np.mean(np.asarray(dropped["normal_force"])[-100:]) - load) < 0.05 * load

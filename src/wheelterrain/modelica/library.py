@@ -21,9 +21,15 @@ level), and where each part comes from:
   ``RoverChassis`` (no MSL) and
   ``Contact`` on MSL flanges (Rotational hub, Translational axle and vertical), the soil's
   memory a state, each contact function replaceable (generated or external).
+- ``Wheels.PlanarWheel`` (a wheel on PlanarMechanics' Frame with a Rotational axle flange,
+  the soil's memory its state), ``Terrain`` (the ``inner`` ground: flat, a plane or a
+  profile; its soil the terrain map's; replaceable height, slope and soil functions,
+  ``Functions.Ground``), ``Types`` (enumerations), ``Components.SoilWheel`` (the Wheel with its
+  soil as an input).
 - ``Examples``: ``SteadyC2``, ``SlipRamp``, ``Rover``, ``RoverSlope``, ``RoverDescent``,
   ``RoverPullTest``, ``RoverSoftPatch`` (no MSL) and ``RigC1`` ... ``RigC4`` (the paper's
-  rig from MSL components), with ``experiment`` annotations; reference results in
+  rig from MSL components), ``PlanarRig`` (the rig with a PlanarWheel, level or tilted) with
+  ``Utilities.RigCarriage``, with ``experiment`` annotations; reference results in
   ``Resources/Reference`` written by the Python model.
 - ``UsersGuide``: conventions, slips, citations, the name map, what was tested in which tool.
 
@@ -52,6 +58,7 @@ from wheelterrain.parameters import NAMES, RIG_TABLE, TABLE, TURN_SLIP_LIMIT, Pa
 
 LIBRARY = "WheelTerrain"
 MSL_VERSION = "4.1.0"
+PLANAR_MECHANICS_VERSION = "1.6.0"
 FORM_NAMES = {"arc": "Arc", "arc_reversal": "ArcReversal", "patch": "Patch"}
 GROUPS = {"wheel": "wheel", "grouser": "grouser", "soil": "soil", "ripple": "ripple",
           "model": "options"}
@@ -359,6 +366,8 @@ def _functions(lib: Library) -> None:
         order += _dispatch(lib, where, stem, memory)
     _index(lib, where)
     order.append("Index")
+    _class_file(lib, where, "Ground", _template("Ground"))
+    order.append("Ground")
     order += _external(lib, where)
     order += _interfaces(lib, where)
     lib.package(f"{LIBRARY}/Functions", "Internal", "Pieces of the long generated functions "
@@ -426,8 +435,24 @@ def _interfaces(lib: Library, where: str) -> list[str]:
         lines += [out.declaration("output"), f"end {name};"]
         _class_file(lib, f"{where}/Interfaces", name, "\n".join(lines) + "\n")
         order.append(name)
-    lib.package(where, "Interfaces", "The signatures a component's contact function must have",
-                order)
+    n_soil = len(ground.SOIL_NAMES)
+    for name, what, lines in (
+            ("Height", "Terrain.height: the terrain's height at a horizontal position",
+             ['  input Real x(unit="m") "horizontal position";',
+              '  output Real h(unit="m") "the terrain\'s height there";']),
+            ("Slope", "Terrain.slopeAt: the terrain's inclination at a horizontal position",
+             ['  input Real x(unit="m") "horizontal position";',
+              '  output Real angle(unit="rad") "the inclination there, rising toward +x";']),
+            ("Soil", "Terrain.soil: the soil at a horizontal position",
+             ['  input Real position(unit="m") "horizontal position";',
+              f'  output Real soil[{n_soil}] "the soil.* parameters there, table order '
+              '(Index.Soil)";'])):
+        text = "\n".join([f'partial function {name} "The signature of {what}"', *lines,
+                          f"end {name};"]) + "\n"
+        _class_file(lib, f"{where}/Interfaces", name, text)
+        order.append(name)
+    lib.package(where, "Interfaces", "The signatures a component's contact function and a "
+                "terrain's functions must have", order)
     return ["Interfaces"]
 
 
@@ -609,7 +634,8 @@ def _wrap_call(line: str) -> str:
 def _template(name: str, **values) -> str:
     """The Modelica text of templates/<name>.mo with ${...} filled in."""
     text = resources.files("wheelterrain.modelica").joinpath("templates", f"{name}.mo")
-    return string.Template(text.read_text(encoding="utf-8")).substitute(values)
+    return string.Template(text.read_text(encoding="utf-8")).substitute(
+        {"version": __version__, **values})
 
 
 def _components(lib: Library) -> None:
@@ -639,10 +665,30 @@ def _components(lib: Library) -> None:
         SOIL_AFTER=soil[-1] + 2, START=ground.NAMES.index("patch.start") + 1,
         END=ground.NAMES.index("patch.end") + 1, PATCH_FIRST=patch[0] + 1,
         PATCH_LAST=patch[-1] + 1, MAP_SOIL_FIRST=in_map[0] + 1, MAP_SOIL_LAST=in_map[-1] + 1))
+    _class_file(lib, where, "SoilWheel", _template(
+        "SoilWheel", N=len(NAMES), S=len(soil), SOIL_FIRST=soil[0], SOIL_AFTER=soil[-1] + 2))
     _class_file(lib, where, "RoverChassis", _rover_chassis())
-    lib.package(LIBRARY, "Components", "The wheel on the soil as components",
+    lib.package(LIBRARY, "Components", "The wheel on the soil as blocks (signals in, signals "
+                "out) and the contact on MSL's 1-D flanges",
                 ["QuasiStaticWheel", "Contact", "PartialWheel", "Wheel", "MapWheel",
-                 "RoverChassis"])
+                 "SoilWheel", "RoverChassis"])
+
+
+def _planar(lib: Library) -> None:
+    """The component layer on PlanarMechanics: Types, the inner Terrain, Wheels.PlanarWheel."""
+    _class_file(lib, LIBRARY, "Types", _template("Types"))
+    soil = [NAMES.index(n) for n in ground.SOIL_NAMES]
+    in_map = [ground.NAMES.index(n) for n in ground.SOIL_NAMES]
+    if in_map != list(range(len(in_map))):
+        raise ValueError("Terrain needs the map's soil rows first in the map's table")
+    _class_file(lib, LIBRARY, "Terrain", _template(
+        "Terrain", G=len(ground.NAMES), SOIL_FIRST=soil[0] + 1, SOIL_LAST=soil[-1] + 1,
+        MAP_AFTER_SOIL=len(in_map) + 1))
+    _class_file(lib, f"{LIBRARY}/Wheels", "PlanarWheel", _template("PlanarWheel", N=len(NAMES)))
+    lib.package(LIBRARY, "Wheels", "Wheels to connect into a vehicle: PlanarMechanics frames, "
+                "Rotational flanges, an inner Terrain", ["PlanarWheel"],
+                'Icon(graphics={Ellipse(extent={{-80,80},{80,-80}}, lineColor={64,64,64}, '
+                'fillColor={160,160,160}, fillPattern=FillPattern.Solid)})')
 
 
 def _state(name: str) -> str:
@@ -793,6 +839,11 @@ def _examples(lib: Library) -> None:
         _class_file(lib, where, example, text)
         order.append(example)
     order.append("Rig")
+    _class_file(lib, where, "PlanarRig", _template(
+        "PlanarRig", sinkage_start=translate.literal(reference.RIG_SINKAGE_START),
+        experiment=_experiment(reference.RIG_STOP, reference.RIG_INTERVAL), **rig))
+    _class_file(lib, where, "Utilities", _template("Utilities"))
+    order += ["PlanarRig", "Utilities"]
     for case, s in reference.RIG_CASES.items():
         text = (f'model Rig{case} "The rig at the paper\'s {case}: slip s = {s}"\n'
                 f"  extends Rig(slip_paper={translate.literal(s)});\n"
@@ -827,13 +878,16 @@ def build_library() -> Library:
     lib = Library()
     lib.package("", LIBRARY, "Rigid-wheel terramechanics for planetary rover wheels with "
                 "grousers on loose soil (generated by wheelterrain)",
-                ["UsersGuide", "Functions", "Data", "Records", "Components", "Examples"],
-                f'version="{__version__}", uses(Modelica(version="{MSL_VERSION}"))')
+                ["UsersGuide", "Wheels", "Terrain", "Types", "Functions", "Data", "Records",
+                 "Components", "Examples"],
+                f'version="{__version__}", uses(Modelica(version="{MSL_VERSION}"), '
+                f'PlanarMechanics(version="{PLANAR_MECHANICS_VERSION}"))')
     _users_guide(lib)
     _functions(lib)
     _data(lib)
     _records(lib)
     _components(lib)
+    _planar(lib)
     _examples(lib)
     for name, text in reference.files().items():
         lib.add(f"{LIBRARY}/Resources/Reference/{name}", text)

@@ -185,11 +185,13 @@ def find_msl() -> Path | None:
 
 
 def one_root(msl: Path, library_root: Path, folder: Path) -> Path:
-    """``folder`` made one source root holding MSL and the library side by side (links):
+    """``folder`` made one source root holding MSL (and PlanarMechanics, where it lies beside
+    MSL) and the library side by side (links):
     rumoca 0.10 does not resolve a class of one root from a class of another."""
     folder.mkdir(parents=True, exist_ok=True)
-    for name in ("Modelica", "ModelicaServices", "Complex.mo"):
-        (folder / name).symlink_to(Path(msl) / name)
+    for name in ("Modelica", "ModelicaServices", "Complex.mo", "PlanarMechanics"):
+        if name != "PlanarMechanics" or (Path(msl) / name).is_dir():
+            (folder / name).symlink_to(Path(msl) / name)
     (folder / "WheelTerrain").symlink_to(Path(library_root) / "WheelTerrain")
     return folder
 

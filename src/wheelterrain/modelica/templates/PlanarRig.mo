@@ -1,0 +1,48 @@
+model PlanarRig "The paper's single-wheel rig with a PlanarWheel: a carriage moves the hub at the set slip and presses it down with the load, an MSL speed loop drives the axle"
+  import SI = Modelica.Units.SI;
+  parameter Real slip_paper = 0 "the paper's slip s the carriage is set to";
+  parameter SI.Angle angle = 0 "the terrain's and the carriage's guide's inclination (0: the paper's level rig)";
+  parameter SI.Force load = ${rig_load} "rig.load: presses the hub toward the terrain, along its normal";
+  parameter SI.Mass mass = ${rig_mass} "rig.mass: moves with the wheel across the guide";
+  parameter SI.MomentOfInertia wheel_inertia = ${rig_wheel_inertia} "rig.wheel_inertia";
+  parameter SI.AngularVelocity speed_bandwidth = ${rig_speed_bandwidth} "rig.speed_bandwidth: both poles of the speed loop";
+  parameter SI.Velocity rim_speed = ${rig_rim_speed} "rig.rim_speed";
+  parameter SI.Length sinkage_start = ${sinkage_start} "where the wheel starts (the reference results start there)";
+  inner WheelTerrain.Terrain terrain(ground=WheelTerrain.Types.Ground.plane, slope=angle)
+    annotation(Placement(transformation(extent={{-100,-100},{-60,-60}})));
+  WheelTerrain.Wheels.PlanarWheel wheel "the default preset"
+    annotation(Placement(transformation(extent={{0,-40},{40,0}})));
+  WheelTerrain.Examples.Utilities.RigCarriage carriage(angle=angle, speed=rim_speed/(1 + slip_paper), mass=mass, load=load,
+    height_start=wheel.contact_radius - sinkage_start)
+    annotation(Placement(transformation(extent={{-60,-40},{-20,0}})));
+  final parameter SI.Length slip_radius = wheel.parameters.wheel.radius + wheel.parameters.options.slip_radius_factor*wheel.parameters.grouser.height "R_ref";
+  final parameter SI.AngularVelocity omega_ref = rim_speed/slip_radius;
+  Modelica.Mechanics.Rotational.Components.Inertia inertia(J=wheel_inertia, phi(start=0, fixed=true), w(start=omega_ref, fixed=true))
+    annotation(Placement(transformation(extent={{60,-30},{80,-10}})));
+  Modelica.Mechanics.Rotational.Sources.Torque motor
+    annotation(Placement(transformation(extent={{60,20},{80,40}})));
+  Modelica.Mechanics.Rotational.Sensors.SpeedSensor speed
+    annotation(Placement(transformation(extent={{60,-70},{80,-50}})));
+  Modelica.Blocks.Sources.Constant reference(k=omega_ref)
+    annotation(Placement(transformation(extent={{-60,40},{-40,60}})));
+  Modelica.Blocks.Math.Feedback error
+    annotation(Placement(transformation(extent={{-20,40},{0,60}})));
+  Modelica.Blocks.Continuous.PI controller(k=2*speed_bandwidth*wheel_inertia, T=2/speed_bandwidth, initType=Modelica.Blocks.Types.Init.InitialState, x_start=0)
+    annotation(Placement(transformation(extent={{20,40},{40,60}})));
+  SI.Force drawbar_pull = wheel.drawbar_pull;
+  SI.Length sinkage = wheel.sinkage;
+  SI.Force normal_force = wheel.normal_force;
+equation
+  connect(carriage.frame_b, wheel.frame_a) annotation(Line(points={{-20,-20},{0,-20}}));
+  connect(reference.y, error.u1) annotation(Line(points={{-39,50},{-18,50}}, color={0,0,127}));
+  connect(speed.w, error.u2) annotation(Line(points={{81,-60},{90,-60},{90,20},{-10,20},{-10,42}}, color={0,0,127}));
+  connect(error.y, controller.u) annotation(Line(points={{-1,50},{18,50}}, color={0,0,127}));
+  connect(controller.y, motor.tau) annotation(Line(points={{41,50},{50,50},{50,30},{58,30}}, color={0,0,127}));
+  connect(motor.flange, inertia.flange_b) annotation(Line(points={{80,30},{90,30},{90,-20},{80,-20}}));
+  connect(inertia.flange_a, wheel.flange_a) annotation(Line(points={{60,-20},{40,-20}}));
+  connect(speed.flange, inertia.flange_a) annotation(Line(points={{60,-60},{50,-60},{50,-20},{60,-20}}));
+  annotation(${experiment},
+    Diagram(coordinateSystem(extent={{-100,-100},{100,100}})),
+    Documentation(info="<html><p>Examples.Rig with the wheel a Wheels.PlanarWheel on an inner Terrain: the carriage (Examples.Utilities.RigCarriage, PlanarMechanics' Frame connector) moves the hub along its guide at the set slip, lets it move across the guide with the rig's mass and presses it toward the terrain with the load; the speed loop drives the axle through the wheel's inertia. With <code>angle</code> = 0 it is the paper's rig: Resources/Reference/Rig*.csv (the Python model's rig) at slip_paper 0, 0.25, 0.5, 0.75. Tilted (<code>angle</code> &lt;&gt; 0), the terrain and the guide incline together and the load stays along the terrain's normal: the same trajectory in the terrain's frame.</p></html>",
+      revisions="<html><ul><li>${version}: first version.</li></ul></html>"));
+end PlanarRig;

@@ -1,0 +1,71 @@
+model PlanarWheel "A rigid wheel with grousers on the terrain's soil in the vertical plane of travel: its hub a PlanarMechanics frame, its axle a Rotational flange"
+  import SI = Modelica.Units.SI;
+  outer WheelTerrain.Terrain terrain "the ground (one inner WheelTerrain.Terrain in the model)";
+  replaceable parameter WheelTerrain.Records.Presets.RashidPatch parameters
+    constrainedby WheelTerrain.Records.Parameters
+    "the wheel and the contact model (a preset; the soil rows are the terrain's)"
+    annotation(choicesAllMatching=true);
+  replaceable function contactFunction = WheelTerrain.Functions.contact
+    constrainedby WheelTerrain.Functions.Interfaces.Contact
+    "the contact: Functions.contact (generated, the default) or Functions.External.contact (CasADi's C)"
+    annotation(Dialog(tab="Advanced"));
+  PlanarMechanics.Interfaces.Frame_a frame_a
+    "the hub: x forward, y up (PlanarMechanics' plane of travel), phi its pitch, counter-clockwise"
+    annotation(Placement(transformation(extent={{-116,-16},{-84,16}})));
+  Modelica.Mechanics.Rotational.Interfaces.Flange_a flange_a
+    "the axle: the wheel's angle relative to the hub, positive rolling toward +x (the drive's reaction acts on the hub)"
+    annotation(Placement(transformation(extent={{90,-10},{110,10}})));
+  final parameter Real p[${N}] = WheelTerrain.Records.parameterVector(parameters)
+    "the parameters in table order";
+  final parameter SI.Length contact_radius = parameters.wheel.radius + parameters.options.contact_radius_factor*parameters.grouser.height
+    "R_c: the circle the sinkage is measured to";
+  SI.Angle surface_slope "the terrain's inclination under the hub, rising toward +x";
+  SI.Length clearance "the hub's height above the terrain, along the terrain's normal";
+  SI.Length sinkage "of the contact circle below the terrain's surface";
+  SI.Velocity sinkage_rate "d(sinkage)/dt";
+  SI.Velocity carriage_speed "the hub's speed along the terrain, forward";
+  SI.AngularVelocity wheel_speed "the wheel's rolling rate: the axle's turning less the hub's pitch rate";
+  Real slip(unit="1") = contact.slip "the model's slip: traction driving, skid braking (-1 locked)";
+  SI.Force normal_force = contact.normal_force "the soil's force on the wheel along the terrain's normal";
+  SI.Force drawbar_pull = contact.drawbar_pull "the soil's force on the wheel along the terrain, forward";
+  SI.Torque torque = contact.torque "the torque the soil resists the wheel's rolling with (the axle carries it)";
+  SI.Length plastic_sinkage = contact.plastic_sinkage "the deepest the wheel has pressed the soil under it";
+  WheelTerrain.Components.SoilWheel contact(p=p, redeclare function contactFunction = contactFunction,
+    soil=terrain.soil(frame_a.x), sinkage=sinkage, sinkage_rate=sinkage_rate, wheel_speed=wheel_speed,
+    carriage_speed=carriage_speed, slip_angle=0, yaw_rate=0)
+    "the contact with the soil's memory (the WheelTerrain FMU's), the terrain's soil at the hub"
+    annotation(Placement(transformation(extent={{-20,-60},{20,-20}})));
+equation
+  surface_slope = terrain.slopeAt(frame_a.x);
+  clearance = (frame_a.y - terrain.height(frame_a.x))*cos(surface_slope);
+  sinkage = contact_radius - clearance;
+  carriage_speed = der(frame_a.x)*cos(surface_slope) + der(frame_a.y)*sin(surface_slope);
+  sinkage_rate = der(frame_a.x)*sin(surface_slope) - der(frame_a.y)*cos(surface_slope);
+  wheel_speed = der(flange_a.phi) - der(frame_a.phi);
+  // the wheel is massless: the hub carries the soil's force, the axle its torque, and the
+  // drive's reaction acts on the hub (PlanarMechanics.Joints.Revolute's convention)
+  frame_a.fx = -(drawbar_pull*cos(surface_slope) - normal_force*sin(surface_slope));
+  frame_a.fy = -(drawbar_pull*sin(surface_slope) + normal_force*cos(surface_slope));
+  frame_a.t = -torque;
+  flange_a.tau = torque;
+  annotation(
+    Icon(coordinateSystem(extent={{-100,-100},{100,100}}), graphics={
+      Rectangle(extent={{-100,-100},{100,-62}}, lineColor={128,96,64}, fillColor={190,150,100}, fillPattern=FillPattern.Solid),
+      Ellipse(extent={{-70,80},{70,-60}}, lineColor={64,64,64}, fillColor={160,160,160}, fillPattern=FillPattern.Solid),
+      Ellipse(extent={{-50,60},{50,-40}}, lineColor={64,64,64}, fillColor={220,220,220}, fillPattern=FillPattern.Solid),
+      Line(points={{0,80},{0,92}}, thickness=1), Line(points={{0,-60},{0,-72}}, thickness=1),
+      Line(points={{-70,10},{-82,10}}, thickness=1), Line(points={{70,10},{82,10}}, thickness=1),
+      Line(points={{-84,0},{0,10}}, color={95,95,95}), Line(points={{0,10},{90,0}}, color={64,64,64}),
+      Text(extent={{-150,100},{150,130}}, textString="%name", textColor={0,0,255})}),
+    Documentation(info="<html>
+<p>The wheel of the WheelTerrain FMU (Components.SoilWheel: the contact with the soil's memory, the grouser ripple, the model's slip) as a component in the vertical plane of travel: PlanarMechanics' plane, x horizontal and forward, y up, gravity along -y. Connect <code>frame_a</code> to the body carrying the axle and <code>flange_a</code> to its drive; put one <code>inner WheelTerrain.Terrain terrain</code> in the model.</p>
+<ul>
+<li><b>Load from the hub's motion</b>: the sinkage is the contact circle's depth below the terrain's plane under the hub, R_c minus the hub's clearance along the terrain's normal; its rate and the axle's speed along the terrain come from the hub's velocity. The normal load is not an input: it is what the soil carries at that sinkage.</li>
+<li><b>Forces back on the hub</b>: the drawbar pull (along the terrain) and the normal force (along its normal) in PlanarMechanics' world frame on <code>frame_a</code>; the soil's torque on <code>flange_a</code>. The wheel is massless (give its mass to the body and its spin inertia to a Rotational.Components.Inertia on the axle, as for PlanarMechanics' wheel joints).</li>
+<li><b>The axle</b>: <code>flange_a.phi</code> is the wheel's angle relative to the hub, positive rolling forward (toward +x, clockwise in the x-y view); the wheel rolls at the axle's rate less the hub's pitch rate. As in PlanarMechanics.Joints.Revolute, the drive's reaction acts on <code>frame_a</code> (the motor sits in the hub): connect the drive's support to nothing, or to a fixed flange.</li>
+<li><b>Soil</b>: the terrain's (<code>terrain.soil</code> at the hub's x) in place of the soil rows of <code>parameters</code>; the soil's memory (the plastic sinkage) is the wheel's state, fresh soil at the start. No rut is recorded along the track (the FMUs' model exchange).</li>
+<li><b>Range</b>: forward, braking to the locked wheel, at rest, and backward (both the wheel's rolling and the hub's speed &lt;= 0: the mirror image of rolling forward). A wheel turning against its hub's motion (spinning forward while the hub moves backward, or the reverse) is outside the contact's slip range and stops the simulation at the slip's assert, as the FMU refuses it. Lateral forces do not act in this plane (slip angle and yaw rate 0).</li>
+</ul>
+<p>Tested (tests/test_modelica.py, rumoca with MSL 4.1.0 and PlanarMechanics 1.6.0): Examples.PlanarRig reproduces the paper's rig on Components.Contact (Resources/Reference/Rig*.csv) at the four slips; the same rig tilted onto a plane of 15 deg, its load along the plane's normal, gives the level rig's trajectory. rumoca 0.10 cannot run PlanarMechanics' Body and PlanarWorld (an outer reference of the body is not resolved), so the tests carry the hub on a body written with PlanarMechanics' Frame connector (Examples.Utilities.RigCarriage).</p>
+</html>", revisions="<html><ul><li>${version}: first version.</li></ul></html>"));
+end PlanarWheel;

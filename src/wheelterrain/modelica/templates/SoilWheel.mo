@@ -1,0 +1,10 @@
+block SoilWheel "The Wheel with the soil rows of its parameters as an input: a terrain's soil under the wheel (no Modelica Standard Library needed)"
+  extends WheelTerrain.Components.PartialWheel;
+  parameter Real p[${N}] = WheelTerrain.Data.rashidPatch
+    "the wheel's and the model's parameters in table order (its soil rows are the input's)";
+  input Real soil[${S}] "the soil.* parameters under the wheel, table order (Functions.Index.Soil)";
+equation
+  pk = cat(1, p[1:${SOIL_FIRST}], soil, p[${SOIL_AFTER}:${N}]);
+  annotation(Documentation(info="<html><p>The contact of Wheel with the soil rows (soil.*) of its parameters given by the input <code>soil</code>, e.g. a terrain's soil at the wheel's position (Wheels.PlanarWheel: Terrain.soil). A change of soil is not an event here; MapWheel writes the terrain map's rule as an equation so that the tool meets a patch's edges as events.</p></html>",
+    revisions="<html><ul><li>${version}: first version.</li></ul></html>"));
+end SoilWheel;
