@@ -357,6 +357,41 @@ def _load_example(roots, name):
                          model="Run")
 
 
+def _experiment(built, name: str) -> dict[str, float]:
+    """The example ``name``'s experiment annotation as the library writes it."""
+    text = (built / ROOT / "Examples" / f"{name}.mo").read_text(encoding="utf-8")
+    found = re.search(r"experiment\(([^)]*)\)", text)
+    assert found, name
+    return {k: float(v) for k, v in re.findall(r"(\w+)=([^,\s]+)", found.group(1))}
+
+
+def _own_tolerance(built, *names: str):
+    """rumoca's settings at the examples' own experiment tolerance (one for all of ``names``):
+    relative the annotation's, absolute reference.ABSOLUTE_SHARE of it."""
+    tolerances = {_experiment(built, n)["Tolerance"] for n in names}
+    assert len(tolerances) == 1, names
+    (tolerance,) = tolerances
+    return rumoca.SimConfig(solver="rk-like", rtol=tolerance,
+                            atol=tolerance * reference.ABSOLUTE_SHARE)
+
+
+def test_every_example_has_a_reference_compared_on_its_signals(built):
+    """MSL's regression layout: each example with an experiment annotation has its CSV and
+    comparisonSignals.txt (time first, every signal a column of the CSV) in
+    Resources/Reference/WheelTerrain/Examples/<Example>/, and its run stops at the CSV's end."""
+    examples = [p.stem for p in (built / ROOT / "Examples").glob("*.mo")
+                if "experiment(" in p.read_text(encoding="utf-8")]
+    assert len(examples) == 12  # SteadyC2, SlipRamp, 5 rovers, RigC1 ... RigC4, PlanarRig
+    for name in examples:
+        signals = reference.read_signals(built, name)
+        ref = reference.read(built, name)
+        assert signals[0] == "time"
+        assert set(signals) <= set(ref), name
+        run = _experiment(built, name)
+        assert ref["time"][-1] == pytest.approx(run["StopTime"], abs=1e-12), name
+        assert run["Tolerance"] == reference.tolerance(name)
+
+
 @pytest.fixture(scope="module")
 def quasi_static(built):
     """SteadyC2 and SlipRamp side by side in one rumoca model (the quasi-static contact
@@ -370,14 +405,15 @@ def quasi_static(built):
         f"  {ROOT}.Components.Wheel back(sinkage=0.012, sinkage_rate=0, wheel_speed=-0.25, "
         "carriage_speed=-0.02, slip_angle=0.2, yaw_rate=-0.04);\nend Run;\n", model="Run")
     assert model.structure().is_balanced
-    return model.simulate((0.0, 1.0), dt=0.05)
+    return model.simulate((0.0, 1.0), dt=0.05,
+                          config=_own_tolerance(built, "SteadyC2", "SlipRamp"))
 
 
 @pytest.mark.slow
 def test_steady_c2_matches_the_steady_state(built, quasi_static):
     expected = api.steady_state(presets.load(), 62.0, 0.25, slip_definition="paper")
     ref = reference.read(built, "SteadyC2")
-    for key in ("sinkage", "drawbar_pull"):
+    for key in ("sinkage", "drawbar_pull", "torque"):
         assert ref[key][0] == expected[key]
         got = quasi_static[f"c2.{key}"][-1]
         assert abs(got - expected[key]) <= 1e-8 * abs(expected[key]), key
@@ -429,7 +465,7 @@ def test_the_wheel_rolling_backward_is_the_mirror_image_of_the_wheel_rolling_for
 def test_a_slip_ramp_of_the_quasi_static_wheel_matches_the_steady_state(built, quasi_static):
     ref = reference.read(built, "SlipRamp")
     assert np.allclose(np.asarray(quasi_static.time), ref["time"], rtol=0, atol=1e-12)
-    for key in ("sinkage", "drawbar_pull"):
+    for key in reference.read_signals(built, "SlipRamp")[1:]:
         got = np.asarray(quasi_static[f"ramp.{key}"])
         assert np.all(np.abs(got - ref[key]) <= 1e-8 * np.abs(ref[key]) + 1e-12), key
     assert ref["slip"][0] == reference.RAMP[0]
@@ -455,10 +491,10 @@ steps cross the contact's switches over 10 s (1.4e-9 N, as in the other examples
 def test_the_rover_of_four_wheels_follows_the_python_models_trajectory(built, group):
     """Examples.Rover (over its first second), RoverSlope, RoverDescent, RoverPullTest and
     RoverSoftPatch (RoverChassis and four Wheels or MapWheels, no MSL) against the Python
-    model's rover in model exchange (Resources/Reference/<example>.csv: the RoverChassis FMU's
-    rates on four contacts with memory, CVODES at 1e-12): 1e-8 of each quantity's largest
-    value. rumoca at rtol 1e-13,
-    atol 1e-15: the contact switches (the soil's memory yielding or unloading, the ripple's
+    model's rover in model exchange (the RoverChassis FMU's rates on four contacts with memory,
+    CVODES at 1e-12), on each example's comparisonSignals.txt: 1e-8 of each signal's largest
+    value. rumoca at the examples' own experiment tolerance, 1e-13 (absolute 1e-15): the
+    contact switches (the soil's memory yielding or unloading, the ripple's
     clip) are not events, and rumoca's error where its steps cross them falls with its
     tolerance (measured against the reference, worst quantity over the descent: 2.7e-8 N in a
     pull at 1e-12, 3.7e-9 N at 1e-13; the rumoca runs at the two tolerances differ by the same
@@ -471,8 +507,7 @@ def test_the_rover_of_four_wheels_follows_the_python_models_trajectory(built, gr
     model = rumoca.Session(roots=[str(built)]).loads(f"model Run\n{parts}end Run;\n",
                                                      model="Run")
     assert model.structure().is_balanced
-    result = model.simulate((0.0, stop), dt=interval, config=rumoca.SimConfig(
-        solver="rk-like", rtol=1e-13, atol=1e-15))
+    result = model.simulate((0.0, stop), dt=interval, config=_own_tolerance(built, *examples))
     # the output grid (the soft patch's edges are events: rumoca adds a row at each)
     time = np.asarray(result.time)
     grid = np.flatnonzero(np.abs(time / interval - np.round(time / interval)) < 1e-9)
@@ -480,14 +515,8 @@ def test_the_rover_of_four_wheels_follows_the_python_models_trajectory(built, gr
         n = round((1.0 if example in ROVER_FIRST_SECOND else stop) / interval) + 1
         ref = reference.read(built, example)
         assert np.allclose(time[grid][:n], ref["time"][:n], rtol=0, atol=1e-9)
-        checked = {"speed": "speed", "pitch": "pitch"}
-        for j, wheel in enumerate(("front_left", "front_right", "rear_left", "rear_right")):
-            checked[f"chassis.sinkage[{j + 1}]"] = f"{wheel}.sinkage"
-            checked[f"chassis.wheel_speed[{j + 1}]"] = f"{wheel}.wheel_speed"
-            checked[f"{wheel}.drawbar_pull"] = f"{wheel}.drawbar_pull"
-            checked[f"{wheel}.normal_force"] = f"{wheel}.normal_force"
-        for key, column in checked.items():
-            got, want = np.asarray(result[f"e{k}.{key}"])[grid][:n], ref[column][:n]
+        for key in reference.read_signals(built, example)[1:]:
+            got, want = np.asarray(result[f"e{k}.{key}"])[grid][:n], ref[key][:n]
             assert np.max(np.abs(got - want)) <= 1e-8 * np.max(np.abs(want)), (example, key)
 
 
@@ -558,24 +587,23 @@ def test_every_quantity_of_the_records_is_an_msl_si_type():
 @pytest.mark.slow
 def test_the_rig_on_msl_components_follows_the_python_models_trajectory(built, msl_root):
     """Rig (Components.Contact on MSL flanges, an MSL speed loop, carriage and mass) against
-    the Python model's continuous-time rig (Resources/Reference/Rig<case>.csv) over the first
-    second of each case: 1e-8 relative (rumoca at 1e-12: at 1e-10 its step across the plastic
+    the Python model's continuous-time rig (RigC1 ... RigC4's references and signals) over
+    the first second of each case: 1e-8 relative (rumoca at the examples' own 1e-12: at 1e-10
+    its step across the plastic
     sinkage's yield, where the wheel first presses the soil, leaves 1.3e-8 of the plastic
     sinkage at C1)."""
     model = _load_example([msl_root], "Rig")
     structure = model.structure()
     assert structure.is_balanced
-    config = rumoca.SimConfig(solver="rk-like", rtol=1e-12, atol=1e-14)
+    config = _own_tolerance(built, *(f"Rig{case}" for case in reference.RIG_CASES))
     for case, slip_paper in reference.RIG_CASES.items():
         result = model.simulate((0.0, 1.0), dt=reference.RIG_INTERVAL,
                                 params={"slip_paper": slip_paper}, config=config)
         ref = reference.read(built, f"Rig{case}")
         n = len(result.time)
         assert n == 101
-        for key, column in (("sinkage", "sinkage"), ("wheel.w", "wheel_speed"),
-                            ("contact.plastic_sinkage", "plastic_sinkage"),
-                            ("drawbar_pull", "drawbar_pull"), ("normal_force", "normal_force")):
-            got, want = np.asarray(result[key]), ref[column][:n]
+        for key in reference.read_signals(built, f"Rig{case}")[1:]:
+            got, want = np.asarray(result[key]), ref[key][:n]
             scale = np.max(np.abs(want))
             assert np.max(np.abs(got - want)) <= 1e-8 * scale, (case, key)
 
@@ -641,23 +669,19 @@ def planar_rig(msl_root):
     return model
 
 
-PLANAR_CHECKED = (("sinkage", "sinkage"), ("inertia.w", "wheel_speed"),
-                  ("wheel.plastic_sinkage", "plastic_sinkage"), ("drawbar_pull", "drawbar_pull"),
-                  ("normal_force", "normal_force"))
-
-
 @needs_planar
 @pytest.mark.slow
 @pytest.mark.parametrize("angle_deg", [0.0, 15.0])
 def test_the_planar_wheel_on_its_rig_is_the_rig_level_and_tilted(built, planar_rig, angle_deg):
     """Examples.PlanarRig (a PlanarWheel on PlanarMechanics' Frame, an inner Terrain, an MSL
-    speed loop) against the Python model's rig (Resources/Reference/Rig<case>.csv, the rig on
-    Components.Contact checks the same files) over the first second of each case: 1e-8 of each
-    quantity's largest value (measured: 1.1e-9 at worst, the plastic sinkage tilted at C4). Tilted
+    speed loop) against the Python model's rig (RigC1 ... RigC4's references, the rig on
+    Components.Contact checks the same files) on PlanarRig's comparisonSignals.txt over the
+    first second of each case, at its own experiment tolerance: 1e-8 of each signal's largest
+    value (measured: 1.1e-9 at worst, the plastic sinkage tilted at C4). Tilted
     by 15 deg (terrain plane and carriage guide together, the load along the normal) the
     trajectory in the terrain's frame is the level one: the sinkage from the hub's clearance,
     the speeds along the terrain, the forces turned into the world frame and back."""
-    config = rumoca.SimConfig(solver="rk-like", rtol=1e-12, atol=1e-14)
+    config = _own_tolerance(built, "PlanarRig")
     for case, slip_paper in reference.RIG_CASES.items():
         result = planar_rig.simulate((0.0, 1.0), dt=reference.RIG_INTERVAL, config=config,
                                      params={"slip_paper": slip_paper,
@@ -665,8 +689,8 @@ def test_the_planar_wheel_on_its_rig_is_the_rig_level_and_tilted(built, planar_r
         ref = reference.read(built, f"Rig{case}")
         n = len(result.time)
         assert n == 101
-        for key, column in PLANAR_CHECKED:
-            got, want = np.asarray(result[key]), ref[column][:n]
+        for key in reference.read_signals(built, "PlanarRig")[1:]:
+            got, want = np.asarray(result[key]), ref[key][:n]
             assert np.max(np.abs(got - want)) <= 1e-8 * np.max(np.abs(want)), (case, key)
 
 

@@ -24,6 +24,15 @@ from wheelterrain import plots
 from wheelterrain.modelica import library, reference
 
 
+def _own(example: str):
+    """rumoca's settings at the example's own experiment tolerance (reference.tolerance)."""
+    import rumoca
+
+    tolerance = reference.tolerance(example)
+    return rumoca.SimConfig(solver="rk-like", rtol=tolerance,
+                            atol=tolerance * reference.ABSOLUTE_SHARE)
+
+
 def _relative(got, want) -> float:
     return float(np.max(np.abs(np.asarray(got) - want)) / np.max(np.abs(want)))
 
@@ -44,7 +53,7 @@ def main() -> int:
         session = rumoca.Session(roots=[str(root / "lib")])
         model = session.loads("model Run\n  extends WheelTerrain.Examples.SlipRamp;\nend Run;\n",
                               model="Run")
-        result = model.simulate((0.0, 1.0), dt=0.05)
+        result = model.simulate((0.0, 1.0), dt=0.05, config=_own("SlipRamp"))
         ref = reference.read(root / "lib", "SlipRamp")
         ramp = {"name": f"rumoca {rumoca.version()}", "python": ref,
                 "tool": {k: np.asarray(result[k]) for k in ("sinkage", "drawbar_pull")}}
@@ -53,8 +62,7 @@ def main() -> int:
         model = session.loads("model Run\n  extends WheelTerrain.Examples.RoverSlope;\n"
                               "end Run;\n", model="Run")
         result = model.simulate((0.0, reference.ROVER_STOP), dt=reference.ROVER_INTERVAL,
-                                config=rumoca.SimConfig(solver="rk-like", rtol=1e-13,
-                                                        atol=1e-15))
+                                config=_own("RoverSlope"))
         ref = reference.read(root / "lib", "RoverSlope")
         columns = {"drawbar_pull": ("rear_left.drawbar_pull", "rear_left.drawbar_pull"),
                    "sinkage": ("chassis.sinkage[3]", "rear_left.sinkage")}
@@ -73,8 +81,7 @@ def main() -> int:
             model = rumoca.Session(roots=[str(path)]).loads(
                 "model Run\n  extends WheelTerrain.Examples.RigC2;\nend Run;\n", model="Run")
             result = model.simulate((0.0, args.stop), dt=reference.RIG_INTERVAL,
-                                    config=rumoca.SimConfig(solver="rk-like", rtol=1e-10,
-                                                            atol=1e-12))
+                                    config=_own("RigC2"))
             ref = reference.read(root / "lib", "RigC2")
             n = len(result.time)
             tool = {"time": np.asarray(result.time)}

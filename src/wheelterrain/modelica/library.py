@@ -29,8 +29,9 @@ level), and where each part comes from:
 - ``Examples``: ``SteadyC2``, ``SlipRamp``, ``Rover``, ``RoverSlope``, ``RoverDescent``,
   ``RoverPullTest``, ``RoverSoftPatch`` (no MSL) and ``RigC1`` ... ``RigC4`` (the paper's
   rig from MSL components), ``PlanarRig`` (the rig with a PlanarWheel, level or tilted) with
-  ``Utilities.RigCarriage``, with ``experiment`` annotations; reference results in
-  ``Resources/Reference`` written by the Python model.
+  ``Utilities.RigCarriage``, with ``experiment`` annotations at which they reproduce their
+  reference results (``Resources/Reference``, MSL's regression layout: each example's CSV and
+  ``comparisonSignals.txt``) written by the Python model.
 - ``UsersGuide``: conventions, slips, citations, the name map, what was tested in which tool.
 
 The output is deterministic: the same bytes on every run.
@@ -746,9 +747,17 @@ def _rover_chassis() -> str:
     return "\n".join(lines) + "\n"
 
 
-def _experiment(stop: float, interval: float) -> str:
-    """An example's experiment annotation (its reference result is at these output times)."""
-    return f"experiment(StartTime=0, StopTime={stop}, Interval={interval}, Tolerance=1e-8)"
+def _experiment(name: str, stop: float, interval: float) -> str:
+    """The example ``name``'s experiment annotation: its reference result is at these output
+    times, and a run at this tolerance reproduces it (reference.tolerance)."""
+    return (f"experiment(StartTime=0, StopTime={stop}, Interval={interval}, "
+            f"Tolerance={reference.tolerance(name):g})")
+
+
+def _reference_doc(name: str) -> str:
+    """Where the example ``name``'s reference result and compared signals are."""
+    folder = f"Resources/Reference/{reference.location(name)}"
+    return f"Reference: {folder}/{name}.csv, compared on {folder}/comparisonSignals.txt"
 
 
 def _rover_example(name: str = "Rover") -> str:
@@ -784,6 +793,8 @@ def _rover_example(name: str = "Rover") -> str:
     lines += [f"  {LIBRARY}.Components.MapWheel {w}(p=p_{w}, g=g);" if mapped else
               f"  {LIBRARY}.Components.Wheel {w}(p=p_{w});" for w in rover.WHEELS]
     lines += ['  Real speed(unit="m/s") = chassis.speed;',
+              '  Real position(unit="m") = chassis.position;',
+              f'  Real heave(unit="m") = chassis.{_state("heave")};',
               '  Real pitch(unit="rad") = chassis.pitch;', "equation"]
     half = f"r[{rover.ROVER_NAMES.index('rover.wheelbase') + 1}]/2"
     for k, w in enumerate(rover.WHEELS, start=1):
@@ -798,8 +809,8 @@ def _rover_example(name: str = "Rover") -> str:
                          f"{'+' if w in rover.FRONT else '-'} {half};")
         lines += [f"  chassis.{q}[{k}] = {w}.{q};"
                   for q in ("normal_force", "drawbar_pull", "torque")]
-    lines += [f"  annotation({_experiment(stop, interval)},",
-              f'    Documentation(info="<html><p>Reference: Resources/Reference/{name}.csv (the '
+    lines += [f"  annotation({_experiment(name, stop, interval)},",
+              f'    Documentation(info="<html><p>{_reference_doc(name)} (the '
               "Python model: the RoverChassis FMU's model-exchange rates on four contacts with "
               'memory). Model exchange records no rut along the track (as the FMUs\' model '
               'exchange): the rear wheels do not meet the front wheels\' rut here.</p></html>"));',
@@ -810,10 +821,13 @@ def _rover_example(name: str = "Rover") -> str:
 def _examples(lib: Library) -> None:
     where = f"{LIBRARY}/Examples"
     load = translate.literal(reference.STEADY_LOAD)
-    _class_file(lib, where, "SteadyC2", _template("SteadyC2", steady_load=load))
+    _class_file(lib, where, "SteadyC2", _template(
+        "SteadyC2", steady_load=load,
+        experiment=_experiment("SteadyC2", reference.STEADY_TIMES[-1], 0.5)))
     _class_file(lib, where, "SlipRamp", _template(
         "SlipRamp", steady_load=load, ramp_start=translate.literal(reference.RAMP[0]),
-        ramp_rate=translate.literal(reference.RAMP[1])))
+        ramp_rate=translate.literal(reference.RAMP[1]),
+        experiment=_experiment("SlipRamp", reference.RAMP_TIMES[-1], 0.05)))
     rig = {row.name.replace(".", "_"): translate.literal(row.default) for row in RIG_TABLE}
     _class_file(lib, where, "Rig", _template(
         "Rig", sinkage_start=translate.literal(reference.RIG_SINKAGE_START), **rig))
@@ -830,9 +844,9 @@ def _examples(lib: Library) -> None:
         changed = ", ".join(sorted(profile))
         text = (f'model {example} "The rover: {what} (no Modelica Standard Library needed)"\n'
                 f"  extends Rover(r={_vector([r[n] for n in rover.ROVER_NAMES])});\n"
-                f"  annotation({_experiment(*reference.rover_run(example))},\n"
+                f"  annotation({_experiment(example, *reference.rover_run(example))},\n"
                 f'    Documentation(info="<html><p>Data.rover with {changed} changed. '
-                f"Reference: Resources/Reference/{example}.csv (the Python model, as for "
+                f"{_reference_doc(example)} (the Python model, as for "
                 "Rover). <code>wheelterrain rover --scenario slope|descent|pull-test</code> "
                 'goes on until the rover stalls or slides.</p></html>"));\n'
                 f"end {example};\n")
@@ -841,20 +855,23 @@ def _examples(lib: Library) -> None:
     order.append("Rig")
     _class_file(lib, where, "PlanarRig", _template(
         "PlanarRig", sinkage_start=translate.literal(reference.RIG_SINKAGE_START),
-        experiment=_experiment(reference.RIG_STOP, reference.RIG_INTERVAL), **rig))
+        experiment=_experiment("PlanarRig", reference.RIG_STOP, reference.RIG_INTERVAL),
+        **rig))
     _class_file(lib, where, "Utilities", _template("Utilities"))
     order += ["PlanarRig", "Utilities"]
     for case, s in reference.RIG_CASES.items():
+        name = f"Rig{case}"
+        run = _experiment(name, reference.RIG_STOP, reference.RIG_INTERVAL)
         text = (f'model Rig{case} "The rig at the paper\'s {case}: slip s = {s}"\n'
                 f"  extends Rig(slip_paper={translate.literal(s)});\n"
-                f"  annotation({_experiment(reference.RIG_STOP, reference.RIG_INTERVAL)},\n"
-                f'    Documentation(info="<html><p>Reference: Resources/Reference/Rig{case}.csv '
+                f"  annotation({run},\n"
+                f'    Documentation(info="<html><p>{_reference_doc(name)} '
                 f'(the Python model\'s rig in continuous time).</p></html>"));\n'
                 f"end Rig{case};\n")
         _class_file(lib, where, f"Rig{case}", text)
         order.append(f"Rig{case}")
     lib.package(LIBRARY, "Examples", "Examples with experiment annotations; reference results "
-                "in Resources/Reference", order)
+                "in Resources/Reference (MSL's regression layout)", order)
 
 
 # ---- the package, the guide, the reference results ----------------------------------------

@@ -1,5 +1,7 @@
-"""Reference results of the Modelica library's examples, computed by the Python model
-(``Resources/Reference/<Example>.csv``): what a Modelica tool's run of each example should give.
+"""Reference results of the Modelica library's examples, computed by the Python model, in MSL's
+regression layout (``Resources/Reference/WheelTerrain/Examples/<Example>/<Example>.csv`` and
+``comparisonSignals.txt`` beside it, :func:`location`): what a Modelica tool's run of each
+example should give at the example's own experiment annotation (:data:`TOLERANCES`).
 
 - SteadyC2 and SlipRamp: the project's steady state (:func:`wheelterrain.model.api.steady_state`)
   at the examples' loads and slips.
@@ -38,6 +40,23 @@ RIG_CASES = {"C1": 0.0, "C2": 0.25, "C3": 0.5, "C4": 0.75}
 RIG_STOP, RIG_INTERVAL = 4.0, 0.01
 RIG_SINKAGE_START = 0.01
 RIG_COLUMNS = ("time", *fmu_functions.RIG_LOOP_STATES, *rig.FORCE_INPUTS)
+RIG_COMPARED = ("time", "sinkage", "sinkage_rate", "wheel_speed", "wheel_angle",
+                "plastic_sinkage", "normal_force", "drawbar_pull", "torque")
+"""The rig examples' compared signals: every column of the rig's reference but the speed loop's
+integral (the Python rig's integral of the speed error; MSL's PI keeps it divided by T)."""
+
+QUASI_STATIC_TOLERANCE = 1e-8
+ROVER_TOLERANCE = 1e-13
+RIG_TOLERANCE = 1e-12
+"""The examples' experiment tolerances (relative; absolute 1e-2 of it, ABSOLUTE_SHARE): the
+tolerance at which rumoca's run of each example reproduces its reference within 1e-8 of each
+compared signal's largest value (tests/test_modelica.py runs every example at its own
+annotation). The contact's switches (the soil's memory yielding or unloading, the ripple's
+clip) are not events, so a tool's error where its steps cross them falls with its tolerance:
+at 1e-8 the rover examples were 3e-6 to 5e-5 off their references and the rig 2e-7 to 9e-7;
+at 1e-12 the rover descent's pulls 2.7e-8, at 1e-13 3.7e-9. The quasi-static examples have no
+state, only the sinkage's implicit equation."""
+ABSOLUTE_SHARE = 1e-2
 
 
 def steady_rows(slips: Sequence[float], times: Sequence[float] | None = None) -> list[dict]:
@@ -162,10 +181,40 @@ def _csv(columns: Sequence[str], rows) -> str:
     return buffer.getvalue()
 
 
+def location(name: str) -> str:
+    """The folder of the example ``name``'s reference files below Resources/Reference (MSL's
+    regression layout: the example's class path)."""
+    return f"WheelTerrain/Examples/{name}"
+
+
+def tolerance(name: str) -> float:
+    """The relative tolerance of the example ``name``'s experiment annotation."""
+    if name in ("SteadyC2", "SlipRamp"):
+        return QUASI_STATIC_TOLERANCE
+    return RIG_TOLERANCE if "Rig" in name else ROVER_TOLERANCE
+
+
+def compared(name: str) -> tuple[str, ...]:
+    """The signals of the example ``name`` its reference is compared on (comparisonSignals.txt):
+    model variables, time first, each a column of its reference CSV."""
+    if name in ("SteadyC2", "SlipRamp"):
+        return ("time", "slip", "sinkage", "drawbar_pull", "torque")
+    return RIG_COMPARED if "Rig" in name else ROVER_COLUMNS
+
+
+def read_signals(library_root: Path, name: str) -> tuple[str, ...]:
+    """The example ``name``'s comparisonSignals.txt in the library written to
+    ``library_root``."""
+    path = (Path(library_root) / "WheelTerrain" / "Resources" / "Reference" / location(name)
+            / "comparisonSignals.txt")
+    return tuple(path.read_text(encoding="utf-8").split())
+
+
 def read(library_root: Path, name: str) -> dict[str, np.ndarray]:
     """The reference result ``name`` (an example's) of the library written to
     ``library_root`` (the folder holding WheelTerrain/): column -> values."""
-    path = Path(library_root) / "WheelTerrain" / "Resources" / "Reference" / f"{name}.csv"
+    path = (Path(library_root) / "WheelTerrain" / "Resources" / "Reference" / location(name)
+            / f"{name}.csv")
     with path.open(encoding="utf-8") as handle:
         rows = list(csv.reader(handle))
     data = np.array(rows[1:], dtype=float)
@@ -196,19 +245,28 @@ def one_root(msl: Path, library_root: Path, folder: Path) -> Path:
     return folder
 
 
+STEADY_TIMES = (0.0, 1.0)
+"""s: SteadyC2's output times (its experiment's start and stop): the steady state at both."""
+
+
 def files() -> dict[str, str]:
-    """Resources/Reference/<Example>.csv -> text, for every example."""
-    out = {}
-    c2 = steady_rows([unified_from_paper(0.25)])
-    out["SteadyC2.csv"] = _csv(("slip", "sinkage", "drawbar_pull", "torque"),
-                               [[r[k] for k in ("slip", "sinkage", "drawbar_pull", "torque")]
-                                for r in c2])
-    ramp = steady_rows(ramp_slips(), RAMP_TIMES)
+    """<Example folder>/<Example>.csv and comparisonSignals.txt (below Resources/Reference) ->
+    text, for every example."""
+    tables = {}
     columns = ("time", "slip", "sinkage", "drawbar_pull", "torque")
-    out["SlipRamp.csv"] = _csv(columns, [[r[k] for k in columns] for r in ramp])
+    c2 = steady_rows([unified_from_paper(0.25)] * len(STEADY_TIMES), STEADY_TIMES)
+    tables["SteadyC2"] = _csv(columns, [[r[k] for k in columns] for r in c2])
+    ramp = steady_rows(ramp_slips(), RAMP_TIMES)
+    tables["SlipRamp"] = _csv(columns, [[r[k] for k in columns] for r in ramp])
     for case, s in RIG_CASES.items():
-        out[f"Rig{case}.csv"] = _csv(RIG_COLUMNS, rig_trajectory(s))
+        tables[f"Rig{case}"] = _csv(RIG_COLUMNS, rig_trajectory(s))
+    tables["PlanarRig"] = tables["RigC1"]  # its defaults: level, the paper's slip 0
     for example in (*ROVER_PROFILES, *ROVER_MAPS):
         stop, interval = rover_run(example)
-        out[f"{example}.csv"] = _csv(ROVER_COLUMNS, rover_trajectory(stop, interval, example))
+        tables[example] = _csv(ROVER_COLUMNS, rover_trajectory(stop, interval, example))
+    out = {}
+    for name, text in tables.items():
+        out[f"{location(name)}/{name}.csv"] = text
+        out[f"{location(name)}/comparisonSignals.txt"] = "".join(
+            f"{signal}\n" for signal in compared(name))
     return out

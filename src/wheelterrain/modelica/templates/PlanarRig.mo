@@ -32,6 +32,11 @@ model PlanarRig "The paper's single-wheel rig with a PlanarWheel: a carriage mov
   SI.Force drawbar_pull = wheel.drawbar_pull;
   SI.Length sinkage = wheel.sinkage;
   SI.Force normal_force = wheel.normal_force;
+  SI.Velocity sinkage_rate = wheel.sinkage_rate;
+  SI.AngularVelocity wheel_speed = wheel.wheel_speed;
+  SI.Angle wheel_angle = inertia.phi;
+  SI.Length plastic_sinkage = wheel.plastic_sinkage;
+  SI.Torque torque = wheel.torque;
 equation
   connect(carriage.frame_b, wheel.frame_a) annotation(Line(points={{-20,-20},{0,-20}}));
   connect(reference.y, error.u1) annotation(Line(points={{-39,50},{-18,50}}, color={0,0,127}));
@@ -43,6 +48,6 @@ equation
   connect(speed.flange, inertia.flange_a) annotation(Line(points={{60,-60},{50,-60},{50,-20},{60,-20}}));
   annotation(${experiment},
     Diagram(coordinateSystem(extent={{-100,-100},{100,100}})),
-    Documentation(info="<html><p>Examples.Rig with the wheel a Wheels.PlanarWheel on an inner Terrain: the carriage (Examples.Utilities.RigCarriage, PlanarMechanics' Frame connector) moves the hub along its guide at the set slip, lets it move across the guide with the rig's mass and presses it toward the terrain with the load; the speed loop drives the axle through the wheel's inertia. With <code>angle</code> = 0 it is the paper's rig: Resources/Reference/Rig*.csv (the Python model's rig) at slip_paper 0, 0.25, 0.5, 0.75. Tilted (<code>angle</code> &lt;&gt; 0), the terrain and the guide incline together and the load stays along the terrain's normal: the same trajectory in the terrain's frame.</p></html>",
+    Documentation(info="<html><p>Examples.Rig with the wheel a Wheels.PlanarWheel on an inner Terrain: the carriage (Examples.Utilities.RigCarriage, PlanarMechanics' Frame connector) moves the hub along its guide at the set slip, lets it move across the guide with the rig's mass and presses it toward the terrain with the load; the speed loop drives the axle through the wheel's inertia. With <code>angle</code> = 0 it is the paper's rig: its reference is RigC1's (Resources/Reference/WheelTerrain/Examples/PlanarRig/PlanarRig.csv, the Python model's rig at slip_paper 0); at 0.25, 0.5, 0.75 RigC2 ... RigC4's. Tilted (<code>angle</code> &lt;&gt; 0), the terrain and the guide incline together and the load stays along the terrain's normal: the same trajectory in the terrain's frame.</p></html>",
       revisions="<html><ul><li>${version}: first version.</li></ul></html>"));
 end PlanarRig;

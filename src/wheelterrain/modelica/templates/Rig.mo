@@ -23,6 +23,11 @@ model Rig "The paper's single-wheel rig on MSL components: a speed-controlled wh
   SI.Force drawbar_pull = contact.drawbar_pull;
   SI.Length sinkage = contact.sinkage;
   SI.Force normal_force = contact.normal_force;
+  SI.Velocity sinkage_rate = contact.sinkage_rate;
+  SI.AngularVelocity wheel_speed = wheel.w;
+  SI.Angle wheel_angle = wheel.phi;
+  SI.Length plastic_sinkage = contact.plastic_sinkage;
+  SI.Torque torque = contact.torque;
 equation
   connect(reference.y, error.u1);
   connect(speed.w, error.u2);

@@ -3,6 +3,8 @@ model SlipRamp "The quasi-static wheel at ${steady_load} N as its slip ramps fro
     slip_angle=0, turn_slip=0);
   Real sinkage(unit="m") = wheel.sinkage;
   Real drawbar_pull(unit="N") = wheel.drawbar_pull;
-  annotation(experiment(StartTime=0, StopTime=1, Interval=0.05),
-    Documentation(info="<html><p>Reference: Resources/Reference/SlipRamp.csv (the Python model's steady state at each output time).</p></html>"));
+  Real slip(unit="1") = wheel.slip "the model's slip";
+  Real torque(unit="N.m") = wheel.torque;
+  annotation(${experiment},
+    Documentation(info="<html><p>Reference: Resources/Reference/WheelTerrain/Examples/SlipRamp/SlipRamp.csv (the Python model's steady state at each output time).</p></html>"));
 end SlipRamp;

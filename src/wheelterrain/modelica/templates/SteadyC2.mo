@@ -4,6 +4,8 @@ model SteadyC2 "The quasi-static wheel at the paper's C2: 62 N, the paper's slip
     slip=WheelTerrain.Functions.slipFromPaper(slip_paper), slip_angle=0, turn_slip=0);
   Real sinkage(unit="m") = wheel.sinkage;
   Real drawbar_pull(unit="N") = wheel.drawbar_pull;
-  annotation(experiment(StartTime=0, StopTime=1, Interval=0.5),
-    Documentation(info="<html><p>Reference: Resources/Reference/SteadyC2.csv (the Python model's steady state).</p></html>"));
+  Real slip(unit="1") = wheel.slip "the model's slip";
+  Real torque(unit="N.m") = wheel.torque;
+  annotation(${experiment},
+    Documentation(info="<html><p>Reference: Resources/Reference/WheelTerrain/Examples/SteadyC2/SteadyC2.csv (the Python model's steady state).</p></html>"));
 end SteadyC2;
