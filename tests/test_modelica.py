@@ -723,3 +723,76 @@ def test_the_planar_wheel_rolls_backward_as_the_mirror_and_lands_from_above(plan
     assert np.all(np.asarray(dropped["wheel.plastic_sinkage"])[air] == 0)
     load = rig.defaults()["rig.load"]
     assert abs(np.mean(np.asarray(dropped["normal_force"])[-100:]) - load) < 0.05 * load
+
+
+HORIZONTAL_RUN = """model Run
+  model Mover "a hub moved in the ground plane at a set speed, slip angle and yaw rate"
+    parameter Real U = 0.03 "speed [m/s]";
+    parameter Real beta = 0.2 "the velocity's angle from the heading [rad]";
+    parameter Real yaw = 0.02 "the heading's yaw rate [rad/s]";
+    parameter Real psi0 = 0.4 "the heading at the start [rad]";
+    PlanarMechanics.Interfaces.Frame_b frame_b;
+    Real x(start=0, fixed=true);
+    Real y(start=0, fixed=true);
+  equation
+    frame_b.phi = psi0 + yaw*time;
+    der(x) = U*cos(frame_b.phi + beta);
+    der(y) = U*sin(frame_b.phi + beta);
+    frame_b.x = x;
+    frame_b.y = y;
+  end Mover;
+  parameter Real omega = 0.7 "the wheel's spin [rad/s]";
+  Mover mover;
+  WheelTerrain.Wheels.HorizontalWheel wheel;
+  Modelica.Mechanics.Rotational.Sources.Speed drive(exact=true);
+  Modelica.Blocks.Sources.Constant spin(k=omega);
+  Modelica.Blocks.Sources.Constant weight(k=62);
+equation
+  connect(mover.frame_b, wheel.frame_a);
+  connect(drive.flange, wheel.flange_a);
+  connect(spin.y, drive.w_ref);
+  connect(weight.y, wheel.load);
+end Run;
+"""
+
+
+@needs_planar
+@pytest.mark.slow
+def test_the_horizontal_wheel_is_the_steady_state_at_its_hubs_slip_angle_and_yaw(msl_root,
+                                                                                monkeypatch):
+    """Wheels.HorizontalWheel under a hub moved (a body written on PlanarMechanics' Frame) at
+    0.03 m/s, 0.2 rad from its heading, yawing at 0.02 rad/s, spun at 0.7 rad/s, 62 N: the
+    steady state's drawbar pull, lateral force, turning moment and torque at that slip, slip
+    angle and turn slip within 1e-8, the forces on the hub the pull and the side force turned
+    by the heading; moved backward (speed and spin negated) the mirror image: the contact at
+    slip angle and turn slip negated, pull, torque and turning moment negated back."""
+    from wheelterrain.fmu import functions as fmu_functions
+
+    # the model names MSL classes itself: rumoca 0.10 would take them from MODELICAPATH, a
+    # second root, and then not resolve the library's classes from them (one root: msl_root)
+    monkeypatch.delenv("MODELICAPATH", raising=False)
+    model = rumoca.Session(roots=[str(msl_root)]).loads(HORIZONTAL_RUN, model="Run")
+    assert model.structure().is_balanced
+    config = rumoca.SimConfig(solver="rk-like", rtol=1e-10, atol=1e-12)
+    params = presets.load()
+    radius = float(fmu_functions.slip_radius(ca.DM(params.vector())))
+    for sign in (1, -1):
+        result = model.simulate((0.0, 1.0), dt=0.5, config=config,
+                                params={"mover.U": sign * 0.03, "omega": sign * 0.7})
+        speed, rim = 0.03 * math.cos(0.2), 0.7 * radius
+        slip = (rim - speed) / max(rim, speed)
+        steady = api.steady_state(params, 62.0, slip, "unified", slip_angle=sign * 0.2,
+                                  turn_slip=sign * 0.02 / speed)
+        want = {"slip": slip, "slip_angle": sign * 0.2, "lateral_force": steady["lateral_force"]}
+        want.update({k: sign * steady[k] for k in ("drawbar_pull", "turning_moment", "torque")})
+        for key, value in want.items():
+            got = result[f"wheel.{key}"][-1]
+            assert abs(got - value) <= 1e-8 * abs(value), (sign, key, got, value)
+        heading = 0.4 + 0.02 * 1.0
+        pull, side = want["drawbar_pull"], want["lateral_force"]
+        fx = pull * math.cos(heading) - side * math.sin(heading)
+        fy = pull * math.sin(heading) + side * math.cos(heading)
+        assert result["mover.frame_b.fx"][-1] == pytest.approx(fx, rel=1e-8)
+        assert result["mover.frame_b.fy"][-1] == pytest.approx(fy, rel=1e-8)
+        assert result["mover.frame_b.t"][-1] == pytest.approx(want["turning_moment"], rel=1e-8)
+    assert steady["lateral_force"] > 0  # moving toward its right (backward): pushed left

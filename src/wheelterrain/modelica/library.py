@@ -55,7 +55,14 @@ from wheelterrain import __version__, presets
 from wheelterrain.model import contact, ground, rover
 from wheelterrain.modelica import external, reference, translate
 from wheelterrain.modelica.translate import Port
-from wheelterrain.parameters import NAMES, RIG_TABLE, TABLE, TURN_SLIP_LIMIT, Parameter
+from wheelterrain.parameters import (
+    NAMES,
+    RIG_TABLE,
+    SLIP_ANGLE_LIMIT,
+    TABLE,
+    TURN_SLIP_LIMIT,
+    Parameter,
+)
 
 LIBRARY = "WheelTerrain"
 MSL_VERSION = "4.1.0"
@@ -686,8 +693,14 @@ def _planar(lib: Library) -> None:
         "Terrain", G=len(ground.NAMES), SOIL_FIRST=soil[0] + 1, SOIL_LAST=soil[-1] + 1,
         MAP_AFTER_SOIL=len(in_map) + 1))
     _class_file(lib, f"{LIBRARY}/Wheels", "PlanarWheel", _template("PlanarWheel", N=len(NAMES)))
+    _class_file(lib, f"{LIBRARY}/Wheels", "HorizontalWheel", _template(
+        "HorizontalWheel", N=len(NAMES), SLIP_ANGLE_LIMIT=translate.literal(SLIP_ANGLE_LIMIT),
+        SLIP_ANGLE_DEG=f"{math.degrees(SLIP_ANGLE_LIMIT):g}",
+        TURN_SLIP_LIMIT=f"{TURN_SLIP_LIMIT:g}"))
     lib.package(LIBRARY, "Wheels", "Wheels to connect into a vehicle: PlanarMechanics frames, "
-                "Rotational flanges, an inner Terrain", ["PlanarWheel"],
+                "Rotational flanges; in the vertical plane of travel on an inner Terrain "
+                "(PlanarWheel) or seen from above with the load an input (HorizontalWheel)",
+                ["PlanarWheel", "HorizontalWheel"],
                 'Icon(graphics={Ellipse(extent={{-80,80},{80,-80}}, lineColor={64,64,64}, '
                 'fillColor={160,160,160}, fillPattern=FillPattern.Solid)})')
 
