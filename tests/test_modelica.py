@@ -796,3 +796,26 @@ def test_the_horizontal_wheel_is_the_steady_state_at_its_hubs_slip_angle_and_yaw
         assert result["mover.frame_b.fy"][-1] == pytest.approx(fy, rel=1e-8)
         assert result["mover.frame_b.t"][-1] == pytest.approx(want["turning_moment"], rel=1e-8)
     assert steady["lateral_force"] > 0  # moving toward its right (backward): pushed left
+
+
+@needs_msl
+def test_every_preset_record_gives_its_parameter_vector_options_as_enumerations(msl_root):
+    """Records.parameterVector of every preset record (the options Types enumerations) is the
+    preset's table vector (Data, the FMUs' and the CLI's), bit for bit: each option's literal
+    turns into the table's code."""
+    names = presets.available()
+    parts = "".join(f"  parameter {ROOT}.Records.Presets.{library.preset_record(n)} r{k};\n"
+                    f"  Real p{k}[{len(NAMES)}] = {ROOT}.Records.parameterVector(r{k});\n"
+                    for k, n in enumerate(names))
+    model = rumoca.Session(roots=[str(msl_root)]).loads(f"model Run\n{parts}end Run;\n",
+                                                         model="Run")
+    result = model.simulate((0.0, 1.0), dt=1.0)
+    codes = set()
+    for k, name in enumerate(names):
+        want = presets.load(name).vector()
+        got = [result[f"p{k}[{j + 1}]"][0] for j in range(len(NAMES))]
+        assert got == [float(v) for v in want], name
+        codes.add(want[NAMES.index("model.contact_form")])
+    assert codes == {0.0, 1.0}  # both literals of an enumeration are met
+    text = (msl_root / ROOT / "Records" / "Options.mo").read_text(encoding="utf-8")
+    assert f"{ROOT}.Types.ContactForm contact_form" in text

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import html
 import math
+import re
 import string
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -552,7 +553,58 @@ def _data(lib: Library) -> None:
     _class_file(lib, LIBRARY, "Data", "\n".join(lines) + "\n")
 
 
+def _camel(text: str, upper: bool) -> str:
+    """'wong-hump' -> 'wongHump' (``upper``: 'WongHump'); 'toward the wheel' -> 'towardTheWheel'."""
+    words = [w for w in re.split(r"[^0-9A-Za-z]+", text) if w]
+    name = words[0].lower() + "".join(w[:1].upper() + w[1:] for w in words[1:])
+    return name[:1].upper() + name[1:] if upper else name
+
+
+def enumeration(row: Parameter) -> str | None:
+    """The Types enumeration of an option row (choices given), 'Types.ContactForm' for
+    model.contact_form; None for any other row."""
+    if row.kind != "enum" or not row.choices:
+        return None
+    return f"{LIBRARY}.Types.{_camel(row.name.partition('.')[2], upper=True)}"
+
+
+def _literals(row: Parameter) -> list[tuple[int, str, str]]:
+    """(code, literal, description) of an option row's choices, in code order (0, 1, ...)."""
+    codes = sorted(int(k) for k in row.choices)
+    if codes != list(range(len(codes))):
+        raise ValueError(f"{row.name}: an enumeration needs the codes 0, 1, ... ({codes})")
+    return [(k, _camel(row.choices[k], upper=False), row.choices[k]) for k in codes]
+
+
+def _enumerations() -> str:
+    """The Types package's enumerations of the table's options."""
+    lines = []
+    for row in TABLE:
+        kind = enumeration(row)
+        if kind is None:
+            continue
+        items = ",\n".join(f'      {lit} "{_doc(text)}"' for _, lit, text in _literals(row))
+        lines.append(f"  type {kind.rsplit('.', 1)[1]} = enumeration(\n{items})\n"
+                     f'    "{_doc(row.description)} ({row.name}; the table\'s codes '
+                     f'{", ".join(f"{k} {t}" for k, _, t in _literals(row))})";')
+    return "\n".join(lines)
+
+
+def _code(row: Parameter, expression: str) -> str:
+    """The table's code of an option record field ``expression`` (rumoca 0.10 cannot convert
+    an enumeration with Integer(), so a comparison per literal)."""
+    kind = enumeration(row)
+    if kind is None:
+        return expression
+    literals = _literals(row)
+    text = " elseif ".join(f"{expression} == {kind}.{lit} then {k}"
+                           for k, lit, _ in literals[:-1])
+    return f"(if {text} else {literals[-1][0]})"
+
+
 def _type(row: Parameter) -> str:
+    if enumeration(row):
+        return enumeration(row)
     if row.kind != "real":
         return "Integer"
     if row.quantity:
@@ -565,12 +617,14 @@ def _modifiers(row: Parameter) -> str:
     if row.kind == "real" and not row.quantity:
         mods.append(f'unit="{row.unit}"')
     for key, value in (("min", row.min), ("max", row.max)):
-        if math.isfinite(value):
+        if math.isfinite(value) and not enumeration(row):
             mods.append(f"{key}={_number(row, value)}")
     return f"({', '.join(mods)})" if mods else ""
 
 
 def _number(row: Parameter, value: float) -> str:
+    if enumeration(row):
+        return f"{enumeration(row)}.{_literals(row)[int(value)][1]}"
     return str(int(value)) if row.kind != "real" else translate.literal(value)
 
 
@@ -608,7 +662,8 @@ def _records(lib: Library) -> None:
     lines = ['function parameterVector "The parameters in table order, as the functions take '
              'them"', "  input Parameters parameters;",
              f"  output Real p[{len(NAMES)}];", "algorithm"]
-    lines.append("  p := {" + ", ".join(f"parameters.{modelica_name(n)}" for n in NAMES) + "};")
+    lines.append("  p := {" + ", ".join(_code(TABLE[k], f"parameters.{modelica_name(n)}")
+                                      for k, n in enumerate(NAMES)) + "};")
     lines.append("end parameterVector;")
     text = "\n".join(_wrap_call(line) for line in lines) + "\n"
     _class_file(lib, where, "parameterVector", text)
@@ -684,7 +739,7 @@ def _components(lib: Library) -> None:
 
 def _planar(lib: Library) -> None:
     """The component layer on PlanarMechanics: Types, the inner Terrain, Wheels.PlanarWheel."""
-    _class_file(lib, LIBRARY, "Types", _template("Types"))
+    _class_file(lib, LIBRARY, "Types", _template("Types", ENUMERATIONS=_enumerations()))
     soil = [NAMES.index(n) for n in ground.SOIL_NAMES]
     in_map = [ground.NAMES.index(n) for n in ground.SOIL_NAMES]
     if in_map != list(range(len(in_map))):

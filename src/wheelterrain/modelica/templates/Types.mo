@@ -4,6 +4,7 @@ package Types "Enumerations for the components' options"
       plane "a plane through the origin rising at a constant slope toward +x",
       profile "heights over x from a table, linear between its points and level beyond them")
     "The terrain's shape (WheelTerrain.Terrain.ground)";
-  annotation(Documentation(info="<html><p>Enumerations of the components' options. The parameter records keep the table's integer codes (Records, UsersGuide.NameMap): they are the FMUs' parameters and the CLI's, one list of names for every face.</p></html>",
-    revisions="<html><ul><li>${version}: Ground (the inner Terrain's shape).</li></ul></html>"));
+${ENUMERATIONS}
+  annotation(Documentation(info="<html><p>Enumerations of the components' options: the terrain's shape, and every option of the parameter table (the records' option fields, Records.Options). Records.parameterVector turns them into the table's integer codes, which the functions, the FMUs and the CLI take (one list of names, the table's).</p></html>",
+    revisions="<html><ul><li>${version}: Ground (the inner Terrain's shape); the table's options as enumerations.</li></ul></html>"));
 end Types;
