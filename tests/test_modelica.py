@@ -42,6 +42,19 @@ def built(modelica_root) -> Path:
     return modelica_root
 
 
+needs_msl = pytest.mark.skipif(reference.find_msl() is None, reason=(
+    "needs the Modelica Standard Library 4.x on MODELICAPATH (a folder holding Modelica/, "
+    "ModelicaServices/ and Complex.mo, e.g. modelica/ModelicaStandardLibrary at tag v4.1.0)"))
+
+
+@pytest.fixture(scope="module")
+def msl_root(built, tmp_path_factory) -> Path:
+    """One root holding MSL and the library side by side (rumoca 0.10 does not resolve a
+    class of one root from a class of another)."""
+    return reference.one_root(reference.find_msl(), built,
+                              tmp_path_factory.mktemp("modelicapath"))
+
+
 # ---- the generator --------------------------------------------------------------------------
 
 def test_every_operation_of_the_exported_functions_is_mapped():
@@ -88,6 +101,21 @@ def test_every_file_parses_and_every_folder_orders_its_classes(built):
         present = sorted([p.stem for p in folder.glob("*.mo") if p.name != "package.mo"]
                          + [p.name for p in folder.iterdir() if (p / "package.mo").exists()])
         assert sorted(listed) == present, folder
+
+
+def test_every_public_class_is_documented_and_every_component_and_example_has_an_icon(built):
+    """MSL's form: Documentation with info and revisions on every class file (the pieces of
+    Functions.Internal, not to be called, aside); an Icon on every component, wheel, terrain
+    and example."""
+    for path in sorted((built / ROOT).rglob("*.mo")):
+        if "Internal" in path.parts:
+            continue
+        text = path.read_text(encoding="utf-8")
+        assert "Documentation(info=" in text, path
+        assert "revisions=" in text, path
+        drawn = {"Components", "Wheels", "Examples"} & set(path.parts) or path.stem == "Terrain"
+        if drawn and "partial " not in text.split("\n", 2)[1]:
+            assert "Icon(" in text, path
 
 
 def test_the_substitutions_stay_within_1e_10_of_what_they_replace():
@@ -393,10 +421,10 @@ def test_every_example_has_a_reference_compared_on_its_signals(built):
 
 
 @pytest.fixture(scope="module")
-def quasi_static(built):
+def quasi_static(built, msl_root):
     """SteadyC2 and SlipRamp side by side in one rumoca model (the quasi-static contact
     compiled once), run over SlipRamp's second."""
-    model = rumoca.Session(roots=[str(built)]).loads(
+    model = rumoca.Session(roots=[str(msl_root)]).loads(
         f"model Run\n  {ROOT}.Examples.SteadyC2 c2;\n  {ROOT}.Examples.SlipRamp ramp;\n"
         f"  {ROOT}.Components.QuasiStaticWheel side(load=62, slip=0.2, slip_angle=0.3, "
         "turn_slip=2);\n"
@@ -409,6 +437,7 @@ def quasi_static(built):
                           config=_own_tolerance(built, "SteadyC2", "SlipRamp"))
 
 
+@needs_msl
 @pytest.mark.slow
 def test_steady_c2_matches_the_steady_state(built, quasi_static):
     expected = api.steady_state(presets.load(), 62.0, 0.25, slip_definition="paper")
@@ -419,6 +448,7 @@ def test_steady_c2_matches_the_steady_state(built, quasi_static):
         assert abs(got - expected[key]) <= 1e-8 * abs(expected[key]), key
 
 
+@needs_msl
 @pytest.mark.slow
 def test_the_wheels_at_a_slip_angle_give_the_models_side_force(quasi_static):
     """QuasiStaticWheel at a slip angle and a turn slip: the steady state's lateral force and
@@ -446,6 +476,7 @@ def test_the_wheels_at_a_slip_angle_give_the_models_side_force(quasi_static):
     assert want[0] > 0  # moving toward its right: pushed to its left
 
 
+@needs_msl
 @pytest.mark.slow
 def test_the_wheel_rolling_backward_is_the_mirror_image_of_the_wheel_rolling_forward(
         quasi_static):
@@ -461,6 +492,7 @@ def test_the_wheel_rolling_backward_is_the_mirror_image_of_the_wheel_rolling_for
     assert quasi_static["back.rolling"][0] == -1
 
 
+@needs_msl
 @pytest.mark.slow
 def test_a_slip_ramp_of_the_quasi_static_wheel_matches_the_steady_state(built, quasi_static):
     ref = reference.read(built, "SlipRamp")
@@ -486,11 +518,12 @@ their largest value (0.06 N, in the first second) is 6e-10 N, below rumoca's err
 steps cross the contact's switches over 10 s (1.4e-9 N, as in the other examples)."""
 
 
+@needs_msl
 @pytest.mark.slow
 @pytest.mark.parametrize("group", list(ROVER_GROUPS))
-def test_the_rover_of_four_wheels_follows_the_python_models_trajectory(built, group):
+def test_the_rover_of_four_wheels_follows_the_python_models_trajectory(built, msl_root, group):
     """Examples.Rover (over its first second), RoverSlope, RoverDescent, RoverPullTest and
-    RoverSoftPatch (RoverChassis and four Wheels or MapWheels, no MSL) against the Python
+    RoverSoftPatch (RoverChassis and four Wheels or MapWheels) against the Python
     model's rover in model exchange (the RoverChassis FMU's rates on four contacts with memory,
     CVODES at 1e-12), on each example's comparisonSignals.txt: 1e-8 of each signal's largest
     value. rumoca at the examples' own experiment tolerance, 1e-13 (absolute 1e-15): the
@@ -504,8 +537,8 @@ def test_the_rover_of_four_wheels_follows_the_python_models_trajectory(built, gr
     assert len(runs) == 1
     ((stop, interval),) = runs
     parts = "".join(f"  {ROOT}.Examples.{e} e{k};\n" for k, e in enumerate(examples))
-    model = rumoca.Session(roots=[str(built)]).loads(f"model Run\n{parts}end Run;\n",
-                                                     model="Run")
+    model = rumoca.Session(roots=[str(msl_root)]).loads(f"model Run\n{parts}end Run;\n",
+                                                        model="Run")
     assert model.structure().is_balanced
     result = model.simulate((0.0, stop), dt=interval, config=_own_tolerance(built, *examples))
     # the output grid (the soft patch's edges are events: rumoca adds a row at each)
@@ -520,6 +553,7 @@ def test_the_rover_of_four_wheels_follows_the_python_models_trajectory(built, gr
             assert np.max(np.abs(got - want)) <= 1e-8 * np.max(np.abs(want)), (example, key)
 
 
+@needs_msl
 @pytest.mark.slow
 def test_the_rover_examples_climb_descend_and_pull_as_their_profiles_say(built):
     """The examples' references over their last 2 s: the wheels' pulls carry the weight's
@@ -544,12 +578,13 @@ def test_the_rover_examples_climb_descend_and_pull_as_their_profiles_say(built):
         assert abs(pull - expected) <= 0.01 * max(abs(expected), 2.0), (example, pull)
 
 
+@needs_msl
 @pytest.mark.slow
-def test_a_wheel_running_the_external_contact_is_balanced_and_refused_by_name(built):
+def test_a_wheel_running_the_external_contact_is_balanced_and_refused_by_name(msl_root):
     """Redeclared to Functions.External.contact, the Wheel is plug-compatible (rumoca flattens
     it and finds it balanced); rumoca cannot execute external C and says so, naming the C
     function (the C itself: tests/test_modelica_external.py)."""
-    session = rumoca.Session(roots=[str(built)])
+    session = rumoca.Session(roots=[str(msl_root)])
     model = session.loads(
         f"model Run\n  {ROOT}.Components.Wheel w(redeclare function contactFunction = "
         f"{ROOT}.Functions.External.contact, sinkage=0.01, sinkage_rate=0, wheel_speed=0.1, "
@@ -560,19 +595,6 @@ def test_a_wheel_running_the_external_contact_is_balanced_and_refused_by_name(bu
 
 
 # ---- with the Modelica Standard Library --------------------------------------------------------
-
-needs_msl = pytest.mark.skipif(reference.find_msl() is None, reason=(
-    "needs the Modelica Standard Library 4.x on MODELICAPATH (a folder holding Modelica/, "
-    "ModelicaServices/ and Complex.mo, e.g. modelica/ModelicaStandardLibrary at tag v4.1.0)"))
-
-
-@pytest.fixture(scope="module")
-def msl_root(built, tmp_path_factory) -> Path:
-    """One root holding MSL and the library side by side (rumoca 0.10 does not resolve a
-    class of one root from a class of another)."""
-    return reference.one_root(reference.find_msl(), built,
-                              tmp_path_factory.mktemp("modelicapath"))
-
 
 @needs_msl
 def test_every_quantity_of_the_records_is_an_msl_si_type():

@@ -105,18 +105,27 @@ def test_report_states_the_pull_floor_from_its_figures(monkeypatch, floor, sinka
 
 
 @pytest.mark.slow
-def test_modelica_examples_runs_the_slip_ramp_in_rumoca_and_draws_it(tmp_path):
-    """Without MSL the script runs SlipRamp and RoverSlope, says why RigC2 was not run, and
-    prints and writes the measured difference from the Python model."""
+def test_modelica_examples_runs_the_examples_in_rumoca_and_draws_them(tmp_path):
+    """With MSL (the tests' MODELICAPATH) the script runs SlipRamp, RoverSlope and RigC2 (its
+    first second here) at their own tolerances and prints and writes the measured difference
+    from the Python model; without MSL it says what it needs, exit 2."""
     pytest.importorskip("rumoca")
+    from wheelterrain.modelica import reference
+
+    script = str(ROOT / "validation" / "modelica_examples.py")
+    bare = {k: v for k, v in os.environ.items() if k != "MODELICAPATH"}
+    refused = subprocess.run([sys.executable, script], capture_output=True, text=True,
+                             env=bare, timeout=300)
+    assert refused.returncode == 2
+    assert "need the Modelica Standard Library 4.x" in refused.stderr
+    if reference.find_msl() is None:
+        pytest.skip("no MSL 4.x on MODELICAPATH (the shared archive unpacks it in CI)")
     out, figures = tmp_path / "examples.png", tmp_path / "figures.json"
-    env = {k: v for k, v in os.environ.items() if k != "MODELICAPATH"}
-    run = subprocess.run([sys.executable, str(ROOT / "validation" / "modelica_examples.py"),
-                          "--out", str(out), "--json", str(figures)], capture_output=True,
-                         text=True, check=True, env=env, timeout=900)
-    assert "put the Modelica Standard Library 4.x on MODELICAPATH" in run.stderr
+    run = subprocess.run([sys.executable, script, "--out", str(out), "--json", str(figures),
+                          "--stop", "1"], capture_output=True, text=True, check=True,
+                         timeout=1500)
     result = json.loads(figures.read_text())
-    assert set(result) == {"SlipRamp", "RoverSlope"}
+    assert set(result) == {"SlipRamp", "RoverSlope", "RigC2"}
     for example in result.values():
         assert 0 <= example["sinkage"] < 1e-8
         assert 0 <= example["drawbar_pull"] < 1e-8

@@ -17,8 +17,8 @@ level), and where each part comes from:
 - ``Records``: the parameter table as records with ``Modelica.Units.SI`` types, ranges,
   descriptions and sources; every preset a record (rumoca 0.10 cannot flatten a reference to
   a record constant); ``parameterVector``.
-- ``Components``: ``QuasiStaticWheel``, ``Wheel``, ``MapWheel`` (on the terrain map) and
-  ``RoverChassis`` (no MSL) and
+- ``Components``: ``QuasiStaticWheel``, ``Wheel``, ``MapWheel`` (on the terrain map),
+  ``SoilWheel`` and ``RoverChassis`` (blocks: MSL's RealInput and RealOutput connectors) and
   ``Contact`` on MSL flanges (Rotational hub, Translational axle and vertical), the soil's
   memory a state, each contact function replaceable (generated or external).
 - ``Wheels.PlanarWheel`` (a wheel on PlanarMechanics' Frame with a Rotational axle flange,
@@ -27,7 +27,7 @@ level), and where each part comes from:
   ``Functions.Ground``), ``Types`` (enumerations), ``Components.SoilWheel`` (the Wheel with its
   soil as an input).
 - ``Examples``: ``SteadyC2``, ``SlipRamp``, ``Rover``, ``RoverSlope``, ``RoverDescent``,
-  ``RoverPullTest``, ``RoverSoftPatch`` (no MSL) and ``RigC1`` ... ``RigC4`` (the paper's
+  ``RoverPullTest``, ``RoverSoftPatch`` and ``RigC1`` ... ``RigC4`` (the paper's
   rig from MSL components), ``PlanarRig`` (the rig with a PlanarWheel, level or tilted) with
   ``Utilities.RigCarriage``, with ``experiment`` annotations at which they reproduce their
   reference results (``Resources/Reference``, MSL's regression layout: each example's CSV and
@@ -760,6 +760,38 @@ def _planar(lib: Library) -> None:
                 'fillColor={160,160,160}, fillPattern=FillPattern.Solid)})')
 
 
+def _declaration_end(text: str, start: int) -> int:
+    """The index of the ';' ending the declaration that begins at ``start`` (strings
+    skipped)."""
+    k = start
+    while text[k] != ";":
+        k = _string_end(text, k) if text[k] == '"' else k + 1
+    return k
+
+
+def _connectors(text: str) -> str:
+    """A block's ``input Real`` and ``output Real`` declarations as MSL's RealInput and
+    RealOutput connectors, placed on the icon's left (inputs) and right (outputs) edges."""
+    found = list(re.finditer(r"^  (input|output) Real ", text, re.M))
+    counts = {"input": 0, "output": 0}
+    totals = {side: sum(m.group(1) == side for m in found) for side in counts}
+    out, last = [], 0
+    for m in found:
+        side = m.group(1)
+        counts[side] += 1
+        y = round(80 - 160 * (counts[side] - 0.5) / totals[side])
+        x = (-140, -100) if side == "input" else (100, 120)
+        half = 20 if side == "input" else 10
+        end = _declaration_end(text, m.end())
+        kind = "RealInput" if side == "input" else "RealOutput"
+        out.append(text[last:m.start()] + f"  Modelica.Blocks.Interfaces.{kind} "
+                   + text[m.end():end]
+                   + f"\n    annotation(Placement(transformation(extent={{{{{x[0]},{y - half}}},"
+                     f"{{{x[1]},{y + half}}}}})))")
+        last = end
+    return "".join(out) + text[last:]
+
+
 def _state(name: str) -> str:
     return f"x[{rover.STATES.index(name) + 1}]"
 
@@ -781,7 +813,7 @@ def _rover_chassis() -> str:
                        f"carriage_speed[{k + 1}]"]
     lines = [
         'block RoverChassis "The RoverChassis FMU\'s chassis (its model exchange): a rigid body '
-        'in the plane of travel on four driven wheels (no Modelica Standard Library needed)"',
+        'in the plane of travel on four driven wheels"',
         f"  parameter Real r[{sizes['r']}] = {LIBRARY}.Data.rover "
         '"the rover\'s parameters in table order";',
         f"  parameter Real x_start[{sizes['x']}] = {LIBRARY}.Data.roverStart "
@@ -813,6 +845,12 @@ def _rover_chassis() -> str:
               f"  position = {_state('position')};", f"  pitch = {_state('pitch')};",
               "end RoverChassis;"]
     return "\n".join(lines) + "\n"
+
+
+def _placement(x: float, y: float) -> str:
+    """A component's place in an example's diagram: a 40 x 40 square centred at (x, y)."""
+    corners = f"{{{{{x - 20:g},{y - 20:g}}},{{{x + 20:g},{y + 20:g}}}}}"
+    return f"Placement(transformation(extent={corners}))"
 
 
 def _experiment(name: str, stop: float, interval: float) -> str:
@@ -851,15 +889,19 @@ def _rover_example(name: str = "Rover") -> str:
                      f"{_vector([g[k] for k in ground.NAMES])} "
                      '"the terrain map (Data.terrain with the soft patch)";')
     lines += [f"  {LIBRARY}.Components.RoverChassis chassis(r=r, slope=0, towing_force=0,",
-              f"    wheel_speed_command=zeros({n}), motor_torque_command=zeros({n}));"]
+              f"    wheel_speed_command=zeros({n}), motor_torque_command=zeros({n}))",
+              f"    annotation({_placement(0, 40)});"]
     k, size = NAMES.index("ripple.phase") + 1, len(NAMES)
     for w in rover.WHEELS:  # each wheel's grouser phase added to its ripple.phase
         j = rover.ROVER_NAMES.index(f"rover.grouser_phase.{w}") + 1
         lines += translate.wrap(f"  parameter Real p_{w}[{size}] = cat(1, p[1:{k - 1}], "
                                 f"{{p[{k}] + r[{j}]}}, p[{k + 1}:{size}]) "
                                 f'"{w}: p with its grouser phase";')
-    lines += [f"  {LIBRARY}.Components.MapWheel {w}(p=p_{w}, g=g);" if mapped else
-              f"  {LIBRARY}.Components.Wheel {w}(p=p_{w});" for w in rover.WHEELS]
+    where = {w: _placement(60 if w in rover.FRONT else -60, 20 - 60 * (k % 2))
+             for k, w in enumerate(rover.WHEELS)}  # front right of the diagram, left above
+    lines += [f"  {LIBRARY}.Components.MapWheel {w}(p=p_{w}, g=g) annotation({where[w]});"
+              if mapped else f"  {LIBRARY}.Components.Wheel {w}(p=p_{w}) annotation({where[w]});"
+              for w in rover.WHEELS]
     lines += ['  Real speed(unit="m/s") = chassis.speed;',
               '  Real position(unit="m") = chassis.position;',
               f'  Real heave(unit="m") = chassis.{_state("heave")};',
@@ -910,7 +952,7 @@ def _examples(lib: Library) -> None:
         r = reference.rover_parameters(example)
         what = reference.ROVER_DESCRIPTIONS[example]
         changed = ", ".join(sorted(profile))
-        text = (f'model {example} "The rover: {what} (no Modelica Standard Library needed)"\n'
+        text = (f'model {example} "The rover: {what}"\n'
                 f"  extends Rover(r={_vector([r[n] for n in rover.ROVER_NAMES])});\n"
                 f"  annotation({_experiment(example, *reference.rover_run(example))},\n"
                 f'    Documentation(info="<html><p>Data.rover with {changed} changed. '
@@ -958,6 +1000,83 @@ def _users_guide(lib: Library) -> None:
     _class_file(lib, LIBRARY, "UsersGuide", text)
 
 
+EXAMPLE_ICON = ('Icon(graphics={Ellipse(extent={{-100,100},{100,-100}}, lineColor={75,138,73}, '
+                'fillColor={255,255,255}, fillPattern=FillPattern.Solid), Polygon(points='
+                '{{-36,60},{64,0},{-36,-60},{-36,60}}, lineColor={0,0,255}, fillColor={75,138,73}, '
+                'fillPattern=FillPattern.Solid)})')
+"""MSL's example icon (Modelica.Icons.Example's look, drawn here rather than extended)."""
+BLOCK_ICON = ('Icon(graphics={Rectangle(extent={{-100,100},{100,-100}}, lineColor={0,0,127}, '
+              'fillColor={255,255,255}, fillPattern=FillPattern.Solid), Ellipse(extent='
+              '{{-50,50},{50,-50}}, lineColor={64,64,64}, fillColor={160,160,160}, '
+              'fillPattern=FillPattern.Solid), Text(extent={{-150,150},{150,110}}, '
+              'textString="%name", textColor={0,0,255})})')
+"""The components' icon where their template draws none: a wheel in a block."""
+
+
+def _revisions() -> str:
+    return (f'"<html><ul><li>{__version__}: generated by wheelterrain {__version__}.</li>'
+            '</ul></html>"')
+
+
+def _string_end(text: str, start: int) -> int:
+    """The index just past the Modelica string literal opening at ``start``."""
+    k = start + 1
+    while text[k] != '"':
+        k += 2 if text[k] == "\\" else 1
+    return k + 1
+
+
+def _documented(path: str, text: str) -> str:
+    """``text`` (one class file) with Documentation info and revisions on its class, where
+    missing: info the class's description, revisions the generator's version; an icon on a
+    component or an example that has none."""
+    parts = path.split("/")
+    name = parts[-2] if parts[-1] == "package.mo" else parts[-1][:-3]
+    prefixes = "(?:partial |encapsulated |pure |impure )*"
+    header = re.search(rf'^{prefixes}\w+ {name} "((?:[^"\\]|\\.)*)"', text, re.M)
+    end = text.rfind(f"end {name};")
+    if header is None or end < 0:
+        raise ValueError(f"{path}: no class {name} with a description")
+    own = [m.start() for m in re.finditer(r"^  annotation\(", text, re.M) if m.start() < end]
+    at = own[-1] if own else None
+    block = text[at:end] if at is not None else ""
+    additions = []
+    if "Documentation(" not in block:
+        info = f'"<html><p>{html.escape(header.group(1), quote=False)}.</p></html>"'
+        additions.append(f"Documentation(info={info}, revisions={_revisions()})")
+    if "/Components/" in path and "Icon(" not in block and "partial " not in text[:header.end()]:
+        additions.append(BLOCK_ICON)
+    if "/Examples/" in path and "Icon(" not in block and "/Utilities" not in path:
+        additions.append(EXAMPLE_ICON)
+    if "revisions=" not in block and "Documentation(" in block:
+        info = block.index('info="', block.index("Documentation(")) + len("info=")
+        close = _string_end(block, info)
+        block = block[:close] + f", revisions={_revisions()}" + block[close:]
+        text = text[:at] + block + text[end:]
+        end = text.rfind(f"end {name};")
+    if not additions:
+        return text
+    if at is None:
+        return text[:end] + f"  annotation({', '.join(additions)});\n" + text[end:]
+    opening = at + len("  annotation(")
+    return text[:opening] + ", ".join(additions) + ", " + text[opening:]
+
+
+CONNECTED = ("QuasiStaticWheel", "PartialWheel", "MapWheel", "SoilWheel", "RoverChassis")
+"""The signal blocks whose inputs and outputs are MSL's RealInput and RealOutput connectors."""
+
+
+def _document(lib: Library) -> None:
+    """info and revisions on every public class (not the pieces of Functions.Internal);
+    connectors on the signal blocks (CONNECTED)."""
+    for name in CONNECTED:
+        path = f"{LIBRARY}/Components/{name}.mo"
+        lib.files[path] = _connectors(lib.files[path])
+    for path in list(lib.files):
+        if path.endswith(".mo") and "/Functions/Internal/" not in path:
+            lib.files[path] = _documented(path, lib.files[path])
+
+
 def build_library() -> Library:
     """The whole library as files (relative path -> text)."""
     lib = Library()
@@ -974,6 +1093,7 @@ def build_library() -> Library:
     _components(lib)
     _planar(lib)
     _examples(lib)
+    _document(lib)
     for name, text in reference.files().items():
         lib.add(f"{LIBRARY}/Resources/Reference/{name}", text)
     for name, text in external.sources(entries()).items():

@@ -1,4 +1,4 @@
-block MapWheel "The Wheel on a terrain map: its soil the Terrain FMU's map gives at the wheel's position (no Modelica Standard Library needed)"
+block MapWheel "The Wheel on a terrain map: its soil the Terrain FMU's map gives at the wheel's position"
   extends WheelTerrain.Components.PartialWheel;
   parameter Real p[${N}] = WheelTerrain.Data.rashidPatch
     "the wheel's and the model's parameters in table order (its soil rows are the map's)";

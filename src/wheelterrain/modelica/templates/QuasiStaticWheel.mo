@@ -1,4 +1,4 @@
-block QuasiStaticWheel "A wheel at steady state on the soil: the sinkage at which the static normal force carries the load (no Modelica Standard Library needed)"
+block QuasiStaticWheel "A wheel at steady state on the soil: the sinkage at which the static normal force carries the load"
   parameter Real p[${N}] = WheelTerrain.Data.rashidPatch
     "the parameters in table order (WheelTerrain.Data, Records.parameterVector)";
   parameter Real sinkage_start(unit="m") = 0.01

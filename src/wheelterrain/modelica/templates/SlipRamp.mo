@@ -1,4 +1,4 @@
-model SlipRamp "The quasi-static wheel at ${steady_load} N as its slip ramps from ${ramp_start} by ${ramp_rate} per second (no Modelica Standard Library needed)"
+model SlipRamp "The quasi-static wheel at ${steady_load} N as its slip ramps from ${ramp_start} by ${ramp_rate} per second"
   WheelTerrain.Components.QuasiStaticWheel wheel(load=${steady_load}, slip=${ramp_start} + ${ramp_rate}*time,
     slip_angle=0, turn_slip=0);
   Real sinkage(unit="m") = wheel.sinkage;

@@ -1,4 +1,4 @@
-block SoilWheel "The Wheel with the soil rows of its parameters as an input: a terrain's soil under the wheel (no Modelica Standard Library needed)"
+block SoilWheel "The Wheel with the soil rows of its parameters as an input: a terrain's soil under the wheel"
   extends WheelTerrain.Components.PartialWheel;
   parameter Real p[${N}] = WheelTerrain.Data.rashidPatch
     "the wheel's and the model's parameters in table order (its soil rows are the input's)";

@@ -1,4 +1,4 @@
-model SteadyC2 "The quasi-static wheel at the paper's C2: 62 N, the paper's slip 0.25, the default preset (no Modelica Standard Library needed)"
+model SteadyC2 "The quasi-static wheel at the paper's C2: 62 N, the paper's slip 0.25, the default preset"
   parameter Real slip_paper = 0.25 "the paper's slip s";
   WheelTerrain.Components.QuasiStaticWheel wheel(load=${steady_load},
     slip=WheelTerrain.Functions.slipFromPaper(slip_paper), slip_angle=0, turn_slip=0);
