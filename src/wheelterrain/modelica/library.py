@@ -701,36 +701,52 @@ def _template(name: str, **values) -> str:
         {"version": __version__, **values})
 
 
-def _components(lib: Library) -> None:
-    where = f"{LIBRARY}/Components"
-    rows = len(contact.CONTACT_OUTPUTS)
-    lateral_rows = len(contact.LATERAL_OUTPUTS)
-    _class_file(lib, where, "QuasiStaticWheel", _template(
-        "QuasiStaticWheel", N=len(NAMES), QUASI_ROWS=rows, LATERAL_ROWS=lateral_rows,
-        TURN_SLIP_LIMIT=f"{TURN_SLIP_LIMIT:g}"))
-    _class_file(lib, where, "Contact", _template(
-        "Contact", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS)))
-    phase = NAMES.index("ripple.phase") + 1
-    _class_file(lib, where, "PartialWheel", _template(
-        "PartialWheel", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS),
-        PHASE_BEFORE=phase - 1, PHASE=phase, PHASE_AFTER=phase + 1,
-        LATERAL_ROWS=lateral_rows, TURN_SLIP_LIMIT=f"{TURN_SLIP_LIMIT:g}"))
-    _class_file(lib, where, "Wheel", _template("Wheel", N=len(NAMES)))
+def _speed_floor() -> str:
+    """The FMU's SPEED_FLOOR [m/s] as a literal: below it a wheel and its axle are at rest (the
+    turn slip's denominator in the wheels)."""
+    from wheelterrain.fmu import functions as fmu_functions
+
+    return translate.literal(fmu_functions.SPEED_FLOOR)
+
+
+def _soil_rows() -> tuple[list[int], list[int], list[int]]:
+    """The soil rows' 0-based positions in the table, and the soil's and the patch's in the
+    terrain map's table: each side by side, as MapWheel, SoilWheel and Terrain slice them."""
     soil = [NAMES.index(n) for n in ground.SOIL_NAMES]
     in_map = [ground.NAMES.index(n) for n in ground.SOIL_NAMES]
     patch = [ground.NAMES.index(n) for n in ground.PATCH_NAMES]
     for rows in (soil, in_map, patch):
         if rows != list(range(rows[0], rows[0] + len(rows))):
-            raise ValueError("MapWheel needs the soil rows side by side in the table and the "
-                             "map's soil and patch rows side by side in the map's")
-    _class_file(lib, where, "MapWheel", _template(
+            raise ValueError("the soil rows must lie side by side in the table, and the map's "
+                             "soil and patch rows side by side in the map's")
+    return soil, in_map, patch
+
+
+def _components(lib: Library) -> None:
+    where = f"{LIBRARY}/Components"
+    rows = len(contact.CONTACT_OUTPUTS)
+    lateral_rows = len(contact.LATERAL_OUTPUTS)
+    _class_file(lib, where, "QuasiStaticWheel", _connectors(_template(
+        "QuasiStaticWheel", N=len(NAMES), QUASI_ROWS=rows, LATERAL_ROWS=lateral_rows,
+        TURN_SLIP_LIMIT=f"{TURN_SLIP_LIMIT:g}")))
+    _class_file(lib, where, "Contact", _template(
+        "Contact", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS)))
+    phase = NAMES.index("ripple.phase") + 1
+    _class_file(lib, where, "PartialWheel", _connectors(_template(
+        "PartialWheel", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS),
+        PHASE_BEFORE=phase - 1, PHASE=phase, PHASE_AFTER=phase + 1,
+        LATERAL_ROWS=lateral_rows, TURN_SLIP_LIMIT=f"{TURN_SLIP_LIMIT:g}",
+        SPEED_FLOOR=_speed_floor())))
+    _class_file(lib, where, "Wheel", _template("Wheel", N=len(NAMES)))
+    soil, in_map, patch = _soil_rows()
+    _class_file(lib, where, "MapWheel", _connectors(_template(
         "MapWheel", N=len(NAMES), G=len(ground.NAMES), SOIL_FIRST=soil[0],
         SOIL_AFTER=soil[-1] + 2, START=ground.NAMES.index("patch.start") + 1,
         END=ground.NAMES.index("patch.end") + 1, PATCH_FIRST=patch[0] + 1,
-        PATCH_LAST=patch[-1] + 1, MAP_SOIL_FIRST=in_map[0] + 1, MAP_SOIL_LAST=in_map[-1] + 1))
-    _class_file(lib, where, "SoilWheel", _template(
-        "SoilWheel", N=len(NAMES), S=len(soil), SOIL_FIRST=soil[0], SOIL_AFTER=soil[-1] + 2))
-    _class_file(lib, where, "RoverChassis", _rover_chassis())
+        PATCH_LAST=patch[-1] + 1, MAP_SOIL_FIRST=in_map[0] + 1, MAP_SOIL_LAST=in_map[-1] + 1)))
+    _class_file(lib, where, "SoilWheel", _connectors(_template(
+        "SoilWheel", N=len(NAMES), S=len(soil), SOIL_FIRST=soil[0], SOIL_AFTER=soil[-1] + 2)))
+    _class_file(lib, where, "RoverChassis", _connectors(_rover_chassis()))
     lib.package(LIBRARY, "Components", "The wheel on the soil as blocks (signals in, signals "
                 "out) and the contact on MSL's 1-D flanges",
                 ["QuasiStaticWheel", "Contact", "PartialWheel", "Wheel", "MapWheel",
@@ -740,9 +756,8 @@ def _components(lib: Library) -> None:
 def _planar(lib: Library) -> None:
     """The component layer on PlanarMechanics: Types, the inner Terrain, Wheels.PlanarWheel."""
     _class_file(lib, LIBRARY, "Types", _template("Types", ENUMERATIONS=_enumerations()))
-    soil = [NAMES.index(n) for n in ground.SOIL_NAMES]
-    in_map = [ground.NAMES.index(n) for n in ground.SOIL_NAMES]
-    if in_map != list(range(len(in_map))):
+    soil, in_map, _ = _soil_rows()
+    if in_map[0] != 0:
         raise ValueError("Terrain needs the map's soil rows first in the map's table")
     _class_file(lib, LIBRARY, "Terrain", _template(
         "Terrain", G=len(ground.NAMES), SOIL_FIRST=soil[0] + 1, SOIL_LAST=soil[-1] + 1,
@@ -751,7 +766,7 @@ def _planar(lib: Library) -> None:
     _class_file(lib, f"{LIBRARY}/Wheels", "HorizontalWheel", _template(
         "HorizontalWheel", N=len(NAMES), SLIP_ANGLE_LIMIT=translate.literal(SLIP_ANGLE_LIMIT),
         SLIP_ANGLE_DEG=f"{math.degrees(SLIP_ANGLE_LIMIT):g}",
-        TURN_SLIP_LIMIT=f"{TURN_SLIP_LIMIT:g}"))
+        TURN_SLIP_LIMIT=f"{TURN_SLIP_LIMIT:g}", SPEED_FLOOR=_speed_floor()))
     lib.package(LIBRARY, "Wheels", "Wheels to connect into a vehicle: PlanarMechanics frames, "
                 "Rotational flanges; in the vertical plane of travel on an inner Terrain "
                 "(PlanarWheel) or seen from above with the load an input (HorizontalWheel)",
@@ -770,8 +785,9 @@ def _declaration_end(text: str, start: int) -> int:
 
 
 def _connectors(text: str) -> str:
-    """A block's ``input Real`` and ``output Real`` declarations as MSL's RealInput and
-    RealOutput connectors, placed on the icon's left (inputs) and right (outputs) edges."""
+    """A signal block's ``input Real`` and ``output Real`` declarations as MSL's RealInput and
+    RealOutput connectors, placed on the icon's left (inputs) and right (outputs) edges (the
+    templates keep plain declarations: one place decides the connectors)."""
     found = list(re.finditer(r"^  (input|output) Real ", text, re.M))
     counts = {"input": 0, "output": 0}
     totals = {side: sum(m.group(1) == side for m in found) for side in counts}
@@ -1062,16 +1078,8 @@ def _documented(path: str, text: str) -> str:
     return text[:opening] + ", ".join(additions) + ", " + text[opening:]
 
 
-CONNECTED = ("QuasiStaticWheel", "PartialWheel", "MapWheel", "SoilWheel", "RoverChassis")
-"""The signal blocks whose inputs and outputs are MSL's RealInput and RealOutput connectors."""
-
-
 def _document(lib: Library) -> None:
-    """info and revisions on every public class (not the pieces of Functions.Internal);
-    connectors on the signal blocks (CONNECTED)."""
-    for name in CONNECTED:
-        path = f"{LIBRARY}/Components/{name}.mo"
-        lib.files[path] = _connectors(lib.files[path])
+    """info and revisions on every public class (not the pieces of Functions.Internal)."""
     for path in list(lib.files):
         if path.endswith(".mo") and "/Functions/Internal/" not in path:
             lib.files[path] = _documented(path, lib.files[path])

@@ -1,7 +1,7 @@
 """Reference results of the Modelica library's examples, computed by the Python model, in MSL's
 regression layout (``Resources/Reference/WheelTerrain/Examples/<Example>/<Example>.csv`` and
 ``comparisonSignals.txt`` beside it, :func:`location`): what a Modelica tool's run of each
-example should give at the example's own experiment annotation (:data:`TOLERANCES`).
+example should give at the example's own experiment annotation (:func:`tolerance`).
 
 - SteadyC2 and SlipRamp: the project's steady state (:func:`wheelterrain.model.api.steady_state`)
   at the examples' loads and slips.
@@ -181,6 +181,17 @@ def _csv(columns: Sequence[str], rows) -> str:
     return buffer.getvalue()
 
 
+QUASI_STATIC_EXAMPLES = ("SteadyC2", "SlipRamp")
+
+
+def _kind(name: str) -> str:
+    """'quasi-static', 'rig' (RigC1 ... RigC4, PlanarRig) or 'rover': what the example ``name``
+    runs, which sets its tolerance and its compared signals."""
+    if name in QUASI_STATIC_EXAMPLES:
+        return "quasi-static"
+    return "rig" if name.startswith("Rig") or name == "PlanarRig" else "rover"
+
+
 def location(name: str) -> str:
     """The folder of the example ``name``'s reference files below Resources/Reference (MSL's
     regression layout: the example's class path)."""
@@ -189,32 +200,33 @@ def location(name: str) -> str:
 
 def tolerance(name: str) -> float:
     """The relative tolerance of the example ``name``'s experiment annotation."""
-    if name in ("SteadyC2", "SlipRamp"):
-        return QUASI_STATIC_TOLERANCE
-    return RIG_TOLERANCE if "Rig" in name else ROVER_TOLERANCE
+    return {"quasi-static": QUASI_STATIC_TOLERANCE, "rig": RIG_TOLERANCE,
+            "rover": ROVER_TOLERANCE}[_kind(name)]
 
 
 def compared(name: str) -> tuple[str, ...]:
     """The signals of the example ``name`` its reference is compared on (comparisonSignals.txt):
     model variables, time first, each a column of its reference CSV."""
-    if name in ("SteadyC2", "SlipRamp"):
-        return ("time", "slip", "sinkage", "drawbar_pull", "torque")
-    return RIG_COMPARED if "Rig" in name else ROVER_COLUMNS
+    return {"quasi-static": STEADY_COLUMNS, "rig": RIG_COMPARED,
+            "rover": ROVER_COLUMNS}[_kind(name)]
+
+
+def _folder(library_root: Path, name: str) -> Path:
+    """The example ``name``'s reference folder in the library written to ``library_root``."""
+    return Path(library_root) / "WheelTerrain" / "Resources" / "Reference" / location(name)
 
 
 def read_signals(library_root: Path, name: str) -> tuple[str, ...]:
     """The example ``name``'s comparisonSignals.txt in the library written to
     ``library_root``."""
-    path = (Path(library_root) / "WheelTerrain" / "Resources" / "Reference" / location(name)
-            / "comparisonSignals.txt")
+    path = _folder(library_root, name) / "comparisonSignals.txt"
     return tuple(path.read_text(encoding="utf-8").split())
 
 
 def read(library_root: Path, name: str) -> dict[str, np.ndarray]:
     """The reference result ``name`` (an example's) of the library written to
     ``library_root`` (the folder holding WheelTerrain/): column -> values."""
-    path = (Path(library_root) / "WheelTerrain" / "Resources" / "Reference" / location(name)
-            / f"{name}.csv")
+    path = _folder(library_root, name) / f"{name}.csv"
     with path.open(encoding="utf-8") as handle:
         rows = list(csv.reader(handle))
     data = np.array(rows[1:], dtype=float)
@@ -245,6 +257,8 @@ def one_root(msl: Path, library_root: Path, folder: Path) -> Path:
     return folder
 
 
+STEADY_COLUMNS = ("time", "slip", "sinkage", "drawbar_pull", "torque")
+"""The quasi-static examples' reference columns, each a model variable (their compared signals)."""
 STEADY_TIMES = (0.0, 1.0)
 """s: SteadyC2's output times (its experiment's start and stop): the steady state at both."""
 
@@ -253,11 +267,11 @@ def files() -> dict[str, str]:
     """<Example folder>/<Example>.csv and comparisonSignals.txt (below Resources/Reference) ->
     text, for every example."""
     tables = {}
-    columns = ("time", "slip", "sinkage", "drawbar_pull", "torque")
-    c2 = steady_rows([unified_from_paper(0.25)] * len(STEADY_TIMES), STEADY_TIMES)
-    tables["SteadyC2"] = _csv(columns, [[r[k] for k in columns] for r in c2])
+    (c2,) = steady_rows([unified_from_paper(0.25)])  # the same steady state at every time
+    tables["SteadyC2"] = _csv(STEADY_COLUMNS, [[t, *(c2[k] for k in STEADY_COLUMNS[1:])]
+                                               for t in STEADY_TIMES])
     ramp = steady_rows(ramp_slips(), RAMP_TIMES)
-    tables["SlipRamp"] = _csv(columns, [[r[k] for k in columns] for r in ramp])
+    tables["SlipRamp"] = _csv(STEADY_COLUMNS, [[r[k] for k in STEADY_COLUMNS] for r in ramp])
     for case, s in RIG_CASES.items():
         tables[f"Rig{case}"] = _csv(RIG_COLUMNS, rig_trajectory(s))
     tables["PlanarRig"] = tables["RigC1"]  # its defaults: level, the paper's slip 0

@@ -50,7 +50,7 @@ equation
   slip_angle = atan2(v_lat, rolling*v_long);
   assert(abs(slip_angle) <= ${SLIP_ANGLE_LIMIT}, "HorizontalWheel: |slip angle| beyond ${SLIP_ANGLE_DEG} deg, the lateral contact's range (a wheel moving sideways has no heading to slip along)");
   assert(abs(yaw_rate) <= ${TURN_SLIP_LIMIT}*max(rolling*v_long, 0), "HorizontalWheel: |yaw_rate|/speed beyond ${TURN_SLIP_LIMIT} rad/m, the lateral contact's range (a wheel yawing on the spot or at rest is outside the model)");
-  turn_slip = if abs(yaw_rate) > 0 then rolling*yaw_rate/max(rolling*v_long, 1e-9) else 0;
+  turn_slip = if abs(yaw_rate) > 0 then rolling*yaw_rate/max(rolling*v_long, ${SPEED_FLOOR}) else 0;
   drawbar_pull = rolling*contact.drawbar_pull;
   lateral_force = contact.lateral_force;
   turning_moment = rolling*contact.turning_moment;

@@ -13,7 +13,7 @@ partial block PartialWheel "The WheelTerrain FMU's contact as a block (its model
     "the wheel's yaw rate about the vertical, + counter-clockwise from above (0: it does not yaw)";
   Real rolling(unit="1")
     "-1 rolling backward (both speeds <= 0): the mirror image of rolling forward; else 1";
-  Real turn_slip(unit="rad/m") = if abs(yaw_rate) > 0 then rolling*yaw_rate/max(rolling*carriage_speed, 1e-9) else 0
+  Real turn_slip(unit="rad/m") = if abs(yaw_rate) > 0 then rolling*yaw_rate/max(rolling*carriage_speed, ${SPEED_FLOOR}) else 0
     "the turn slip yaw_rate/carriage_speed, the curvature of the wheel's path";
   output Real normal_force(unit="N") "the soil's force on the wheel, up";
   output Real drawbar_pull(unit="N") "the soil's net force on the wheel, forward";
