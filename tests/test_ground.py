@@ -49,14 +49,15 @@ def test_the_fmu_function_is_the_model_on_floats():
     x_py = list(model.initial(p))
     assert list(x_fn) == x_py
     for k, position in enumerate((0.5, 1.0, 1.7, 2.0, 2.003, 2.2)):
-        u = (position, 0.001 * k, position - 0.4, 0.002 * k)
+        u = (position, 0.001 * k, 2e4 * k, position - 0.4, 0.002 * k, 3e4 * k)
         y = [float(v) for v in outputs(x_fn, u, pv, []).full().ravel()]
         assert y == list(model.output_values(x_py, u, p, ()))
         x_fn = step(x_fn, u, pv, 1e-3)[0].full().ravel()
         x_py, _ = model.step(x_py, u, p, 1e-3)
         assert list(x_fn) == list(x_py)
     assert model.outputs == tuple(n for q in variables.QUERY_POINTS
-                                  for n in (*variables.query_ground(q), f"{q}.rut_met"))
+                                  for n in (*variables.query_ground(q), f"{q}.rut_met",
+                                            f"{q}.rut_pressure_met"))
 
 
 def test_the_record_keeps_the_deepest_rut_per_cell_and_serves_it_ahead():
@@ -66,15 +67,37 @@ def test_the_record_keeps_the_deepest_rut_per_cell_and_serves_it_ahead():
     p = ground.defaults()
     x = ground.no_ruts()
     cell, ahead = p["terrain.cell"], p["terrain.lookahead"]
-    for rut in (0.004, 0.006, 0.005):  # three ruts left in one cell: the deepest stays
-        x = ground.lay_rut(x, 1.0 + cell / 2, rut, p)
-    assert ground.met(x, 1.0 + cell / 2 - ahead, p) == pytest.approx(0.006, abs=1e-15)
-    # halfway to the next cell's middle (untouched): half the rut; at its middle none
-    assert ground.met(x, 1.0 + cell - ahead, p) == pytest.approx(0.003, abs=1e-15)
-    assert ground.met(x, 1.0 + 1.5 * cell - ahead, p) == pytest.approx(0.0, abs=1e-15)
+    # three ruts left in one cell: the deepest stays, with its own pressure
+    for rut, pressure in ((0.004, 9e3), (0.006, 2e4), (0.005, 3e4)):
+        x = ground.lay_rut(x, 1.0 + cell / 2, rut, pressure, p)
+    assert ground.met(x, 1.0 + cell / 2 - ahead, p) == pytest.approx((0.006, 2e4), rel=1e-13)
+    # halfway to the next cell's middle (untouched): half the rut and half its pressure; at
+    # its middle none
+    assert ground.met(x, 1.0 + cell - ahead, p) == pytest.approx((0.003, 1e4), rel=1e-13)
+    assert ground.met(x, 1.0 + 1.5 * cell - ahead, p) == pytest.approx((0.0, 0.0), abs=1e-15)
+    # as deep again: the larger pressure stays
+    x = ground.lay_rut(x, 1.0 + cell / 2, 0.006, 2.5e4, p)
+    assert ground.met(x, 1.0 + cell / 2 - ahead, p) == pytest.approx((0.006, 2.5e4), rel=1e-13)
     # the ring comes round: a cell RUT_CELLS further on takes the slot, and the old is gone
-    x = ground.lay_rut(x, 1.0 + cell / 2 + ground.RUT_CELLS * cell, 0.001, p)
-    assert ground.met(x, 1.0 + cell / 2 - ahead, p) == pytest.approx(0.0, abs=1e-15)
+    x = ground.lay_rut(x, 1.0 + cell / 2 + ground.RUT_CELLS * cell, 0.001, 5e3, p)
+    assert ground.met(x, 1.0 + cell / 2 - ahead, p) == pytest.approx((0.0, 0.0), abs=1e-15)
+
+
+def test_a_rut_of_unknown_pressure_beside_a_known_one_is_met_as_unknown():
+    """A rut recorded without its pressure (0: a wheel whose rut_pressure_left is not
+    connected) makes the pressure met 0 between its cell and the next, so that the wheel
+    reads the rut from its depth, not as carrying a share of its neighbour's pressure."""
+    p = ground.defaults()
+    cell, ahead = p["terrain.cell"], p["terrain.lookahead"]
+    x = ground.lay_rut(ground.no_ruts(), 1.0 + cell / 2, 0.006, 2e4, p)
+    x = ground.lay_rut(x, 1.0 + 1.5 * cell, 0.006, 0.0, p)
+    assert ground.met(x, 1.0 + cell / 2 - ahead, p) == pytest.approx((0.006, 2e4), rel=1e-13)
+    assert ground.met(x, 1.0 + cell - ahead, p) == pytest.approx((0.006, 0.0), rel=1e-13)
+    first = ground.met_cells(1.0 + cell / 2 - ahead, p)[0] - 1  # a table as the rover's
+    cells = [ground.rut_in_cell(x, first + k) for k in range(4)]
+    table = [first, *(r for r, _ in cells), *(q for _, q in cells)]
+    for at in (1.0 + cell / 2 - ahead, 1.0 + cell - ahead):
+        assert ground.met_in_table(at, p, table) == ground.met(x, at, p)
 
 
 def test_the_rut_a_wheel_meets_has_no_step_at_a_cell_s_edge():
@@ -85,12 +108,13 @@ def test_the_rut_a_wheel_meets_has_no_step_at_a_cell_s_edge():
     cell, ahead = p["terrain.cell"], p["terrain.lookahead"]
     x = ground.no_ruts()
     for k in range(10):
-        x = ground.lay_rut(x, (100 + k + 0.5) * cell, 1e-3 * (k + 1), p)
+        x = ground.lay_rut(x, (100 + k + 0.5) * cell, 1e-3 * (k + 1), 1e4 * (k + 1), p)
     for k in range(101, 109):  # the edges between recorded cells
         edge = k * cell - ahead
-        jump = ground.met(x, edge + 1e-9, p) - ground.met(x, edge - 1e-9, p)
-        assert abs(jump) < 1e-8, (k, jump)  # a staircase would jump by 1e-3 here
-    middles = [ground.met(x, (100 + k + 0.5) * cell - ahead, p) for k in range(10)]
+        after, before = ground.met(x, edge + 1e-9, p), ground.met(x, edge - 1e-9, p)
+        assert abs(after[0] - before[0]) < 1e-8, k  # a staircase would jump by 1e-3 here
+        assert abs(after[1] - before[1]) < 1e-1, k  # ... and the pressure by 1e4 Pa
+    middles = [ground.met(x, (100 + k + 0.5) * cell - ahead, p)[0] for k in range(10)]
     assert middles == pytest.approx([1e-3 * (k + 1) for k in range(10)], abs=1e-15)
 
 

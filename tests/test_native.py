@@ -48,7 +48,8 @@ def test_compiled_fmu_functions_equal_the_vm(tmp_path, which):
              rng.uniform(0.0, 0.04), rng.uniform(1.0, 100.0),
              rng.choice([0.0, rng.uniform(0.0, 0.02)]),  # rut_met: none, or a rut
              rng.choice([0.0, rng.uniform(-0.7, 0.7)]),  # slip_angle: straight, or turned
-             rng.choice([0.0, rng.uniform(-0.3, 0.3)])]  # yaw_rate: none, or yawing (or refused)
+             rng.choice([0.0, rng.uniform(-0.3, 0.3)]),  # yaw_rate: none, or yawing (or refused)
+             rng.choice([0.0, rng.uniform(1e3, 5e4)])]  # rut_pressure_met: not known, or kept
         # quasi-static: cold (guess 0) and warm-started from a guess
         guess = rng.choice([0.0, rng.uniform(0.002, 0.06)])
         plastic = rng.choice([0.0, u[0] + rng.uniform(0.0, 3e-4)])  # pressed deeper before

@@ -71,7 +71,7 @@ def test_the_derived_lists_are_the_ones_the_faces_use():
 # the one line a user would add to the table: an output the contact model already computes
 DUMMY = ('        Var("sinkage_exponent", "output", "Sinkage exponent n = n0 + n1*|i| (test '
          'row)", "1"),\n')
-ANCHOR = '    ], (*_TERRAIN_INPUTS, *GROUND)),\n'
+ANCHOR = '    ], (*_TERRAIN_INPUTS, *GROUND, "rut_pressure_met")),\n'
 
 PROBE = r"""
 import json, shutil, sys

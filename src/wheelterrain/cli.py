@@ -555,12 +555,15 @@ def _multipass_table(runs: list[dict]) -> None:
     for run in runs:
         click.echo(f"slip {run['slip']:g} (the model's; paper {run['slip_paper']:.4g})")
         click.echo(f"  {'pass':>4}  {'pull/load':>9}  {'pull [N]':>8}  {'sinkage [mm]':>12}  "
-                   f"{'increment [mm]':>14}  {'rut left [mm]':>13}  {'torque [N.m]':>12}")
+                   f"{'increment [mm]':>14}  {'rut left [mm]':>13}  {'its p [kPa]':>11}  "
+                   f"{'torque [N.m]':>12}")
         for r in run["passes"]:
+            pressure = (f"{r['rut_pressure_left'] * 1e-3:11.3f}" if "rut_pressure_left" in r
+                        else f"{'-':>11}")  # the SCM reference keeps no rut pressure row
             click.echo(f"  {r['pass']:4d}  {r['traction_coefficient']:9.4f}  "
                        f"{r['drawbar_pull']:8.3f}  {r['sinkage'] * 1e3:12.3f}  "
                        f"{r['sinkage_increment'] * 1e3:14.3f}  {r['rut_left'] * 1e3:13.3f}  "
-                       f"{r['torque']:12.4f}")
+                       f"{pressure}  {r['torque']:12.4f}")
 
 
 @main.command(epilog=EPILOG)

@@ -190,6 +190,18 @@ TABLE: tuple[Parameter, ...] = (
        "Wong, Theory of Ground Vehicles, ch. 2 (response to repetitive loading); the multi-pass "
        "effect of a rut: Holm 1969; Senatore & Iagnemma 2011", quantity="Length",
        display_unit="mm"),
+    _P("soil.rut_pressure", "Pa", 0.0, 0.0, 1.0e7,
+       "Pressure the rut (soil.rut_depth) carried at its deepest point when it was made: "
+       "the wheel that made it pressed the soil there to this yield pressure. A wheel "
+       "meeting the rut reloads it elastically up to it (over the rebound "
+       "soil.rut_pressure/K_u), then along its own pressure-sinkage law from the depth at "
+       "which that law carries it. 0 = not known: read from the rut's depth with the "
+       "meeting wheel's own law (exact where it runs at the maker's slip, to first order in "
+       "the rebound). A terrain with memory records it with each rut (rut_pressure_left).",
+       "Wong, Theory of Ground Vehicles, ch. 2 (repetitive loading: the soil reloads "
+       "elastically up to the largest pressure it carried); Krenn & Hirzinger 2009, SCM (each "
+       "soil node keeps its yield pressure sigma_yield)", quantity="Pressure",
+       display_unit="kPa"),
     _P("soil.unloading_stiffness", "Pa/m", 4.0e7, 1.0e5, 1.0e10,
        "Stiffness K_u of the soil's unloading and reloading line (pressure per depth): below "
        "the largest pressure the soil has carried it answers elastically, p = K_u*(z - z_p); "

@@ -157,8 +157,8 @@ class CasadiPlant:
         """WheelTerrain's inputs (TERRAIN_INPUTS) at the rig's state, as the FMU pair couples
         them (no rut met: the rig's strip is virgin soil)."""
         given = {**dict(zip(rig.RIG_STATES, self.x, strict=True)),
-                 "load": self.p_rig["rig.load"], "rut_met": 0.0, "slip_angle": 0.0,
-                 "yaw_rate": 0.0}
+                 "load": self.p_rig["rig.load"], "rut_met": 0.0, "rut_pressure_met": 0.0,
+                 "slip_angle": 0.0, "yaw_rate": 0.0}
         return [given[n] for n in fmu_model.TERRAIN_INPUTS]
 
     def _forces(self) -> np.ndarray:

@@ -152,7 +152,8 @@ class Settings:
 def terrain_inputs(states: dict, load):
     """The terrain Functions' ``u`` (TERRAIN_INPUTS, in order) from states by name and the
     load (no rut met: the rig's strip is virgin soil)."""
-    given = {**states, "load": load, "rut_met": 0.0, "slip_angle": 0.0, "yaw_rate": 0.0}
+    given = {**states, "load": load, "rut_met": 0.0, "rut_pressure_met": 0.0, "slip_angle": 0.0,
+             "yaw_rate": 0.0}
     return ca.vertcat(*(given[n] for n in fmu_model.TERRAIN_INPUTS))
 
 

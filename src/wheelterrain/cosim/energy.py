@@ -175,7 +175,7 @@ def rover_ledger(params: ParameterSet, rover_values: Mapping[str, float] | None 
         first = np.array([*loop["start"], *([0.0] * len(powers))])
         at = float(end[rover.STATES.index("position")])
         met_at_end = {w: float(ground.met(profiles[rover.TRACK_OF[w]],
-                                          rover.wheel_position(r, at, w), terrain_map))
+                                          rover.wheel_position(r, at, w), terrain_map)[0])
                       for w in rover.WHEELS}
     else:
         _, path = _integrate(loop["state"], loop["rate"], powers, loop["start"], stop)
@@ -243,7 +243,8 @@ def _with_ruts(loop: dict, powers: dict, met, r: Mapping[str, float], g: Mapping
                                {"abstol": 1e-14, "reltol": TOLERANCE, "max_num_steps": 10**7})
     position = rover.STATES.index("position")
     left = ca.Function("left", [state, met], [ca.vertcat(
-        *(loop["wheels"][w]["rut_left"] for w in rover.WHEELS))])
+        *(loop["wheels"][w][k] for k in ("rut_left", "rut_pressure_left")
+          for w in rover.WHEELS))])
     profiles = ({track: ground.no_ruts() for track in rover.TRACKS} if profiles is None
                 else {track: list(p) for track, p in profiles.items()})
     column = np.array([*loop["start"], *([0.0] * len(powers))])
@@ -253,7 +254,10 @@ def _with_ruts(loop: dict, powers: dict, met, r: Mapping[str, float], g: Mapping
         path = np.column_stack([column, np.array(integrator(x0=column, p=table)["xf"])])
         steps = path[:, :-1]  # the state at the start of each sample step
         lefts = np.array(left.map(samples)(steps[:n], ca.repmat(ca.DM(table), 1, samples)))
+        wheels = len(rover.WHEELS)
         rut_profile.remember(profiles, steps[position],
-                             {w: lefts[k] for k, w in enumerate(rover.WHEELS)}, table, r, g)
+                             {w: lefts[k] for k, w in enumerate(rover.WHEELS)},
+                             {w: lefts[wheels + k] for k, w in enumerate(rover.WHEELS)},
+                             table, r, g)
         column = path[:, -1]
     return column, profiles

@@ -42,7 +42,7 @@ STEP = 1e-3  # s: communication step. Engines that pass the forces one step late
 # libcosim, ecos) need it: at 2 ms the delayed soil damper makes the bounce grow there.
 BLOCK = 100  # steps per call of the mapped system step
 RECORD = ("slip", "sinkage", "normal_force", "drawbar_pull", "torque", "motor_torque",
-          "wheel_speed", "rut_left")
+          "wheel_speed", "rut_left", "rut_pressure_left")
 """Per-wheel quantities recorded at every step."""
 CHASSIS_RECORD = ("position", "speed", "heave", "pitch", "effective_slope",
                   "effective_towing_force")
@@ -86,14 +86,14 @@ def _wheel_soils(xs: list, p: dict, pw: ca.MX, pg: ca.MX, met: ca.MX) -> ca.MX:
     """The four wheels' terrain parameter vectors side by side (len(NAMES) x 4): the wheels'
     parameters ``pw`` with the soil the map (values ``pg``, ground.NAMES order) has at each
     wheel's position, as each WheelTerrain with soil_from_inputs takes it from its Terrain, and
-    the rut it meets from the record (``met``: per wheel the number of the first of ruts.NEAR cells
-    and their ruts), as its input rut_met."""
+    the rut it meets from the record (``met``: per wheel the number of the first of ruts.NEAR cells,
+    their ruts and their pressures), as its inputs rut_met and rut_pressure_met."""
     g = {name: pg[k] for k, name in enumerate(ground.NAMES)}
     columns = []
     for j, w in enumerate(rover.WHEELS):
         where = rover.wheel_position(p, xs[0], w)
         soil = dict(zip(ground.SOIL_NAMES, ground.soil_at(where, g), strict=True))
-        rut = ground.met_in_table(where, g, met[j * (ruts.NEAR + 1):(j + 1) * (ruts.NEAR + 1)])
+        rut = ground.met_in_table(where, g, met[j * ruts.TABLE:(j + 1) * ruts.TABLE])
         column = ca.vertcat(*(soil.get(name, pw[k]) for k, name in enumerate(NAMES)))
         column = functions.with_grouser_phase(column, rover.grouser_phase(p, w))
         columns.append(functions.with_rut_met(column, rut))
@@ -130,7 +130,8 @@ def _system_step() -> ca.Function:
     u.update({f"{w}.{n}": cmd[k] for k, (w, n) in enumerate(
         (w, n) for w in rover.WHEELS for n in rover.WHEEL_COMMANDS)})
     rec = [(unified, z, out["normal_force"], out["drawbar_pull"], out["torque"],
-            rover.motor_torque(xs, u, p, w), s[f"{w}.wheel_speed"], out["rut_left"])
+            rover.motor_torque(xs, u, p, w), s[f"{w}.wheel_speed"], out["rut_left"],
+            out["rut_pressure_left"])
            for w, (unified, z, out) in zip(rover.WHEELS, wheels, strict=True)]
     nxt, _ = rover.step(tuple(xs), u, p, h)
     new_angles = [angles[k] + h * s[f"{w}.wheel_speed"] for k, w in enumerate(rover.WHEELS)]
@@ -264,7 +265,8 @@ def simulate(soil: Soil, rover_values: Mapping[str, float], stop: float, step: f
         wheels, chassis = named_record(rec)
         try:
             ruts.remember(profiles, chassis["position"],
-                          {w: wheels[w]["rut_left"] for w in rover.WHEELS}, met, p, g)
+                          {w: wheels[w]["rut_left"] for w in rover.WHEELS},
+                          {w: wheels[w]["rut_pressure_left"] for w in rover.WHEELS}, met, p, g)
         except WheelTerrainError as err:  # the run ends here, with the reason
             left = f"at t = {t + block * step:.3f} s {err}"
             break
@@ -323,7 +325,7 @@ def record_units() -> dict[str, str]:
     """Units of the series a rover run writes (CSV headers)."""
     per_wheel = {"slip": "1", "sinkage": "m", "normal_force": "N", "drawbar_pull": "N",
                  "torque": "N.m", "motor_torque": "N.m", "wheel_speed": "rad/s",
-                 "rut_left": "m"}
+                 "rut_left": "m", "rut_pressure_left": "Pa"}
     units = {"time": "s", "position": "m", "speed": "m/s", "heave": "m", "pitch": "rad",
              "slope": "rad", "towing_force": "N"}
     units.update({f"{w}.{k}": u for w in rover.WHEELS for k, u in per_wheel.items()})

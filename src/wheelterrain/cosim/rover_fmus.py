@@ -6,13 +6,15 @@ Coupling per communication step h (fixed), Gauss-Seidel on the algebraic terrain
 single-wheel master couples the rig (:mod:`wheelterrain.cosim.master`):
 
 1. each ``<wheel>.position`` of the chassis at t is set as its track's query point (the leading
-   wheel q1, the one behind q2); the track's ``q*.rut_met`` (and with a soil map its
+   wheel q1, the one behind q2); the track's ``q*.rut_met`` and ``q*.rut_pressure_met``
+   (and with a soil map its
    ``q*.ground.*``, the wheels then taking their soil from them: soil_from_inputs) at t are
    set as the wheel's inputs, with the chassis' per-wheel outputs at t (``<wheel>.sinkage``,
    ``.sinkage_rate``, ``.wheel_speed``, ``.carriage_speed``);
 2. each WheelTerrain's forces at t (normal_force, drawbar_pull, torque) are set as the
    chassis' ``<wheel>.*`` inputs, with the scenario's slope and towing force at t, and its
-   ``rut_left`` as its track's ``q*.rut_left``;
+   ``rut_left`` and ``rut_pressure_left`` as its track's ``q*.rut_left`` and
+   ``q*.rut_pressure_left``;
 3. all FMUs step t -> t + h (each track records the ruts left at t).
 
 The in-process rover (:mod:`wheelterrain.cosim.rover`) couples the same Functions the same
@@ -54,7 +56,7 @@ from wheelterrain.errors import CosimulationError, UsageError
 from wheelterrain.files import replacing
 from wheelterrain.fmu import functions
 from wheelterrain.fmu.instance import Instance
-from wheelterrain.fmu.variables import GROUND, QUERY_POINTS
+from wheelterrain.fmu.variables import GROUND, QUERY_POINTS, RUT_LEFT, RUT_MET
 from wheelterrain.model import rover
 from wheelterrain.parameters import GROUND_TABLE, ROVER_TABLE, TABLE, ParameterSet
 
@@ -85,8 +87,9 @@ def connections(with_map: bool = False) -> list[tuple[str, str, str, str]]:
         track, q = query_of(w)
         out += [(CHASSIS, f"{w}.{n}", w, n) for n in TO_TERRAIN]
         out += [(w, n, CHASSIS, f"{w}.{n}") for n in TO_CHASSIS]
-        out += [(CHASSIS, f"{w}.position", track, f"{q}.position"),
-                (w, "rut_left", track, f"{q}.rut_left"), (track, f"{q}.rut_met", w, "rut_met")]
+        out += [(CHASSIS, f"{w}.position", track, f"{q}.position")]
+        out += [(w, n, track, f"{q}.{n}") for n in RUT_LEFT]
+        out += [(track, f"{q}.{n}", w, n) for n in RUT_MET]
         if with_map:
             out += [(track, f"{q}.{n}", w, n) for n in GROUND]
     return out
@@ -155,21 +158,21 @@ class RoverFMUs:
         self._ch_in = ch.refs(f"{w}.{n}" for w in rover.WHEELS for n in TO_CHASSIS)
         self._ch_record = ch.refs([*(f"{w}.{n}" for w in rover.WHEELS for n in
                                      ("motor_torque", "wheel_speed")), *CHASSIS_RECORD])
-        # per wheel, one call: rut_met (and the map's soil), then TO_TERRAIN
-        self._ter_in = {w: self.instances[w].refs(["rut_met", *(GROUND if self.with_map
-                                                                 else []), *TO_TERRAIN])
+        # per wheel, one call: the rut met (and the map's soil), then TO_TERRAIN
+        self._ter_in = {w: self.instances[w].refs([*RUT_MET, *(GROUND if self.with_map
+                                                                else []), *TO_TERRAIN])
                         for w in rover.WHEELS}
-        # per track, both query points at once: positions in; rut_met (and the map's soil)
-        # out; rut_left in; and each wheel's rut_met (and soil) inputs
+        # per track, both query points at once: positions in; the rut met (and the map's
+        # soil) out; the rut left in; and each wheel's rut met (and soil) inputs
         self._tracks = {}
         for track in rover.TRACKS:
             g = self.instances[track_component(track)]
             outs = [f"{q}.{n}" for q in QUERY_POINTS
-                    for n in ("rut_met", *(GROUND if self.with_map else ()))]
+                    for n in (*RUT_MET, *(GROUND if self.with_map else ()))]
             self._tracks[track] = (g.refs(f"{q}.position" for q in QUERY_POINTS), g.refs(outs),
-                                   g.refs(f"{q}.rut_left" for q in QUERY_POINTS))
+                                   g.refs(f"{q}.{n}" for q in QUERY_POINTS for n in RUT_LEFT))
         self._ter_out = {w: self.instances[w].refs((*TO_CHASSIS, "slip", "contact_sinkage",
-                                                    "rut_left"))
+                                                    *RUT_LEFT))
                          for w in rover.WHEELS}
 
     def exchange(self) -> list[float]:
@@ -195,16 +198,17 @@ class RoverFMUs:
             per[w] = y
         for track, pair in rover.TRACKS.items():  # the ruts left, recorded at the step
             g = self.instances[track_component(track)].fmu
-            g.setReal(self._tracks[track][2], [per[w][-1] for w in pair])
+            g.setReal(self._tracks[track][2],
+                      [v for w in pair for v in per[w][-len(RUT_LEFT):]])
         ch.setReal(self._ch_in, forces)
         rec = ch.getReal(self._ch_record)
         row = []
         for k, w in enumerate(rover.WHEELS):
-            normal, pull, torque, slip, sinkage, rut = per[w]
+            normal, pull, torque, slip, sinkage, rut, pressure = per[w]
             motor, omega = rec[2 * k], rec[2 * k + 1]
             values = {"slip": slip, "sinkage": sinkage, "normal_force": normal,
                       "drawbar_pull": pull, "torque": torque, "motor_torque": motor,
-                      "wheel_speed": omega, "rut_left": rut}
+                      "wheel_speed": omega, "rut_left": rut, "rut_pressure_left": pressure}
             row += [values[r] for r in RECORD]
         return row + rec[2 * len(rover.WHEELS):]
 
@@ -262,7 +266,8 @@ def simulate(fmu_dir: Path, soil: Soil, values: Mapping[str, float], stop: float
 
 # what an SSP engine records, per wheel (component, variable) for each of RECORD
 _SSP_RECORD = {"slip": "slip", "sinkage": "contact_sinkage", "normal_force": "normal_force",
-               "drawbar_pull": "drawbar_pull", "torque": "torque", "rut_left": "rut_left"}
+               "drawbar_pull": "drawbar_pull", "torque": "torque", "rut_left": "rut_left",
+               "rut_pressure_left": "rut_pressure_left"}
 _CHASSIS_OF_WHEEL = {"motor_torque": "motor_torque", "wheel_speed": "wheel_speed"}
 
 
@@ -450,13 +455,13 @@ def system_description(scenario: str, soil: Soil, values: Mapping[str, float],
         own["ripple.phase"] = ssp.binding(PHASE_ROW, terrain_values(
             soil.base, with_map, rover.grouser_phase(rover_p, w))["ripple.phase"])
         ssp.component(elements, w, "resources/WheelTerrain.fmu",
-                       (*TO_TERRAIN, "rut_met", *(GROUND if with_map else ())),
+                       (*TO_TERRAIN, *RUT_MET, *(GROUND if with_map else ())),
                        (*TO_CHASSIS, *(v for v in recorded[w] if v not in TO_CHASSIS)), own,
                        scenario)
     for track in rover.TRACKS:
-        ins = [f"{q}.{n}" for q in QUERY_POINTS for n in ("position", "rut_left")]
+        ins = [f"{q}.{n}" for q in QUERY_POINTS for n in ("position", *RUT_LEFT)]
         outs = [f"{q}.{n}" for q in QUERY_POINTS
-                for n in ("rut_met", *(GROUND if with_map else ()))]
+                for n in (*RUT_MET, *(GROUND if with_map else ()))]
         ssp.component(elements, track_component(track), "resources/Terrain.fmu", ins, outs,
                        terrain_map, scenario)
     conns = ET.SubElement(system, q("ssd", "Connections"))

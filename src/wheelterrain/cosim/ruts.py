@@ -24,34 +24,43 @@ replayed between blocks (:func:`replay`), exactly as Terrain.fmu keeps it step b
 where a wheel moves less than NEAR - 3 cells a block (9 cells of 5 mm in 0.1 s: 0.45 m/s, 15
 times the default rim speed; a rover sliding downhill on braked or locked wheels moves
 faster than its rims)."""
-N_MET = len(rover.WHEELS) * (NEAR + 1)
+TABLE = 2 * NEAR + 1
+"""A wheel's table in a block's ``met`` input (:func:`met_table`)."""
+N_MET = len(rover.WHEELS) * TABLE
 
 
 def met_table(profiles: dict, positions: dict[str, float], g: Mapping[str, float]) -> list:
-    """The ``met`` input of a block (N_MET): per wheel, the number of the cell before the
-    first of the two it meets between at the block's start (ground.met_cells), then the
-    profile's ruts of NEAR cells from there."""
+    """The ``met`` input of a block (N_MET): per wheel (TABLE values), the number of the cell
+    before the first of the two it meets between at the block's start (ground.met_cells),
+    then the profile's ruts of NEAR cells from there, then those ruts' pressures
+    (ground.met_in_table reads it)."""
     out = []
     for w in rover.WHEELS:
         first = ground.met_cells(positions[w], g)[0] - 1
-        out += [float(first), *(ground.rut_in_cell(profiles[rover.TRACK_OF[w]], first + k)
-                                for k in range(NEAR))]
+        cells = [ground.rut_in_cell(profiles[rover.TRACK_OF[w]], first + k)
+                 for k in range(NEAR)]
+        out += [float(first), *(rut for rut, _ in cells), *(pressure for _, pressure in cells)]
     return out
 
 
-def replay(profiles: dict, wheel_positions: dict, ruts: dict, g: Mapping[str, float]) -> None:
+def replay(profiles: dict, wheel_positions: dict, ruts: dict, pressures: dict,
+           g: Mapping[str, float]) -> None:
     """Terrain.fmu's rut profile of each track after a block: every step, each wheel of the track
-    (the leading one first) left its rut at its position. Steps in one cell leave their
-    deepest rut once (ground.lay_rut); within a block the leading and the following
-    wheel never write the same slot (the profile is longer than the wheelbase)."""
+    (the leading one first) left its rut (``ruts``) pressed to its pressure (``pressures``) at
+    its position. Steps in one cell leave their deepest rut once, with the largest pressure
+    among the deepest (ground.lay_rut, ground.cell_after); within a block the leading and the
+    following wheel never write the same slot (the profile is longer than the wheelbase)."""
     for track, pair in rover.TRACKS.items():
         x = profiles[track]
         for w in pair:
             numbers = ground.cell_number(wheel_positions[w], g)
             starts = np.concatenate(([0], np.flatnonzero(np.diff(numbers)) + 1))
-            deepest = np.maximum.reduceat(ruts[w], starts)  # per run of steps in one cell
-            for a, rut in zip(starts, deepest, strict=True):
-                x = ground.lay_rut(x, float(wheel_positions[w][a]), float(rut), g)
+            ends = np.append(starts[1:], len(numbers))
+            for a, e in zip(starts, ends, strict=True):  # per run of steps in one cell
+                rut = np.max(ruts[w][a:e])
+                pressure = np.max(pressures[w][a:e][ruts[w][a:e] == rut])
+                x = ground.lay_rut(x, float(wheel_positions[w][a]), float(rut),
+                                   float(pressure), g)
         profiles[track] = x
 
 
@@ -74,35 +83,39 @@ def check_profile(p: Mapping[str, float], g: Mapping[str, float]) -> None:
             f"{span / ground.RUT_CELLS:.3g} m, or rover.wheelbase shorter")
 
 
-def remember(profiles: dict, position: np.ndarray, left: Mapping[str, np.ndarray], met: list,
-             p: Mapping[str, float], g: Mapping[str, float]) -> None:
+def remember(profiles: dict, position: np.ndarray, left: Mapping[str, np.ndarray],
+             pressures: Mapping[str, np.ndarray], met: list, p: Mapping[str, float],
+             g: Mapping[str, float]) -> None:
     """After a block of steps: the ruts its steps left (``left``: per wheel, the rut left at
-    each step; ``position``: the chassis' at each step), into the tracks' profiles
-    (:func:`replay`); refused where a wheel met a cell outside the block's NEAR (it moved
-    NEAR - 3 cells or more)."""
+    each step; ``pressures``: the pressure it was pressed to; ``position``: the chassis' at
+    each step), into the tracks' profiles (:func:`replay`); refused where a wheel met a cell
+    outside the block's NEAR (it moved NEAR - 3 cells or more)."""
     positions = {w: rover.wheel_position(p, position, w) for w in rover.WHEELS}
     for j, w in enumerate(rover.WHEELS):
         numbers = ground.met_cells(positions[w], g)[0]  # and the cell after each
-        first = met[j * (NEAR + 1)]
+        first = met[j * TABLE]
         if np.any(numbers < first) or np.any(numbers + 1 > first + NEAR - 1):
             raise WheelTerrainError(
                 f"{w} moved more than {NEAR - 3} cells of the rut profile (terrain.cell = "
                 f"{g['terrain.cell']:g} m) in one block of {len(position)} steps: make "
                 "terrain.cell larger or the block shorter")
-    replay(profiles, positions, left, g)
+    replay(profiles, positions, left, pressures, g)
 
 
 def steady_ruts(balance: dict, p: Mapping[str, float], x, g: Mapping[str, float]) -> dict:
     """The tracks' rut profiles of a rover in steady motion (``balance``) at the state ``x``:
-    the track behind each leading wheel holds its steady rut, back past the wheel behind."""
+    the track behind each leading wheel holds its steady rut (and its pressure), back past the
+    wheel behind."""
     profiles = {}
     position = x[rover.STATES.index("position")]
     for track, (front, rear) in rover.TRACKS.items():
         rut = balance["wheels"][front]["rut_left"]
+        pressure = balance["wheels"][front]["rut_pressure_left"]
         profile = ground.no_ruts()
         first = ground.cell_number(rover.wheel_position(p, position, rear), g) - 2
         last = ground.cell_number(rover.wheel_position(p, position, front), g)
         for number in range(first, last + 1):  # at each cell's middle: its own number
-            profile = ground.lay_rut(profile, (number + 0.5) * g["terrain.cell"], rut, g)
+            profile = ground.lay_rut(profile, (number + 0.5) * g["terrain.cell"], rut,
+                                     pressure, g)
         profiles[track] = profile
     return profiles

@@ -47,7 +47,7 @@ BASE_UNITS: dict[str, dict[str, int]] = {
     "s": {"s": 1},
     "N/s": {"kg": 1, "m": 1, "s": -3},
 }
-DISPLAY_UNITS = {"rad": {"deg": 57.29577951308232}, "m": {"mm": 1000.0}}
+DISPLAY_UNITS = {"rad": {"deg": 57.29577951308232}, "m": {"mm": 1000.0}, "Pa": {"kPa": 1e-3}}
 MODELICA_SI = {"Length", "Velocity", "Angle", "AngularVelocity", "Acceleration",
                "AngularAcceleration", "Mass", "MomentOfInertia",
                "Force", "Torque", "Pressure", "TranslationalDampingConstant",

@@ -191,11 +191,16 @@ def slip_radius(p):
     return reference_radius(soil.Params(p))
 
 
-def with_rut_met(p, rut_met):
-    """The parameter vector ``p`` (table order) with soil.rut_depth the deeper of its own and
-    the rut a terrain with memory says the wheel meets (WheelTerrain's input rut_met)."""
-    k = INDEX["soil.rut_depth"]
-    return ca.vertcat(p[:k], ca.fmax(p[k], rut_met), p[k + 1:])
+def with_rut_met(p, met):
+    """The parameter vector ``p`` (table order) with the rut a terrain with memory says the
+    wheel meets (``met``: WheelTerrain's inputs rut_met and rut_pressure_met) where it is
+    deeper than its own: soil.rut_depth the deeper of the two, soil.rut_pressure that rut's."""
+    rut_met, pressure_met = met
+    k, j = INDEX["soil.rut_depth"], INDEX["soil.rut_pressure"]
+    assert j == k + 1, "soil.rut_pressure follows soil.rut_depth in the table"
+    deeper = rut_met > p[k]
+    return ca.vertcat(p[:k], ca.fmax(p[k], rut_met), ca.if_else(deeper, pressure_met, p[j]),
+                      p[j + 1:])
 
 
 def mirrored_grousers(p, angle, sign):
@@ -232,7 +237,8 @@ def terrain_functions(smooth: float | None = None
     named = {name: u[k] for k, name in enumerate(TERRAIN_INPUTS)}
     sinkage, rate, omega, speed, load = (named[n] for n in (
         "sinkage", "sinkage_rate", "wheel_speed", "carriage_speed", "load"))
-    p = with_rut_met(given, named["rut_met"])  # the rut met: the parameter's or the input's
+    # the rut met: the parameter's or the input's
+    p = with_rut_met(given, (named["rut_met"], named["rut_pressure_met"]))
     radius = slip_radius(p)
     # rolling backward (both speeds <= 0): the mirror image of rolling forward (MIRRORED)
     sign = ca.if_else(backward(omega, speed, radius), -1, 1)

@@ -116,6 +116,12 @@ _SLIP_ANGLE = Var("slip_angle", "input", "Slip angle between the wheel's heading
                   "the speeds along the heading. 0: a wheel driven straight (no lateral "
                   "force)", "rad", "Angle", "deg", start=0.0, min=-SLIP_ANGLE_LIMIT,
                   max=SLIP_ANGLE_LIMIT)
+_RUT_PRESSURE_MET = Var(
+    "rut_pressure_met", "input", "Pressure the rut the wheel meets (rut_met) carried when it "
+    "was made, recorded with it by a terrain with memory (a Terrain.fmu query point's "
+    "rut_pressure_met): where rut_met is deeper than soil.rut_depth, it replaces "
+    "soil.rut_pressure. 0: not known (the rut read from its depth with the wheel's own law)",
+    "Pa", "Pressure", "kPa", start=0.0, min=0.0, max=1.0e7)
 _YAW_RATE = Var("yaw_rate", "input", "Yaw rate of the wheel about the vertical through its "
                 "centre, positive counter-clockwise seen from above; with carriage_speed, the "
                 "turn slip yaw_rate/carriage_speed (rad/m, the curvature of the wheel's path), "
@@ -171,7 +177,7 @@ TERRAIN_IO: tuple[Var, ...] = (
             "rebound, never shallower than the rut it met (soil.rut_depth); 0 with "
             "model.soil_memory = 0. What a terrain with memory records along the track",
             "m", "Length", "mm"),
-    ], (*_TERRAIN_INPUTS, *GROUND)),
+    ], (*_TERRAIN_INPUTS, *GROUND, "rut_pressure_met")),
     Var("wheel_angle", "output", "Wheel rotation angle, integrated from wheel_speed (phase of "
         "the grouser ripple)", "rad", "Angle", "deg", depends_on=(), integrated=True,
         nominal=1.0),
@@ -199,7 +205,7 @@ TERRAIN_IO: tuple[Var, ...] = (
         Var("aligning_moment", "output", "Moment of the lateral force about the vertical "
             "through the wheel's centre, positive counter-clockwise seen from above (the "
             "self-aligning moment); 0 at slip_angle and yaw_rate 0", "N.m", "Torque"),
-    ], (*_TERRAIN_INPUTS, *GROUND, "slip_angle", "yaw_rate")),
+    ], (*_TERRAIN_INPUTS, *GROUND, "slip_angle", "yaw_rate", "rut_pressure_met")),
     # a wheel that yaws: after the slip angle's variables, for the same reason
     _YAW_RATE,
     *_outputs([
@@ -213,8 +219,21 @@ TERRAIN_IO: tuple[Var, ...] = (
             "(a lateral force to the left acting below the centre gives a positive moment): "
             "each element's force times its depth below the centre (grouser-period mean); 0 "
             "at slip_angle and yaw_rate 0", "N.m", "Torque"),
-    ], (*_TERRAIN_INPUTS, *GROUND, "slip_angle", "yaw_rate")),
+    ], (*_TERRAIN_INPUTS, *GROUND, "slip_angle", "yaw_rate", "rut_pressure_met")),
+    # the pressure a rut carried: after everything else, for the same reason
+    _RUT_PRESSURE_MET,
+    *_outputs([
+        Var("rut_pressure_left", "output", "Pressure the wheel pressed the soil to at the "
+            "deepest point of the rut it leaves (rut_left): the yield pressure that rut keeps, "
+            "what a terrain with memory records with it (the next wheel's soil.rut_pressure); "
+            "where the wheel only reloaded the rut it met, that rut's own (0 where not "
+            "known); 0 with model.soil_memory = 0", "Pa", "Pressure", "kPa"),
+    ], (*_TERRAIN_INPUTS, *GROUND, "slip_angle", "yaw_rate", "rut_pressure_met")),
 )
+RUT_LEFT = ("rut_left", "rut_pressure_left")
+"""WheelTerrain's outputs a terrain with memory records (a Terrain query point's inputs)."""
+RUT_MET = ("rut_met", "rut_pressure_met")
+"""WheelTerrain's inputs a terrain with memory serves (a Terrain query point's outputs)."""
 
 RIG_IO: tuple[Var, ...] = (
     # start: the default rig.load, so that unconnected the soil holds the wheel still (with
@@ -357,6 +376,10 @@ GROUND_IO: tuple[Var, ...] = tuple(v for q in QUERY_POINTS for v in (
         "rut_left): recorded at its position at each step (co-simulation; model exchange "
         "records none), the deepest in each terrain.cell", "m", "Length", "mm", start=0.0,
         min=0.0, max=1.0),
+    Var(f"{q}.rut_pressure_left", "input", f"The pressure the wheel at {q} pressed its rut "
+        "to (its WheelTerrain's rut_pressure_left): recorded with the rut (the deepest rut's "
+        "in each cell; 0: not known)", "Pa", "Pressure", "kPa", start=0.0, min=0.0,
+        max=1.0e7),
     *(Var(f"{q}.{ground_name(p.name)}", "output", f"Soil of the map at query point {q} (to "
           f"its WheelTerrain's input ground.*, with soil_from_inputs): {p.description}",
           p.unit, p.quantity, p.display_unit, depends_on=(f"{q}.position",))
@@ -365,7 +388,12 @@ GROUND_IO: tuple[Var, ...] = tuple(v for q in QUERY_POINTS for v in (
         "input rut_met): the deepest rut left in the cell terrain.lookahead ahead of its "
         "position (its rut profile, linear between cells' middles), 0 where no wheel has left "
         "one (or the profile has moved on)", "m", "Length",
-        "mm", depends_on=(f"{q}.position",))))
+        "mm", depends_on=(f"{q}.position",)),
+    Var(f"{q}.rut_pressure_met", "output", f"The pressure the rut the wheel at {q} meets "
+        "(rut_met) carried (to its WheelTerrain's input rut_pressure_met): linear between "
+        "cells' middles as the rut; 0 where no wheel has left one, or where either cell's rut "
+        "has no known pressure", "Pa", "Pressure", "kPa",
+        depends_on=(f"{q}.position",))))
 
 
 def _names(rows: tuple[Var, ...], causality: str, computed: bool = False) -> tuple[str, ...]:
@@ -373,7 +401,7 @@ def _names(rows: tuple[Var, ...], causality: str, computed: bool = False) -> tup
                  if v.causality == causality and not (computed and v.integrated))
 
 
-TERRAIN_INPUTS = (*_TERRAIN_INPUTS, "slip_angle", "yaw_rate")
+TERRAIN_INPUTS = (*_TERRAIN_INPUTS, "slip_angle", "yaw_rate", "rut_pressure_met")
 """The order of the terrain Functions' ``u`` (terrain_dynamic, terrain_quasi_static). The
 ground.* inputs (:data:`GROUND`) are not in it: with soil_from_inputs they replace the soil's
 entries of the Functions' ``p`` (:func:`soil_from_ground`)."""

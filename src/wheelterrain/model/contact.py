@@ -135,7 +135,7 @@ CONTACT_OUTPUTS = (
     "normal_force", "drawbar_pull", "torque", "gross_thrust", "compaction_resistance",
     "entry_angle", "exit_angle", "max_stress_angle", "contact_length", "mean_pressure",
     "sinkage_exponent", "ripple_amplitude", "normal_force_static", "bulldozing_resistance",
-    "rut_left",
+    "rut_left", "rut_pressure_left",
 )
 MEMORY_OUTPUTS = ("yield_sinkage", "plastic_rate")
 """``contact_memory``'s outputs beyond CONTACT_OUTPUTS: z_y = max(z_p, z) and d(z_p)/dt."""
@@ -307,18 +307,27 @@ def exit_angle(theta_f: ca.SX, P: Params) -> ca.SX:
     return -2 * ca.asin(root * ca.sin(theta_f / 2))
 
 
-def rut_left(theta_f: ca.SX, ground: Rut, P: Params) -> ca.SX:
-    """Depth of the rut a wheel leaves (its free surface, from the original surface) at entry
-    angle ``theta_f`` below ``ground``'s surface: the deepest point it pressed the soil to,
-    surface + R_c*(1 - cos(theta_f)), less the elastic rebound p/K_u there; never shallower
-    than the rut it met (a wheel that only reloaded the soil elastically leaves it as it was).
-    0 with ``model.soil_memory`` = 0 (elastic soil closes behind the wheel)."""
+def rut_left(theta_f: ca.SX, ground: Rut, P: Params) -> tuple[ca.SX, ca.SX]:
+    """The rut a wheel leaves at entry angle ``theta_f`` below ``ground``'s surface:
+    ``(depth, pressure)``.
+
+    Its depth (its free surface, from the original surface): the deepest point it pressed the
+    soil to, surface + R_c*(1 - cos(theta_f)), less the elastic rebound p/K_u there; never
+    shallower than the rut it met (a wheel that only reloaded the soil elastically leaves it
+    as it was). Its pressure: the p it pressed the soil to there (the yield pressure the rut
+    keeps, ``soil.rut_pressure`` for the next wheel); where it only reloaded the rut it met,
+    that rut's own (``soil.rut_pressure``, 0 where not known). Both 0 with
+    ``model.soil_memory`` = 0 (elastic soil closes behind the wheel)."""
     Rc, _, _ = radii(P)
     surface = rut_surface(P)
     depth = surface + 2 * Rc * ca.sin(theta_f / 2) ** 2
-    rebound = ground.law(ca.fmax(depth, 1e-300)) / P["soil.unloading_stiffness"]
+    carried = ground.plastic(ca.fmax(depth, 1e-300))
+    rebound = carried / P["soil.unloading_stiffness"]
     left = ca.if_else(depth > 0, ca.fmax(surface, depth - rebound), surface)
-    return ca.if_else(P["model.soil_memory"] == 1, left, 0)
+    pressed = ca.logic_and(depth > 0, depth - rebound > surface)
+    pressure = ca.if_else(pressed, carried, ca.if_else(ground.on, P["soil.rut_pressure"], 0))
+    memory = P["model.soil_memory"] == 1
+    return ca.if_else(memory, left, 0), ca.if_else(memory, pressure, 0)
 
 
 def _max_stress_ratio(slip: ca.SX, P: Params) -> ca.SX:
@@ -445,7 +454,8 @@ def _arc_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, nodes:
         "ripple_amplitude": amplitude if ripple else ca.SX(0),
         "normal_force_static": normal_static,
         "bulldozing_resistance": dozing,
-        "rut_left": rut_left(theta_f, ground, P),
+        **dict(zip(("rut_left", "rut_pressure_left"), rut_left(theta_f, ground, P),
+                   strict=True)),
     }
 
 
@@ -622,9 +632,10 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, ripp
     ground = rut(slip, P)  # in a rut: the elastic-plastic soil below its surface
     depth = ground.surface + z
     # the plastic work of the rut's deepening, b*int_y^depth p dz (the elastic part returns)
-    deepest = ca.fmax(depth, ground.yield_depth)
-    deepening = b * (ground.law(deepest) * deepest
-                     - ground.law(ground.yield_depth) * ground.yield_depth) / (n + 1)
+    # (in a rut that keeps its pressure, along the law from the depth that carries it)
+    deepest = ground.work_depth(ca.fmax(depth, ground.yield_depth))
+    yielded = ground.work_depth(ground.yield_depth)
+    deepening = b * (ground.law(deepest) * deepest - ground.law(yielded) * yielded) / (n + 1)
     pressure = ca.if_else(ground.on, ground.pressure(z), pressure)
     compaction = ca.if_else(ground.on, deepening, compaction)
     normal_static = b * length * pressure
@@ -659,7 +670,8 @@ def _patch_form(theta_f: ca.SX, slip: ca.SX, wheel_angle: ca.SX, P: Params, ripp
         "ripple_amplitude": amplitude if ripple else ca.SX(0),
         "normal_force_static": normal_static,
         "bulldozing_resistance": dozing,
-        "rut_left": rut_left(theta_f, ground, P),
+        **dict(zip(("rut_left", "rut_pressure_left"), rut_left(theta_f, ground, P),
+                   strict=True)),
     }
 
 

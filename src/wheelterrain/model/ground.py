@@ -9,14 +9,18 @@ then the rear in the rover's ``soft-patch`` scenario.
 
 The rut profile (the soil's memory along a track): a Terrain answers the query points of one
 track, QUERY (the leading wheel, then the one behind it). Each step it lays, at each query
-point's position, the rut that wheel leaves (WheelTerrain's ``rut_left``): the track is cut into
-cells of ``terrain.cell``, each keeping the deepest rut left in it. A wheel meets the rut
-``terrain.lookahead`` ahead of its axle (the front of its contact; linear between the middles
-of the two cells around that point, :func:`met`), WheelTerrain's input
-``rut_met`` (its contact takes the deeper of it and its soil's ``soil.rut_depth``), so the
-wheel behind runs in the rut of the wheel ahead, the query-point pattern of vehicle-terrain
-co-simulation. The rut profile is a ring of RUT_CELLS cells (the track's last RUT_CELLS * cell
-metres), each holding the rut and the number of the cell it belongs to (:func:`cell_after`).
+point's position, the rut that wheel leaves (WheelTerrain's ``rut_left``) with the pressure
+that wheel pressed it to (``rut_pressure_left``): the track is cut into cells of
+``terrain.cell``, each keeping the deepest rut left in it and that rut's pressure. A wheel
+meets the rut ``terrain.lookahead`` ahead of its axle (the front of its contact; linear between
+the middles of the two cells around that point, :func:`met`), WheelTerrain's inputs
+``rut_met`` and ``rut_pressure_met`` (its contact takes the deeper of it and its soil's
+``soil.rut_depth``, with that rut's pressure), so the wheel behind runs in the rut of the wheel
+ahead, the query-point pattern of vehicle-terrain co-simulation, and meets it as carrying the
+pressure it did carry, whatever its own slip (the Soil Contact Model's node keeps its yield
+pressure so). The rut profile is a ring of RUT_CELLS cells (the track's last RUT_CELLS * cell
+metres), each holding the rut, the number of the cell it belongs to and the rut's pressure
+(:func:`cell_after`).
 
 Written once as plain arithmetic on numbers or CasADi symbols: Terrain.fmu (both flavours, a
 state model whose state is the rut profile) and the in-process rover
@@ -49,9 +53,11 @@ EMPTY = -1.0e15
 """The cell number of a cell no wheel has left a rut in yet (no cell has this number:
 |position| <= 1e6 m, terrain.cell >= 1 mm)."""
 STATES: tuple[str, ...] = (*(f"rut[{k}]" for k in range(RUT_CELLS)),
-                           *(f"cell[{k}]" for k in range(RUT_CELLS)))
-"""The rut profile: the rut of each ring slot [m], then the number of the cell it holds."""
-INPUTS = tuple(f"{q}.{n}" for q in QUERY for n in ("position", "rut_left"))
+                           *(f"cell[{k}]" for k in range(RUT_CELLS)),
+                           *(f"pressure[{k}]" for k in range(RUT_CELLS)))
+"""The rut profile: the rut of each ring slot [m], the number of the cell it holds, the
+pressure the rut carried [Pa] (0: not known, read from its depth)."""
+INPUTS = tuple(f"{q}.{n}" for q in QUERY for n in ("position", "rut_left", "rut_pressure_left"))
 
 
 def in_patch(position, p):
@@ -103,7 +109,12 @@ def defaults() -> dict[str, float]:
 
 def no_ruts() -> list[float]:
     """The rut profile before any wheel passed: no rut, every slot empty."""
-    return [0.0] * RUT_CELLS + [EMPTY] * RUT_CELLS
+    return [0.0] * RUT_CELLS + [EMPTY] * RUT_CELLS + [0.0] * RUT_CELLS
+
+
+def _split(x):
+    """(ruts, cells, pressures) of a rut profile ``x`` (:data:`STATES`)."""
+    return x[:RUT_CELLS], x[RUT_CELLS:2 * RUT_CELLS], x[2 * RUT_CELLS:]
 
 
 def cell_number(position, p):
@@ -123,27 +134,37 @@ def _slot(number):
     return number - RUT_CELLS * _floor(number / RUT_CELLS)
 
 
-def cell_after(rut, cell, number, left):
-    """One slot of the rut profile after a wheel left the rut ``left`` [m] in cell ``number``, the
-    slot holding ``rut`` for cell ``cell``: the deeper of the two where the slot holds that
-    cell, else (a cell the ring comes round to again) the new rut alone. ``(rut, cell)``."""
-    if not any(isinstance(v, (ca.SX, ca.MX)) for v in (rut, cell, number, left)):
-        rut, cell, number, left = (float(v) for v in (rut, cell, number, left))
-        return (max(left, rut) if cell == number else left), number
-    return ca.if_else(cell == number, ca.fmax(left, rut), left), number
+def cell_after(rut, cell, pressure, number, left, left_pressure):
+    """One slot of the rut profile after a wheel left the rut ``left`` [m] pressed to
+    ``left_pressure`` [Pa] in cell ``number``, the slot holding ``rut`` (pressed to
+    ``pressure``) for cell ``cell``: the deeper of the two with its pressure where the slot
+    holds that cell (equally deep: the larger pressure), else (a cell the ring comes round to
+    again) the new rut alone. ``(rut, cell, pressure)``."""
+    values = (rut, cell, pressure, number, left, left_pressure)
+    if not any(isinstance(v, (ca.SX, ca.MX)) for v in values):
+        rut, cell, pressure, number, left, left_pressure = (float(v) for v in values)
+        if cell != number or left > rut:
+            return left, number, left_pressure
+        return rut, number, (max(pressure, left_pressure) if left == rut else pressure)
+    same = cell == number
+    kept = ca.if_else(left < rut, pressure, ca.fmax(pressure, left_pressure))
+    return (ca.if_else(same, ca.fmax(left, rut), left), number,
+            ca.if_else(ca.logic_and(same, left <= rut), kept, left_pressure))
 
 
 def rut_in_cell(x, number):
-    """The rut the rut profile ``x`` (:data:`STATES`: a list of floats, or a CasADi MX vector)
-    holds for cell ``number`` [m]; 0 where no wheel has left one there (or the ring has come
-    round since). MX: the slot is read by a symbolic index (one lookup, not one switch a
-    slot)."""
-    ruts, cells = x[:RUT_CELLS], x[RUT_CELLS:]
+    """``(rut, pressure)``: the rut [m] the rut profile ``x`` (:data:`STATES`: a list of
+    floats, or a CasADi MX vector) holds for cell ``number``, and the pressure it carried [Pa];
+    both 0 where no wheel has left one there (or the ring has come round since). MX: the slot
+    is read by a symbolic index (one lookup, not one switch a slot)."""
+    ruts, cells, pressures = _split(x)
     if isinstance(number, (int, float)):
         slot = int(_slot(number))
-        return float(ruts[slot]) if float(cells[slot]) == number else 0.0
+        here = float(cells[slot]) == number
+        return (float(ruts[slot]), float(pressures[slot])) if here else (0.0, 0.0)
     slot = _slot(number)
-    return ca.if_else(cells[slot] == number, ruts[slot], 0)
+    here = cells[slot] == number
+    return ca.if_else(here, ruts[slot], 0), ca.if_else(here, pressures[slot], 0)
 
 
 def lay_ruts(x, u, p):
@@ -152,28 +173,31 @@ def lay_ruts(x, u, p):
     inputs = dict(zip(INPUTS, u, strict=True))
     x = list(x) if isinstance(x, (list, tuple)) else x
     for q in QUERY:
-        x = lay_rut(x, inputs[f"{q}.position"], inputs[f"{q}.rut_left"], p)
+        x = lay_rut(x, inputs[f"{q}.position"], inputs[f"{q}.rut_left"],
+                    inputs[f"{q}.rut_pressure_left"], p)
     return x
 
 
-def lay_rut(x, position, left, p):
-    """The rut profile ``x`` after a wheel at ``position`` left the rut ``left``: only the slot
-    of its cell changes (:func:`cell_after`). On floats that slot is written; on an MX vector it is
-    read by a symbolic index and written by a switch over the slots. Leaving the ruts r1, r2,
-    ... in one cell one after the other is leaving their deepest once (the in-process rover
-    replays its steps so)."""
+def lay_rut(x, position, left, pressure, p):
+    """The rut profile ``x`` after a wheel at ``position`` left the rut ``left`` pressed to
+    ``pressure``: only the slot of its cell changes (:func:`cell_after`). On floats that slot
+    is written; on an MX vector it is read by a symbolic index and written by a switch over the
+    slots. Leaving the ruts r1, r2, ... in one cell one after the other is leaving their
+    deepest once (with the largest pressure among the deepest; the in-process rover replays
+    its steps so)."""
     number = cell_number(position, p)
     if isinstance(number, (int, float)):
-        ruts, cells = list(x[:RUT_CELLS]), list(x[RUT_CELLS:])
+        ruts, cells, pressures = (list(v) for v in _split(x))
         slot = int(_slot(number))
-        ruts[slot], cells[slot] = cell_after(ruts[slot], cells[slot], number, left)
-        return ruts + cells
-    ruts, cells = x[:RUT_CELLS], x[RUT_CELLS:]
+        ruts[slot], cells[slot], pressures[slot] = cell_after(
+            ruts[slot], cells[slot], pressures[slot], number, left, pressure)
+        return ruts + cells + pressures
+    ruts, cells, pressures = _split(x)
     slot = _slot(number)
-    rut, cell = cell_after(ruts[slot], cells[slot], number, left)
+    new = cell_after(ruts[slot], cells[slot], pressures[slot], number, left, pressure)
     hit = ca.DM(list(range(RUT_CELLS))) == slot
-    return ca.vertcat(ca.if_else(hit, ca.repmat(rut, RUT_CELLS, 1), ruts),
-                      ca.if_else(hit, ca.repmat(cell, RUT_CELLS, 1), cells))
+    return ca.vertcat(*(ca.if_else(hit, ca.repmat(v, RUT_CELLS, 1), old)
+                        for v, old in zip(new, (ruts, cells, pressures), strict=True)))
 
 
 def met_cell(position, p):
@@ -197,39 +221,55 @@ def between(near, far, share):
     return near + share * (far - near)
 
 
+def _met_between(near, far, share):
+    """``(rut, pressure)`` ``share`` of the way from the cell ``near`` to the cell ``far``
+    (each a (rut, pressure) pair): both linear between the cells' middles; the pressure 0
+    (not known) where either cell holds a rut whose pressure is not known."""
+    (r0, p0), (r1, p1) = near, far
+    unknown = pick(r0 > 0, pick(p0 > 0, 0, 1), 0) + pick(r1 > 0, pick(p1 > 0, 0, 1), 0)
+    return between(r0, r1, share), pick(unknown > 0, 0, between(p0, p1, share))
+
+
 def met(x, position, p):
-    """The rut a wheel at ``position`` meets: the rut profile's, linear between the middles of the
-    two cells around the point it meets (:func:`met_cells`). Piecewise linear along the track,
-    not a staircase: a staircase steps the rut under a wheel at every cell's edge, and those
-    steps were a disturbance of the rover's steady motion that depended on the cell's length
-    (the Moon's climb stalled 23.3-25.4 deg for cells of 10-2 mm)."""
+    """``(rut, pressure)``: the rut a wheel at ``position`` meets and the pressure it carried:
+    the rut profile's, linear between the middles of the two cells around the point it meets
+    (:func:`met_cells`, :func:`_met_between`). Piecewise linear along the track, not a
+    staircase: a staircase steps the rut under a wheel at every cell's edge, and those steps
+    were a disturbance of the rover's steady motion that depended on the cell's length (the
+    Moon's climb stalled 23.3-25.4 deg for cells of 10-2 mm)."""
     first, share = met_cells(position, p)
-    return between(rut_in_cell(x, first), rut_in_cell(x, first + 1), share)
+    return _met_between(rut_in_cell(x, first), rut_in_cell(x, first + 1), share)
 
 
 def met_in_table(position, p, table):
     """:func:`met` from a table of the rut profile instead of the profile: ``table`` is the
-    number of a cell, then the ruts of the cells from it on (a few: the cells a wheel meets
-    within a short stretch), any sequence or CasADi vector. The rut a wheel at ``position``
-    meets, linear between the two cells' middles, as :func:`met` reads it; 0 for a cell the
-    table does not hold. On CasADi symbols it is a switch over the table's cells, so SX
+    number of a cell, then the ruts of the m cells from it on (a few: the cells a wheel meets
+    within a short stretch), then their pressures (any sequence or CasADi vector of 2m + 1).
+    ``(rut, pressure)`` a wheel at ``position`` meets, as :func:`met` reads them; 0 for a cell
+    the table does not hold. On CasADi symbols it is a switch over the table's cells, so SX
     expressions take it (the in-process rover's blocks, the rover's energy ledger)."""
     first, share = met_cells(position, p)
     start = table[0]
-    near = far = 0
-    for k in range(1, table.shape[0] if hasattr(table, "shape") else len(table)):
-        near = near + pick(first == start + k - 1, table[k], 0)
-        far = far + pick(first + 1 == start + k - 1, table[k], 0)
-    return between(near, far, share)
+    m = ((table.shape[0] if hasattr(table, "shape") else len(table)) - 1) // 2
+    near_rut = near_pressure = far_rut = far_pressure = 0
+    for k in range(m):
+        rut, pressure = table[1 + k], table[1 + m + k]
+        at_near, at_far = first == start + k, first + 1 == start + k
+        near_rut, near_pressure = (near_rut + pick(at_near, rut, 0),
+                                   near_pressure + pick(at_near, pressure, 0))
+        far_rut, far_pressure = (far_rut + pick(at_far, rut, 0),
+                                 far_pressure + pick(at_far, pressure, 0))
+    return _met_between((near_rut, near_pressure), (far_rut, far_pressure), share)
 
 
 def outputs(x, u, p) -> tuple:
     """Every query point's outputs, QUERY order: the map's soil at its position
-    (:func:`soil_at`), then the rut it meets (:func:`met`). A wheel's contact takes the deeper
-    of the two ruts (WheelTerrain's rut_met input against its soil.rut_depth)."""
+    (:func:`soil_at`), then the rut it meets and that rut's pressure (:func:`met`). A wheel's
+    contact takes the deeper of the two ruts (WheelTerrain's rut_met input against its
+    soil.rut_depth), with its pressure."""
     inputs = dict(zip(INPUTS, u, strict=True))
     out = []
     for q in QUERY:
         position = inputs[f"{q}.position"]
-        out += (*soil_at(position, p), met(x, position, p))
+        out += (*soil_at(position, p), *met(x, position, p))
     return tuple(out)

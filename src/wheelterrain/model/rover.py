@@ -320,7 +320,7 @@ def defaults() -> dict[str, float]:
 
 
 def steady_balance(terrain: Mapping, p: Mapping, slope: float, slip: float,
-                   towing: float = 0.0) -> dict:
+                   towing: float = 0.0, ruts: Mapping | None = None) -> dict:
     """The rover in steady motion at ``slip`` (the model's slip, :mod:`wheelterrain.model.slip`:
     traction driving, skid braking, -1 locked; all four wheels alike, as one speed
     loop reference gives them) on ``slope``: the wheel loads that satisfy the chassis' moment
@@ -328,7 +328,10 @@ def steady_balance(terrain: Mapping, p: Mapping, slope: float, slip: float,
     reactions, the pitch from the axles' sinkages), from the single-wheel steady states of
     each wheel's ``terrain`` parameters (a mapping wheel -> ParameterSet), each rear wheel in
     the rut its front wheel leaves (:data:`TRACKS`; a soil with memory) and ``terrain`` says
-    so (the steady rover's soils: each rear wheel's with that rut).
+    so (the steady rover's soils: each rear wheel's with that rut). ``ruts``: per rear wheel
+    the rut it runs in (a wheel's ``rut_left`` and ``rut_pressure_left``, e.g. another
+    balance's front wheel), instead of the one its front wheel leaves at ``slip``: the rover
+    whose slip changed faster than the rear wheels reach new ruts.
 
     Returns the loads, each wheel's steady state, and ``surplus`` = sum of the pulls minus the
     weight's part along the slope and the towing force [N] (0 in steady motion; > 0 the rover
@@ -346,8 +349,8 @@ def steady_balance(terrain: Mapping, p: Mapping, slope: float, slip: float,
         loads = {w: (front_load if w in FRONT else weight_n / 2 - front_load) for w in WHEELS}
         out = {w: api.steady_state(terrain[w], loads[w], slip, "unified") for w in FRONT}
         for w, ahead in LEADING.items():  # in the rut the wheel ahead leaves (soil memory)
-            out[w] = api.steady_state(in_rut(terrain[w], out[ahead]["rut_left"]), loads[w],
-                                      slip, "unified")
+            met = out[ahead] if ruts is None else ruts[w]
+            out[w] = api.steady_state(in_rut(terrain[w], met), loads[w], slip, "unified")
         zf = (out["front_left"]["sinkage"] + out["front_right"]["sinkage"]) / 2
         zr = (out["rear_left"]["sinkage"] + out["rear_right"]["sinkage"]) / 2
         sin_t = (zf - zr) / base
@@ -364,15 +367,18 @@ def steady_balance(terrain: Mapping, p: Mapping, slope: float, slip: float,
     _, out = state(front)
     surplus = sum(out[w]["drawbar_pull"] for w in WHEELS) - m * g * math.sin(slope) - towing
     ground = {**{w: terrain[w] for w in FRONT},
-              **{w: in_rut(terrain[w], out[a]["rut_left"]) for w, a in LEADING.items()}}
+              **{w: in_rut(terrain[w], out[a] if ruts is None else ruts[w])
+                 for w, a in LEADING.items()}}
     return {"loads": {w: out[w]["load"] for w in WHEELS}, "wheels": out, "surplus": surplus,
             "slip": slip, "slope": slope, "terrain": ground}
 
 
-def in_rut(params, rut: float):
-    """``params`` (a ParameterSet) with the soil in the rut ``rut`` [m] a wheel ahead left:
-    soil.rut_depth the deeper of its own and that (no change where the soil has no memory,
-    whose wheels leave no rut)."""
-    if rut <= params["soil.rut_depth"]:
+def in_rut(params, ahead: Mapping):
+    """``params`` (a ParameterSet) with the soil in the rut a wheel ahead left (``ahead``: its
+    contact outputs, ``rut_left`` [m] and ``rut_pressure_left`` [Pa]): soil.rut_depth the
+    deeper of its own and that, soil.rut_pressure that rut's (no change where the soil has no
+    memory, whose wheels leave no rut)."""
+    if ahead["rut_left"] <= params["soil.rut_depth"]:
         return params
-    return params.with_values({"soil.rut_depth": rut})
+    return params.with_values({"soil.rut_depth": ahead["rut_left"],
+                               "soil.rut_pressure": ahead["rut_pressure_left"]})

@@ -145,6 +145,23 @@ class Rut:
     ``surface`` [m], ``layer`` [m] and ``yield_depth`` = surface + layer; ``n`` and
     ``modulus`` of :func:`reece` (p(z) = modulus*(z/b)**n). The contact begins at the rut's
     surface (:func:`rut_surface`): both forms take the entry angle of the depth below it.
+
+    A rut that keeps the pressure it carried (``soil.rut_pressure`` = p_r > 0; the Soil
+    Contact Model's node keeps its yield pressure) is not read from its depth with this
+    wheel's law: a rut made at another slip carried another pressure (made at i = 0.5 and read
+    at i = 0, the law at its depth is 3.2 times what it carried). It reloads elastically up to
+    p_r, and beyond along this wheel's law from the depth z_r at which that law carries p_r
+    (continuous; the soil hardened to p_r, whatever the law that brought it there)::
+
+        layer = p_r/K_u,  p = p_r*d/layer  (d < layer),  p = p(z_r + d - layer)  (d >= layer)
+
+    ``peak`` is the elastic line's top (p_r, or p(yield_depth)), ``offset`` the depth on this
+    wheel's law of the rut's surface (z_r - layer, or ``surface``): the plastic branch is
+    p(offset + d). Where the wheel runs at its maker's slip, p_r = p(yield depth) and both
+    readings agree but for the first-order rebound of the unknown one. ``soil.rut_pressure`` =
+    0 is a switch (not known), not the limit of a kept pressure: there the exact Jacobians give
+    the reading's derivative, 0 for that column; differentiate from a kept pressure above 0.
+
     Where ``on`` is 0 the fields describe a stand-in rut of depth b, so that the branch a
     switch does not take has finite derivatives (CasADi's derivative of ``if_else`` multiplies
     the branch not taken by 0, and 0*inf is NaN); every use selects by ``on``. Virgin soil,
@@ -159,6 +176,9 @@ class Rut:
     n: ca.SX
     modulus: ca.SX
     width: ca.SX
+    kept: ca.SX  # 1 where the rut keeps the pressure it carried (soil.rut_pressure > 0)
+    peak: ca.SX
+    offset: ca.SX
 
     def law(self, depth: ca.SX) -> ca.SX:
         """The pressure-sinkage law p at ``depth`` > 0 from the original surface."""
@@ -166,9 +186,22 @@ class Rut:
 
     def pressure(self, d: ca.SX) -> ca.SX:
         """The pressure at depth ``d`` >= 0 below the rut's surface (``on`` only)."""
-        plastic = self.law(self.surface + ca.fmax(d, self.layer))
-        elastic = self.law(self.yield_depth) * d / self.layer
+        plastic = self.law(self.offset + ca.fmax(d, self.layer))
+        elastic = self.peak * d / self.layer
         return ca.if_else(d >= self.layer, plastic, elastic)
+
+    def plastic(self, depth: ca.SX) -> ca.SX:
+        """The pressure of soil pressed plastically to ``depth`` > 0 from the original
+        surface: the law there, or in a rut that keeps its pressure, the law from the depth
+        that carries it (:class:`Rut`)."""
+        return ca.if_else(self.kept, self.law(self.offset + (depth - self.surface)),
+                          self.law(depth))
+
+    def work_depth(self, depth: ca.SX) -> ca.SX:
+        """The depth on this wheel's law of soil pressed plastically to ``depth`` from the
+        original surface (the bound of the law's integral): ``depth`` itself, or in a rut
+        that keeps its pressure, offset + (depth - surface)."""
+        return ca.if_else(self.kept, self.offset + (depth - self.surface), depth)
 
 
 def in_rut(P: Params) -> ca.SX:
@@ -182,8 +215,17 @@ def rut(slip: ca.SX, P: Params) -> Rut:
     b = P["wheel.width"]
     on = in_rut(P)
     surface = ca.if_else(on, P["soil.rut_depth"], b)  # the stand-in where off
-    layer = modulus * ca.exp(n * ca.log(surface / b)) / P["soil.unloading_stiffness"]
-    return Rut(on, surface, layer, surface + layer, n, modulus, b)
+    kept = ca.logic_and(on, P["soil.rut_pressure"] > 0)
+    # the pressure the rut carried: kept, or read from its depth with this wheel's law
+    carried = ca.if_else(kept, P["soil.rut_pressure"], modulus * ca.exp(n * ca.log(surface / b)))
+    layer = carried / P["soil.unloading_stiffness"]
+    yield_depth = surface + layer
+    law_yield = modulus * ca.exp(n * ca.log(yield_depth / b))
+    # where kept: the depth at which this wheel's law carries the rut's pressure
+    equivalent = b * ca.exp(ca.log(carried / modulus) / n)
+    return Rut(on, surface, layer, yield_depth, n, modulus, b, kept,
+               ca.if_else(kept, carried, law_yield),
+               ca.if_else(kept, equivalent - layer, surface))
 
 
 def rut_surface(P: Params) -> ca.SX:

@@ -22,6 +22,7 @@ model Contact "The wheel-soil contact between a wheel's hub, its axle and the gr
   SI.Force drawbar_pull "the soil's net force on the wheel, forward";
   SI.Torque torque "the torque the soil resists the wheel's turning with";
   SI.Length rut_left "the rut the wheel leaves";
+  SI.Pressure rut_pressure_left "the pressure the wheel pressed that rut to (its soil.rut_pressure for the next wheel)";
   Real y[${CONTACT_ROWS}] "every output of Functions.contact";
 equation
   sinkage = -vertical.s;
@@ -36,6 +37,7 @@ equation
   drawbar_pull = y[WheelTerrain.Functions.Index.drawbar_pull];
   torque = y[WheelTerrain.Functions.Index.torque];
   rut_left = y[WheelTerrain.Functions.Index.rut_left];
+  rut_pressure_left = y[WheelTerrain.Functions.Index.rut_pressure_left];
   vertical.f = -normal_force;
   axle.f = -drawbar_pull;
   hub.tau = torque;

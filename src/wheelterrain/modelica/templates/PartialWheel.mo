@@ -20,6 +20,7 @@ partial block PartialWheel "The WheelTerrain FMU's contact as a block (its model
   output Real torque(unit="N.m") "the torque the soil resists the wheel's turning with";
   output Real slip(unit="1") "the model's slip along the rolling: traction driving, skid braking (-1 locked)";
   output Real rut_left(unit="m") "the rut the wheel leaves";
+  output Real rut_pressure_left(unit="Pa") "the pressure the wheel pressed that rut to (its soil.rut_pressure for the next wheel)";
   Real wheel_angle(unit="rad", start=0, fixed=true) "the grouser ripple's phase";
   Real plastic_sinkage(unit="m", start=0, fixed=true) "the deepest the wheel has pressed the soil under it";
   output Real lateral_force(unit="N") "the soil's force on the wheel along its axle, + to its left";
@@ -44,6 +45,7 @@ equation
   drawbar_pull = rolling*y[WheelTerrain.Functions.Index.drawbar_pull];
   torque = rolling*y[WheelTerrain.Functions.Index.torque];
   rut_left = y[WheelTerrain.Functions.Index.rut_left];
+  rut_pressure_left = y[WheelTerrain.Functions.Index.rut_pressure_left];
   assert(abs(yaw_rate) <= ${TURN_SLIP_LIMIT}*max(rolling*carriage_speed, 0), "Wheel: |yaw_rate|/carriage_speed beyond ${TURN_SLIP_LIMIT} rad/m, the lateral contact's range (a wheel yawing on the spot or at rest is outside the model)");
   y_lateral = WheelTerrain.Functions.lateralMemory(sinkage, slip, rolling*slip_angle, turn_slip, plastic_sinkage,
     y[WheelTerrain.Functions.Index.mean_pressure], pk);
