@@ -140,8 +140,25 @@ def has_memory(terrain: Mapping) -> bool:
     return any(terrain[w]["model.soil_memory"] == 1 for w in rover.WHEELS)
 
 
-PROBE_TIME = 12.0  # s: how long a perturbed steady motion is run (PROBE_KICK's test)
+PROBE_TIME = 12.0  # s: the shortest a perturbed steady motion is run (PROBE_KICK's test)
 PROBE_KICK = 1e-4  # rad/s: the pitch rate the steady motion is started with
+PROBE_WHEELBASES = 12
+"""Wheelbases of travel a perturbed steady motion is run at least (:func:`probe_time`): on a
+soil with memory a disturbance goes round a loop, front wheel -> its rut -> the rear wheel a
+wheelbase of travel later -> pitch and load transfer -> front wheel, so its period is one or
+two wheelbases of travel (at slip 0.6, 33 s a wheelbase at 3 cm/s rim speed): a fixed 12 s
+run saw none of it, and the Moon's climb was predicted stable 3.5 deg past where the run,
+ramped, stalled. Twelve wheelbases is six periods of the slower form (measured 0.016 Hz at 31
+deg on the Moon, where a 400 s run grows and a 60 s one holds)."""
+
+
+def probe_time(p: Mapping[str, float], slip: float) -> float:
+    """How long [s] :func:`probe` runs the steady motion at ``slip``: PROBE_WHEELBASES of
+    travel at its ground speed, at least PROBE_TIME; whole seconds (a whole number of the
+    in-process rover's blocks of steps)."""
+    speed = ground_speed(slip, p["rover.rim_speed"])
+    travel = PROBE_WHEELBASES * p["rover.wheelbase"]
+    return float(max(PROBE_TIME, math.ceil(travel / speed))) if speed > 0 else PROBE_TIME
 
 
 def holds(terrain: Mapping, p: Mapping[str, float], slope: float, slip: float,
@@ -155,7 +172,7 @@ def probe(terrain: Mapping, p: Mapping[str, float], slope: float, slip: float,
           step: float = STEP, balance_tow: bool = False) -> dict:
     """The rover's steady motion at ``slip`` on ``slope`` disturbed and run: from the steady
     state (:func:`steady_state_vector`, each wheel's plastic sinkage at its sinkage) with the
-    pitch rate PROBE_KICK, in process for PROBE_TIME s at that slope. ``holds``: the normal
+    pitch rate PROBE_KICK, in process for :func:`probe_time` at that slope. ``holds``: the normal
     forces' deviation from the steady motion over the last second is below its largest over
     the first second (it dies out) and the slip stays below STALL_SLIP. The test for a soil
     with memory, which has no one linearisation: lifted, a wheel unloads along the stiff
@@ -170,18 +187,30 @@ def probe(terrain: Mapping, p: Mapping[str, float], slope: float, slip: float,
     plastics = [float(rover.wheel_kinematics(list(x), p, w)[0]) for w in rover.WHEELS]
     x0 = [*x, *([0.0] * len(rover.WHEELS)), *plastics]
     soil = Soil(terrain["front_left"])
-    res = simulate(soil, dict(p), PROBE_TIME, step=step, slope=slope, towing=tow, x0=x0,
+    run = probe_time(p, slip)
+    res = simulate(soil, dict(p), run, step=step, slope=slope, towing=tow, x0=x0,
                    ruts0=ruts.steady_ruts(balance, p, x, soil.map_values()))
     steady = np.array([balance["wheels"][w]["normal_force"] for w in rover.WHEELS])
     strayed = np.array([res.wheels[w]["normal_force"] for w in rover.WHEELS]) - steady[:, None]
-    if res.left_domain or res.time.size < round(PROBE_TIME / step) - 1:
+    if res.left_domain or res.time.size < round(run / step) - 1:
         return {"holds": False, "mode": _grown_mode(res.time, strayed)}
     deviation = np.max(np.abs(strayed), axis=0)
     second = round(1.0 / step)
     slips = np.array([res.wheels[w]["slip"] for w in rover.WHEELS])
-    ok = bool(deviation[-second:].max() < deviation[:second].max()
-              and slips.max() < STALL_SLIP)
-    return {"holds": ok, "mode": None if ok else _grown_mode(res.time, strayed)}
+    mode = _grown_mode(res.time, strayed)
+    ok = bool(slips.max() < STALL_SLIP
+              and (deviation[-second:].max() < deviation[:second].max() or not grows(mode, run)))
+    return {"holds": ok, "mode": None if ok else mode}
+
+
+def grows(mode: dict | None, run: float) -> bool:
+    """Whether the disturbance of a probe run of ``run`` s grew: it at least doubles over the
+    run's second half (:func:`_grown_mode`'s growth rate). A steady motion computed
+    quasi-statically is not the memory soil's own to the last micrometre: the run settles to
+    its own nearby, and its deviation from the computed one, approached from below, rises a
+    little and levels off (growth ~1e-3/s over a 180 s run); a mode that grows doubles every
+    few seconds (0.17-0.7/s measured on the climbs), a run that settles never doubles."""
+    return mode is not None and mode["growth_rate_per_s"] * run / 2 > math.log(2)
 
 
 MODE_CHUNKS = 6

@@ -323,7 +323,11 @@ def pull_curve(res: RoverResult, terrain: Mapping, p: Mapping[str, float], end: 
     over one grouser period), sampled at ``points`` slips from 0.02 up to the slip where the
     steady motion loses its stability (:func:`growth_rate`, towing balanced) or 0.9, beside the
     sum of the four single-wheel steady pulls at those slips with the loads of
-    :func:`rover.steady_balance`. On a soil with memory the stability is :func:`holds`'s."""
+    :func:`rover.steady_balance`. On a soil with memory the stability is :func:`holds`'s, and
+    each rear wheel runs in the rut its front wheel left where the rear wheel meets it (a
+    wheelbase less terrain.lookahead of travel before), at the slip the rover had then: the
+    rut keeps the pressure it was made with (soil.rut_pressure), so a rear wheel whose slip
+    has risen since meets a rut made at a lower one."""
     from scipy.optimize import brentq
 
     top = 0.9
@@ -351,13 +355,21 @@ def pull_curve(res: RoverResult, terrain: Mapping, p: Mapping[str, float], end: 
     kernel = np.ones(window) / window
     slip = np.convolve(res.wheels["front_left"]["slip"][:end + 1], kernel, "valid")
     tow = np.convolve(res.inputs["towing_force"][:end + 1], kernel, "valid")
+    position = np.convolve(res.chassis["position"][:end + 1], kernel, "valid")
+    back = p["rover.wheelbase"] - ground.defaults()["terrain.lookahead"]
+    memory = has_memory(terrain)
     curve, predicted = [], []
     for target in np.linspace(0.02, top * 0.98, points):
         if not (slip >= target).any():
             break
         k = int(np.argmax(slip >= target))
         curve.append([float(slip[k]), float(tow[k])])
-        b = rover.steady_balance(terrain, p, 0.0, float(slip[k]))
+        made = None
+        if memory:  # the slip at which the front wheels made the ruts the rear ones meet
+            then = int(np.searchsorted(position, position[k] - back))
+            made = rover.steady_balance(terrain, p, 0.0, float(slip[min(then, k)]))
+            made = {w: made["wheels"][a] for w, a in rover.LEADING.items()}
+        b = rover.steady_balance(terrain, p, 0.0, float(slip[k]), ruts=made)
         predicted.append(float(sum(b["wheels"][w]["drawbar_pull"] for w in rover.WHEELS)))
     errors = [abs(c[1] - q) for c, q in zip(curve, predicted, strict=True)]
     return {"pull_curve": curve, "predicted_pull": predicted, "stable_up_to_slip": top,
