@@ -309,17 +309,17 @@ TABLE: tuple[Parameter, ...] = (
        "displacement). Multi-pass traction rising in a rut: Holm 1969",
        plausible=(0.0, 1.0, "unmeasured: 0 (reloaded soil shears afresh) to 1 (SCM's node "
                   "keeps all of it); the rover's limit_band spans both ends")),
-    _P("model.imprint_relaxation", "1", 0, 0, 1,
+    _P("model.imprint_relaxation", "1", 1, 0, 1,
        "What the imprint under a rolling wheel lifted from where it yielded relaxes toward, "
        "at the rate |V|/l it rolls onto soil it has not pressed (model.soil_memory = 1): "
        "0 = toward the wheel (the imprint follows the wheel up only by its elastic rebound per "
        "contact length: a wheel whose load falls closes 12 % of the step in five contact "
        "lengths); 1 = toward the sinkage z_t at which the soil ahead carries the force the "
        "wheel carries now (Bekker's rigid wheel, F ~ (z - s)**((2n+1)/2) from the surface s "
-       "it meets: a load step settles within a few contact lengths, 62 % of it in one). 1 is "
-       "the physical law and not yet the default: with it the rover's rear wheels, meeting "
-       "the front wheels' ruts a wheelbase later, close a loop that grows on the Moon's climb "
-       "from 20.5 deg (docs/model.md, Known limits).",
+       "it meets: a load step settles within a few contact lengths, 62 % of it in one). 1, "
+       "the physical law, is the default since each rut keeps the pressure it carried "
+       "(soil.rut_pressure; with the rut read from its depth it closed a loop through the "
+       "ruts on the Moon's climb from 20.5 deg: docs/model.md, Known limits).",
        "Wong, Theory of Ground Vehicles, 4th ed., sec. 2.4.2 (rigid wheel: W from the "
        "pressure-sinkage law, z**((2n+1)/2)); Krenn & Hirzinger 2009 (SCM: a node meeting the "
        "wheel for the first time yields along the pressure-sinkage law)", kind="enum",
