@@ -106,8 +106,9 @@ def _mode_text(mode: dict | None) -> str:
     """The predicted stability mode in words: what grows, how fast, at what frequency."""
     if mode is None:
         return "none"
-    kind = "a divergence" if mode["frequency_hz"] == 0 else f"{mode['frequency_hz']:.1f} Hz"
-    return f"{kind} growing at {mode['growth_rate_per_s']:.0f}/s, {mode['leading']} leading"
+    kind = ("a divergence" if mode["frequency_hz"] == 0
+            else f"a {mode['frequency_hz']:.2g} Hz oscillation")
+    return f"{kind} growing at {mode['growth_rate_per_s']:.2g}/s, {mode['leading']} leading"
 
 
 def _nested(doc: dict, dataset: str, role: str) -> dict:
