@@ -125,6 +125,21 @@ def built_root(tmp_path_factory, fmu_dir, native_dir):
     return root
 
 
+def first_steps(fmu: Path, runs, outputs: list[str]) -> list[list[float]]:
+    """For each set of start values in ``runs``: a fresh instance of ``fmu`` started with them,
+    one co-simulation step of 1 ms, its ``outputs``; no error logged (asserted)."""
+    from wheelterrain.fmu.instance import Instance
+
+    results = []
+    for values in runs:
+        with Instance(fmu, log=True) as inst:
+            inst.start(values, 1.0)
+            inst.fmu.doStep(0.0, 1e-3)
+            results.append(inst.get(outputs))
+            assert inst.errors() == []
+    return results
+
+
 def classical_set(R: float, b: float, c: float, phi_deg: float, kc: float, kphi: float, n: float,
                   gamma: float, K: float, a0: float = 0.4, a1: float = 0.15) -> ParameterSet:
     """Parameters with every extension off: the classical Wong-Reece wheel."""

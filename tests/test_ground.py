@@ -8,6 +8,7 @@ import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
+from conftest import first_steps
 from wheelterrain import presets
 from wheelterrain.fmu import functions as fmu_model
 from wheelterrain.fmu import variables
@@ -155,14 +156,9 @@ def test_wheel_soil_from_its_ground_inputs_equals_the_same_soil_as_parameters(
     inputs = {variables.ground_name(k): v for k, v in soil.items()}
     common = {"quasi_static": quasi_static, "sinkage": 0.015, "load": 40.0}
     outputs = ["normal_force", "drawbar_pull", "torque", "contact_sinkage"]
-    results = []
-    for values in ({**common, **soil}, {**common, "soil_from_inputs": True, **inputs},
-                   {**common, **inputs}):
-        with Instance(built / flavour / "WheelTerrain.fmu", log=True) as inst:
-            inst.start(values, 1.0)
-            inst.fmu.doStep(0.0, 1e-3)
-            results.append(inst.get(outputs))
-            assert inst.errors() == []
+    results = first_steps(built / flavour / "WheelTerrain.fmu", (
+        {**common, **soil}, {**common, "soil_from_inputs": True, **inputs},
+        {**common, **inputs}), outputs)
     assert results[1] == results[0]
     assert results[2] != results[0]  # switch off: the default soil, not the inputs'
     assert all(math.isfinite(v) for v in results[1])

@@ -8,6 +8,7 @@ import itertools
 
 import pytest
 
+from conftest import first_steps
 from wheelterrain import presets
 from wheelterrain.model import api, multipass
 
@@ -105,24 +106,17 @@ def test_the_fmu_meets_the_rut_its_inputs_give_as_the_same_rut_as_parameters(
     """WheelTerrain's inputs rut_met and rut_pressure_met (a Terrain's record) give the forces
     and the rut left of the same rut set as soil.rut_depth and soil.rut_pressure, exactly; a
     pressure met with a rut no deeper than the wheel's own is not taken."""
-    from wheelterrain.fmu.instance import Instance
-
     ps = presets.load(FORMS["patch"])
     rut, pressure, depth = _rut(ps, 0.5)
     common = {"quasi_static": quasi_static, "sinkage": depth + 1e-3, "load": LOAD}
     outputs = ["normal_force", "drawbar_pull", "torque", "contact_sinkage", "rut_left",
                "rut_pressure_left"]
-    results = []
-    for values in ({**common, "soil.rut_depth": rut, "soil.rut_pressure": pressure},
-                   {**common, "rut_met": rut, "rut_pressure_met": pressure},
-                   {**common, "rut_met": rut},
-                   {**common, "soil.rut_depth": rut, "rut_met": rut,
-                    "rut_pressure_met": pressure}):
-        with Instance(built_root / flavour / "WheelTerrain.fmu", log=True) as inst:
-            inst.start(values, 1.0)
-            inst.fmu.doStep(0.0, 1e-3)
-            results.append(inst.get(outputs))
-            assert inst.errors() == []
+    results = first_steps(built_root / flavour / "WheelTerrain.fmu", (
+        {**common, "soil.rut_depth": rut, "soil.rut_pressure": pressure},
+        {**common, "rut_met": rut, "rut_pressure_met": pressure},
+        {**common, "rut_met": rut},
+        {**common, "soil.rut_depth": rut, "rut_met": rut, "rut_pressure_met": pressure}),
+        outputs)
     assert results[1] == results[0]
     assert results[2] != results[0]  # the pressure not known: read from the depth
     assert results[3] == results[2]  # no deeper than its own: its own rut (pressure 0) stays
