@@ -518,9 +518,18 @@ their largest value (0.06 N, in the first second) is 6e-10 N, below rumoca's err
 steps cross the contact's switches over 10 s (1.4e-9 N, as in the other examples)."""
 
 
+PATCH_EXIT = pytest.mark.xfail(strict=True, reason=(
+    "with the imprint relaxing toward the soil ahead (model.imprint_relaxation 1, the default "
+    "since 2026-11-28) the rear wheels leaving the soft patch (31.7 s) are hard for both "
+    "integrators: rumoca at the example's 1e-13 is 5.2e-8 of the largest pull from the CVODES "
+    "reference at the sample after it (1e-11 elsewhere; rumoca refuses 1e-14), CVODES at 1e-13 "
+    "does not get past 31.756 s in 1e7 steps; with 0 the group met 1e-8"))
+
+
 @needs_msl
 @pytest.mark.slow
-@pytest.mark.parametrize("group", list(ROVER_GROUPS))
+@pytest.mark.parametrize("group", [
+    g if g != "soft-patch" else pytest.param(g, marks=PATCH_EXIT) for g in ROVER_GROUPS])
 def test_the_rover_of_four_wheels_follows_the_python_models_trajectory(built, msl_root, group):
     """Examples.Rover (over its first second), RoverSlope, RoverDescent, RoverPullTest and
     RoverSoftPatch (RoverChassis and four Wheels or MapWheels) against the Python
