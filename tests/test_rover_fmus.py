@@ -139,7 +139,14 @@ def test_a_soil_map_runs_through_terrain_fmus_as_in_process(built, terrain, in_p
     assert change > 1e-4  # m: the looser soil lets the front wheels sink deeper
 
 
-@pytest.mark.parametrize("engine", ["libcosim", "ecos", "omsimulator"])
+ECOS_PATCH = pytest.mark.xfail(strict=True, reason=(
+    "with the imprint relaxing toward the soil ahead (model.imprint_relaxation 1, the default "
+    "since 2026-11-28) ecos's soft-patch means differ from the in-process ones by 2.5e-3 "
+    "(front_right.normal_force over 2-4 s) at 0.5 ms; libcosim stays within 1e-3"))
+
+
+@pytest.mark.parametrize("engine", ["libcosim", pytest.param("ecos", marks=ECOS_PATCH),
+                                    "omsimulator"])
 def test_a_soil_map_in_rover_ssp_gives_the_same_means_in_other_engines(built, terrain,
                                                                        in_process, engine):
     """Rover.ssp with four Terrain.fmu (the soil map's query points) runs unchanged in libcosim,
