@@ -116,12 +116,14 @@ _SLIP_ANGLE = Var("slip_angle", "input", "Slip angle between the wheel's heading
                   "the speeds along the heading. 0: a wheel driven straight (no lateral "
                   "force)", "rad", "Angle", "deg", start=0.0, min=-SLIP_ANGLE_LIMIT,
                   max=SLIP_ANGLE_LIMIT)
+_RUT_PRESSURE = ROWS[INDEX["soil.rut_pressure"]]
+"""The row whose range the rut pressure met and left (WheelTerrain, Terrain) share."""
 _RUT_PRESSURE_MET = Var(
     "rut_pressure_met", "input", "Pressure the rut the wheel meets (rut_met) carried when it "
     "was made, recorded with it by a terrain with memory (a Terrain.fmu query point's "
     "rut_pressure_met): where rut_met is deeper than soil.rut_depth, it replaces "
     "soil.rut_pressure. 0: not known (the rut read from its depth with the wheel's own law)",
-    "Pa", "Pressure", "kPa", start=0.0, min=0.0, max=1.0e7)
+    "Pa", "Pressure", "kPa", start=0.0, min=_RUT_PRESSURE.min, max=_RUT_PRESSURE.max)
 _YAW_RATE = Var("yaw_rate", "input", "Yaw rate of the wheel about the vertical through its "
                 "centre, positive counter-clockwise seen from above; with carriage_speed, the "
                 "turn slip yaw_rate/carriage_speed (rad/m, the curvature of the wheel's path), "
@@ -378,8 +380,8 @@ GROUND_IO: tuple[Var, ...] = tuple(v for q in QUERY_POINTS for v in (
         min=0.0, max=1.0),
     Var(f"{q}.rut_pressure_left", "input", f"The pressure the wheel at {q} pressed its rut "
         "to (its WheelTerrain's rut_pressure_left): recorded with the rut (the deepest rut's "
-        "in each cell; 0: not known)", "Pa", "Pressure", "kPa", start=0.0, min=0.0,
-        max=1.0e7),
+        "in each cell; 0: not known)", "Pa", "Pressure", "kPa", start=0.0,
+        min=_RUT_PRESSURE.min, max=_RUT_PRESSURE.max),
     *(Var(f"{q}.{ground_name(p.name)}", "output", f"Soil of the map at query point {q} (to "
           f"its WheelTerrain's input ground.*, with soil_from_inputs): {p.description}",
           p.unit, p.quantity, p.display_unit, depends_on=(f"{q}.position",))
