@@ -260,7 +260,7 @@ def main() -> None:
                 cosim.reproduce(dirs["native"], ps, workers=count)
                 runs.append(time.perf_counter() - start)
             walls[label] = statistics.median(runs)
-            print(f"C1-C4, native, FMI calls straight through ctypes, {count} process(es): "
+            print(f"C1-C4, native, our master's compiled loop, {count} process(es): "
                   f"{walls[label]:.2f} s wall (median of {len(runs)})")
     if "native" in dirs:
         try:
@@ -277,9 +277,9 @@ def main() -> None:
     how = {"pythonfmu": "pythonfmu FMUs, fmpy master", "native": "native FMUs, fmpy master",
            "native+ecos": "native FMUs, ecos master (C++; Jacobi coupling, so its means are "
            "O(step) from ours)",
-           "native+direct": "native FMUs, our master with FMI calls straight through ctypes",
-           "native+direct+processes": "native FMUs, our master with FMI calls straight "
-           f"through ctypes, the four cases in {workers} processes (wheelterrain reproduce)"}
+           "native+direct": "native FMUs, our master's compiled loop calling FMI",
+           "native+direct+processes": "native FMUs, our master's compiled loop calling FMI, "
+           f"the four cases in {workers} processes (wheelterrain reproduce)"}
     fastest = min(walls, key=walls.get)
     figures["c1_c4_fastest_s"], figures["c1_c4_fastest_how"] = walls[fastest], how[fastest]
     _emit(args, figures)

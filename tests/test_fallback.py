@@ -33,6 +33,20 @@ def test_a_cc_that_does_not_exist_is_no_compiler(no_compiler):
         compiled.cached_library(ca.Function("f", [ca.SX.sym("x")], [1]), "test")
 
 
+def test_without_a_compiler_the_master_keeps_its_python_loop(no_compiler):
+    """The rig-terrain master's compiled loop (coupling.c) is not to be had: the master then
+    runs its loop in Python (tests/test_native_fmus.py: the same series)."""
+    from wheelterrain.cosim import master
+
+    master._coupling_loop.cache_clear()
+    try:
+        with pytest.raises(compiled.CompileError, match="no C compiler"):
+            compiled.cached_source(master.Path(master.__file__).with_name("coupling.c"))
+        assert master._coupling_loop() is None
+    finally:
+        master._coupling_loop.cache_clear()
+
+
 @pytest.mark.parametrize("patch", [False, True], ids=["level", "soft-patch"])
 def test_the_rover_on_casadis_vm_gives_the_compiled_runs(monkeypatch, tmp_path, patch):
     """The in-process rover's record on the VM equals the compiled block's to 1e-9 (it once

@@ -347,17 +347,27 @@ def test_flavours_give_the_same_c1_c4_means(flavours):
 
 
 @pytest.mark.parametrize("flavour", ["pythonfmu", "native"])
-def test_direct_calls_give_the_series_of_fmpys_wrappers(flavours, flavour):
-    """The co-simulation loop that calls the FMI functions straight through ctypes makes the
-    same calls in the same order as the one through fmpy's wrappers: the same series, bit for
-    bit, on both flavours."""
+def test_direct_calls_give_the_series_of_fmpys_wrappers(flavours, flavour, monkeypatch):
+    """The co-simulation loops that call the FMI functions straight, compiled (coupling.c) and
+    in Python through ctypes (where nothing can be compiled), make the same calls in the same
+    order as the one through fmpy's wrappers: the same series, bit for bit, on both flavours."""
+    from wheelterrain.compiled import compiler
+
     ps = presets.load("paper-table2-arc")
     unz = {n: flavours["unzip"][(flavour, n)] for n in NAMES}
-    runs = [cosim.run_case(flavours["root"] / flavour, ps, 0.5, 62.0, 0.03, "C3", stop=1.5,
-                           step=1e-3, unzipped=unz, settle=0.5, direct=direct)
-            for direct in (False, True)]
+
+    def run(direct: bool):
+        return cosim.run_case(flavours["root"] / flavour, ps, 0.5, 62.0, 0.03, "C3", stop=1.5,
+                              step=1e-3, unzipped=unz, settle=0.5, direct=direct)
+
+    if compiler() is not None:  # CI has one: the compiled loop is the one that runs
+        assert cosim._coupling_loop() is not None
+    runs = [run(False), run(True)]
+    monkeypatch.setattr(cosim, "_coupling_loop", lambda: None)
+    runs.append(run(True))
     for key in cosim.RECORD:
-        np.testing.assert_array_equal(runs[1].series[key], runs[0].series[key], err_msg=key)
+        for other in runs[1:]:
+            np.testing.assert_array_equal(other.series[key], runs[0].series[key], err_msg=key)
 
 
 def test_direct_calls_raise_as_fmpys_wrappers_on_a_refused_step(flavours):
@@ -367,12 +377,16 @@ def test_direct_calls_raise_as_fmpys_wrappers_on_a_refused_step(flavours):
     ps = presets.load("paper-table2-arc")  # carries ~80 N fully buried; 2000 N sinks it
     unz = {n: flavours["unzip"][("native", n)] for n in NAMES}
     errors = []
-    for direct in (False, True):
-        with pytest.raises(CosimulationError) as err:
-            cosim.run_case(flavours["root"] / "native", ps, 0.5, 2000.0, 0.03, "C3", stop=5.0,
-                           step=1e-3, unzipped=unz, settle=0.5, direct=direct)
+    for direct, loop in ((False, None), (True, cosim._coupling_loop), (True, lambda: None)):
+        with pytest.MonkeyPatch.context() as patch:
+            if loop is not None:  # the compiled loop, then the Python one
+                patch.setattr(cosim, "_coupling_loop", loop)
+            with pytest.raises(CosimulationError) as err:
+                cosim.run_case(flavours["root"] / "native", ps, 0.5, 2000.0, 0.03, "C3",
+                               stop=5.0, step=1e-3, unzipped=unz, settle=0.5, direct=direct)
         errors.append(str(err.value))
     assert errors[1] == errors[0]
+    assert errors[2] == errors[0]
     assert errors[0].startswith("case C3: fmi2DoStep failed with status 2 (discard)")
 
 

@@ -94,6 +94,37 @@ def cached_library(fn: ca.Function, kind: str, jacobian: bool = False,
     return library
 
 
+def cached_source(source: Path, optimisation: str = "-O2") -> Path:
+    """The C file ``source`` (one of the package's own) compiled once per (its text, the
+    compiler) into the cache (:func:`cache_directory`/``source``'s stem/): the library's path,
+    compiled now if missing. CompileError where there is no compiler or it fails."""
+    cc = compiler()
+    if cc is None:
+        raise CompileError(no_compiler_reason())
+    text = source.read_bytes()
+    key = hashlib.sha256(text + b"\0" + cc.encode() + b"\0" + optimisation.encode())
+    place = cache_directory() / source.stem / key.hexdigest()[:16]
+    library = place / f"{source.stem}.so"
+    if library.is_file():
+        return library
+    try:
+        place.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise CompileError(f"cannot create the cache directory {place} ({err}); set "
+                           "WHEELTERRAIN_CACHE to a writable one") from err
+    with locked(place.parent / f".{place.name}.lock"):  # another process may compile it
+        if not library.is_file():
+            with tempfile.TemporaryDirectory(prefix="wheelterrain_c_") as tmp:
+                partial = Path(tmp) / library.name
+                run = run_compiler([cc, optimisation, *CFLAGS, str(source), "-o",
+                                    str(partial)])
+                if run.returncode != 0:
+                    raise CompileError(f"{cc} failed on {source.name}: "
+                                       f"{run.stderr.strip()[:2000]}")
+                install(partial, library)
+    return library
+
+
 def run_compiler(command: list[str]) -> subprocess.CompletedProcess:
     """Run a compiler command line, its output captured; a compiler that cannot be started is
     a CompileError."""
