@@ -125,6 +125,32 @@ def _step(fns, z, zp, v, p, h, slip=0.2):
     return float(fns.plastic_step(z, zp, v, out["mean_pressure"], out["sinkage_exponent"], p, h))
 
 
+@pytest.mark.parametrize("form", FORMS)
+def test_the_yield_pressure_alone_is_the_contact_s_to_the_bit(form):
+    """The memory's co-simulation step takes the mean pressure and the exponent from kernels
+    that compute only those two (contact.yield_pressure, a third of the evaluation): the
+    contact's values, bit for bit, pressed and lifted, in a kept rut and in a read one, at
+    every slip of the domain and whatever the wheel's angle."""
+    fns = model_functions.build()
+    z, slip, plastic = (ca.MX.sym(n) for n in ("z", "slip", "plastic"))
+    p = ca.MX.sym("p", len(INDEX))
+    alone = ca.Function("alone", [z, slip, plastic, p], list(contact.yield_pressure(
+        z, slip, plastic, soil.Params(p), fns.nodes)))
+    rng = np.random.default_rng(7)
+    compared = 0
+    for rut, pressure in ((0.0, 0.0), (0.004, 0.0), (0.004, 6e3)):
+        pv = _vector(FORMS[form], soil__rut_depth=rut, soil__rut_pressure=pressure)
+        for _ in range(60):
+            zz, zp = rng.uniform(0, 0.03, 2)
+            s = rng.uniform(-1, 1)
+            full = _memory(fns, zz, rng.uniform(-0.01, 0.01), s, zp, pv,
+                           angle=rng.uniform(0, 7))
+            got = [float(v) for v in alone(zz, s, zp, pv)]
+            assert got == [full["mean_pressure"], full["sinkage_exponent"]], (zz, zp, s)
+            compared += full["mean_pressure"] > 0
+    assert compared > 100  # most points are in contact: the pressures are not all zero
+
+
 def test_the_plastic_sinkage_yields_at_once_and_is_replaced_over_a_contact_length():
     """Pressed deeper, z_p follows at once. Lifted by d while rolling at V, the imprint is
     replaced by the soil ahead: after h, z_t + (z_y - z_t)*exp(-V*h/l), l the contact length

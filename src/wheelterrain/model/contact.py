@@ -1203,9 +1203,11 @@ FORMS = ("arc", "arc_reversal", "patch")  # their kernels' names, in case order
 
 
 @lru_cache(maxsize=8)
-def form_switch(nodes: tuple[int, int], ripple: bool) -> tuple[ca.Function, ca.Function]:
-    """``(case, switch)``: every contact quantity at an entry angle, evaluating only the form
-    and the rule that apply.
+def form_switch(nodes: tuple[int, int], ripple: bool, keep: tuple[str, ...] = CONTACT_OUTPUTS
+                ) -> tuple[ca.Function, ca.Function]:
+    """``(case, switch)``: every contact quantity at an entry angle (or those in ``keep``, in
+    its order: the kernels then compute only what those need), evaluating only the form and
+    the rule that apply.
 
     ``case(theta_f, slip, p)`` is PATCH when ``model.contact_form`` is 1; for the arc, ARC where
     the shear displacement keeps its sign on the arc and ARC_REVERSAL where it changes sign
@@ -1218,11 +1220,12 @@ def form_switch(nodes: tuple[int, int], ripple: bool) -> tuple[ca.Function, ca.F
     th, sl, angle, pp = (ca.SX.sym("theta_f"), ca.SX.sym("slip"), ca.SX.sym("wheel_angle"),
                          ca.SX.sym("p", len(NAMES)))
     P = Params(pp)
-    tag = "" if ripple else "_static"
+    tag = ("" if ripple else "_static") + ("" if keep == CONTACT_OUTPUTS else
+                                            "_" + "_".join(keep))
 
     def kernel(name: str, out: dict) -> ca.Function:
         return ca.Function(name + tag, [th, sl, angle, pp],
-                           [ca.vertcat(*(out[k] for k in CONTACT_OUTPUTS))], {"cse": True})
+                           [ca.vertcat(*(out[k] for k in keep))], {"cse": True})
 
     arc = kernel(FORMS[ARC], _arc_form(th, sl, angle, P, nodes, ripple, reversal=False))
     split = kernel(FORMS[ARC_REVERSAL], _arc_form(th, sl, angle, P, nodes, ripple,
@@ -1244,6 +1247,23 @@ def _at_entry_angle(theta_f, slip, wheel_angle, P: Params, nodes: tuple[int, int
     case, switch = form_switch(nodes, ripple)
     out = switch(case(theta_f, slip, P.p), theta_f, slip, wheel_angle, P.p)
     return {k: out[i] for i, k in enumerate(CONTACT_OUTPUTS)}
+
+
+YIELD_PRESSURE = ("mean_pressure", "sinkage_exponent")
+"""What the imprint's relaxation toward the soil ahead needs of the contact
+(:func:`plastic_update`)."""
+
+
+def yield_pressure(z, slip, plastic, P: Params, nodes: tuple[int, int]) -> tuple:
+    """(mean_pressure, sinkage_exponent) of :func:`contact_at` with the plastic sinkage
+    ``plastic``, the same numbers, from kernels that compute only those two (both belong to the
+    contact at the yield sinkage: the unloading does not scale them, the grouser ripple and the
+    damper do not enter them): a third of the contact's evaluation in the patch form, for the
+    co-simulation step of the soil's memory."""
+    theta_f = entry_angle(_yield_sinkage(z, plastic, P) - rut_surface(P), P)
+    case, switch = form_switch(nodes, True, YIELD_PRESSURE)
+    out = switch(case(theta_f, slip, P.p), theta_f, slip, 0, P.p)
+    return out[0], out[1]
 
 
 def entry_angle(z, P: Params):
