@@ -56,8 +56,9 @@ from wheelterrain.errors import CosimulationError, UsageError
 from wheelterrain.files import replacing
 from wheelterrain.fmu import functions
 from wheelterrain.fmu.instance import Instance
-from wheelterrain.fmu.variables import GROUND, QUERY_POINTS, RUT_LEFT, RUT_MET
+from wheelterrain.fmu.variables import GROUND, QUERY_POINTS
 from wheelterrain.model import rover
+from wheelterrain.model.ground import RUT_LEFT, RUT_MET
 from wheelterrain.parameters import GROUND_TABLE, ROVER_TABLE, TABLE, ParameterSet
 
 CHASSIS = "chassis"

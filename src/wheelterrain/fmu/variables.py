@@ -232,10 +232,6 @@ TERRAIN_IO: tuple[Var, ...] = (
             "known); 0 with model.soil_memory = 0", "Pa", "Pressure", "kPa"),
     ], (*_TERRAIN_INPUTS, *GROUND, "slip_angle", "yaw_rate", "rut_pressure_met")),
 )
-RUT_LEFT = ("rut_left", "rut_pressure_left")
-"""WheelTerrain's outputs a terrain with memory records (a Terrain query point's inputs)."""
-RUT_MET = ("rut_met", "rut_pressure_met")
-"""WheelTerrain's inputs a terrain with memory serves (a Terrain query point's outputs)."""
 
 RIG_IO: tuple[Var, ...] = (
     # start: the default rig.load, so that unconnected the soil holds the wheel still (with

@@ -57,7 +57,13 @@ STATES: tuple[str, ...] = (*(f"rut[{k}]" for k in range(RUT_CELLS)),
                            *(f"pressure[{k}]" for k in range(RUT_CELLS)))
 """The rut profile: the rut of each ring slot [m], the number of the cell it holds, the
 pressure the rut carried [Pa] (0: not known, read from its depth)."""
-INPUTS = tuple(f"{q}.{n}" for q in QUERY for n in ("position", "rut_left", "rut_pressure_left"))
+RUT_LEFT = ("rut_left", "rut_pressure_left")
+"""What a wheel leaves that the record keeps (its WheelTerrain's outputs, a query point's
+inputs): the rut's depth [m] and the pressure it carried [Pa]."""
+RUT_MET = ("rut_met", "rut_pressure_met")
+"""What the record serves a wheel (a query point's outputs, its WheelTerrain's inputs): the
+same pair, for the rut the wheel meets."""
+INPUTS = tuple(f"{q}.{n}" for q in QUERY for n in ("position", *RUT_LEFT))
 
 
 def in_patch(position, p):
