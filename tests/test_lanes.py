@@ -433,6 +433,10 @@ def test_an_unwritable_cache_is_a_compile_error_naming_the_setting(tmp_path, mon
     monkeypatch.setenv("WHEELTERRAIN_CACHE", str(blocked))
     with pytest.raises(native.CompileError, match="WHEELTERRAIN_CACHE"):
         lanes.compile_source("int f(void) { return 0; }\n", "blocked")
+    source = tmp_path / "blocked.c"  # the package's own C files (the master's loop) alike
+    source.write_text("int f(void) { return 0; }\n")
+    with pytest.raises(native.CompileError, match="WHEELTERRAIN_CACHE"):
+        native.cached_source(source)
 
 
 def test_steady_map_refuses_an_empty_axis(table2):

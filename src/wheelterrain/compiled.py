@@ -107,11 +107,7 @@ def cached_source(source: Path, optimisation: str = "-O2") -> Path:
     library = place / f"{source.stem}.so"
     if library.is_file():
         return library
-    try:
-        place.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise CompileError(f"cannot create the cache directory {place} ({err}); set "
-                           "WHEELTERRAIN_CACHE to a writable one") from err
+    make_cache_folder(place)
     with locked(place.parent / f".{place.name}.lock"):  # another process may compile it
         if not library.is_file():
             with tempfile.TemporaryDirectory(prefix="wheelterrain_c_") as tmp:
@@ -123,6 +119,16 @@ def cached_source(source: Path, optimisation: str = "-O2") -> Path:
                                        f"{run.stderr.strip()[:2000]}")
                 install(partial, library)
     return library
+
+
+def make_cache_folder(place: Path) -> None:
+    """Create the cache folder ``place`` (and its parents); CompileError saying how to choose
+    another where it cannot be."""
+    try:
+        place.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise CompileError(f"cannot create the cache directory {place} ({err}); set "
+                           "WHEELTERRAIN_CACHE to a writable one") from err
 
 
 def run_compiler(command: list[str]) -> subprocess.CompletedProcess:

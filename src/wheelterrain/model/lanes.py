@@ -41,6 +41,7 @@ from wheelterrain.compiled import (
     cache_directory,
     compiler,
     install,
+    make_cache_folder,
     no_compiler_reason,
     run_compiler,
 )
@@ -470,11 +471,7 @@ def compile_source(source: str, name: str) -> tuple[Path, bool]:
     found = _cached_lanes(place, name)
     if found is not None:
         return found
-    try:
-        place.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise CompileError(f"cannot create the cache directory {place} ({err}); set "
-                           "WHEELTERRAIN_CACHE to a writable one") from err
+    make_cache_folder(place)
     with locked(place / f".{name}.lock"):  # another process may be compiling it
         found = _cached_lanes(place, name)
         return found if found is not None else _compile_lanes(source, name, place, cc)
