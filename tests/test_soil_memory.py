@@ -3,6 +3,7 @@ on the rig (model.soil_memory, soil.rut_depth, soil.unloading_stiffness)."""
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import json
 import math
@@ -125,23 +126,30 @@ def _step(fns, z, zp, v, p, h, slip=0.2):
     return float(fns.plastic_step(z, zp, v, out["mean_pressure"], out["sinkage_exponent"], p, h))
 
 
+@pytest.mark.parametrize("smooth", [None, 1e-5], ids=["law", "smooth-yield"])
 @pytest.mark.parametrize("form", FORMS)
-def test_the_yield_pressure_alone_is_the_contact_s_to_the_bit(form):
+def test_the_yield_pressure_alone_is_the_contact_s_to_the_bit(form, smooth):
     """The memory's co-simulation step takes the mean pressure and the exponent from kernels
-    that compute only those two (contact.yield_pressure, a third of the evaluation): the
+    that compute only those two (contact.yield_pressure, the forces not evaluated): the
     contact's values, bit for bit, pressed and lifted, in a kept rut and in a read one, at
-    every slip of the domain and whatever the wheel's angle."""
+    every slip of the domain and whatever the wheel's angle; with the slip MPC's smooth yield
+    (1e-5 m, mpc.YIELD_WIDTH) as with the law."""
     fns = model_functions.build()
+    if smooth is not None:
+        fns = dataclasses.replace(fns, contact_memory=model_functions.contact_memory_smooth(
+            smooth))
     z, slip, plastic = (ca.MX.sym(n) for n in ("z", "slip", "plastic"))
     p = ca.MX.sym("p", len(INDEX))
     alone = ca.Function("alone", [z, slip, plastic, p], list(contact.yield_pressure(
-        z, slip, plastic, soil.Params(p), fns.nodes)))
+        z, slip, plastic, soil.Params(p), fns.nodes, smooth)))
     rng = np.random.default_rng(7)
     compared = 0
     for rut, pressure in ((0.0, 0.0), (0.004, 0.0), (0.004, 6e3)):
         pv = _vector(FORMS[form], soil__rut_depth=rut, soil__rut_pressure=pressure)
-        for _ in range(60):
+        for k in range(60):
             zz, zp = rng.uniform(0, 0.03, 2)
+            if k % 2:  # every other point within the smooth yield's width of the yield
+                zp = zz + rng.uniform(-3e-5, 3e-5)
             s = rng.uniform(-1, 1)
             full = _memory(fns, zz, rng.uniform(-0.01, 0.01), s, zp, pv,
                            angle=rng.uniform(0, 7))

@@ -278,16 +278,11 @@ def terrain_functions(smooth: float | None = None
                           ["u", "angle", "plastic", "p"], ["y", "status", "info", "plastic_rate"])
     h = ca.MX.sym("h")
     # the imprint relaxing toward the soil ahead needs the contact's mean pressure and exponent
-    # at the step's start (the static mean pressure does not depend on the wheel angle: the
-    # grouser ripple acts on the forces, not on it, so the contact at angle 0 gives it); toward
-    # the wheel it needs neither, and the contact is not evaluated (a short-circuit switch)
-    if smooth is None:  # the two alone (contact.yield_pressure), the same numbers
-        pressure, exponent = contact.yield_pressure(sinkage, safe_slip, plastic,
-                                                    soil.Params(p), fns.nodes)
-    else:
-        still = dict(zip((*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS),
-                         held(sinkage, rate, safe_slip, 0, plastic, speed, p), strict=True))
-        pressure, exponent = still["mean_pressure"], still["sinkage_exponent"]
+    # at the step's start, which depend on neither the wheel angle nor the damper
+    # (contact.yield_pressure: those two alone, the contact's numbers); toward the wheel it
+    # needs neither, and the contact is not evaluated (a short-circuit switch)
+    pressure, exponent = contact.yield_pressure(sinkage, safe_slip, plastic, soil.Params(p),
+                                                fns.nodes, smooth)
     toward_soil = fns.plastic_step(sinkage, plastic, speed, pressure, exponent, p, h)
     toward_wheel = fns.plastic_step(sinkage, plastic, speed, 1, 0, p, h)
     relaxation = p[INDEX["model.imprint_relaxation"]]

@@ -1254,13 +1254,14 @@ YIELD_PRESSURE = ("mean_pressure", "sinkage_exponent")
 (:func:`plastic_update`)."""
 
 
-def yield_pressure(z, slip, plastic, P: Params, nodes: tuple[int, int]) -> tuple:
+def yield_pressure(z, slip, plastic, P: Params, nodes: tuple[int, int], smooth=None
+                   ) -> tuple:
     """(mean_pressure, sinkage_exponent) of :func:`contact_at` with the plastic sinkage
-    ``plastic``, the same numbers, from kernels that compute only those two (both belong to the
-    contact at the yield sinkage: the unloading does not scale them, the grouser ripple and the
-    damper do not enter them): a third of the contact's evaluation in the patch form, for the
-    co-simulation step of the soil's memory."""
-    theta_f = entry_angle(_yield_sinkage(z, plastic, P) - rut_surface(P), P)
+    ``plastic`` (and its ``smooth``), the same numbers, from kernels that compute only those
+    two (both belong to the contact at the yield sinkage: the unloading does not scale them,
+    the grouser ripple and the damper do not enter them), for the co-simulation step of the
+    soil's memory: the forces, torque and ripple are not evaluated."""
+    theta_f = entry_angle(_yield_sinkage(z, plastic, P, smooth) - rut_surface(P), P)
     case, switch = form_switch(nodes, True, YIELD_PRESSURE)
     out = switch(case(theta_f, slip, P.p), theta_f, slip, 0, P.p)
     return out[0], out[1]
