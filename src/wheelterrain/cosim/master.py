@@ -259,8 +259,8 @@ def _coupling_loop():
 
 
 COUPLING_CALLS = 6
-"""Calls per step of the compiled loop (coupling.c: rig get, terrain set, terrain get, rig set,
-rig step, terrain step): its stopping point is 6*k + call."""
+"""Calls per step of the direct loops (coupling.c's order: rig get, terrain set, terrain get,
+rig set, rig step, terrain step): the compiled loop's stopping point is 6*k + call."""
 
 
 def _cosimulate_direct(pair: Coupling, where: list[int], n: int, step: float) -> np.ndarray:
@@ -284,14 +284,16 @@ def _cosimulate_direct(pair: Coupling, where: list[int], n: int, step: float) ->
     n_states, n_forces = c_size_t(len(ter_in)), c_size_t(len(rig_in))
     xs, ys = np.empty((n + 1, len(rig_out))), np.empty((n + 1, len(ter_out)))
     rig, ter = pair.rig.fmu, pair.terrain.fmu
+    # each call of step k through fmpy's wrapper, in coupling.c's order: made again where the
+    # direct one did not return fmi2OK (fmpy raises with the FMU's reason)
+    redo = (lambda k: xs.__setitem__(k, rig.getReal(pair._rig_out)),
+            lambda k: ter.setReal(pair._ter_in, list(xs[k, :len(ter_in)])),
+            lambda k: ys.__setitem__(k, ter.getReal(pair._ter_out)),
+            lambda k: rig.setReal(pair._rig_in, list(ys[k, :len(rig_in)])),
+            lambda k: rig.doStep(k * step, step),
+            lambda k: ter.doStep(k * step, step))
     couple = _coupling_loop()
     if couple is not None:
-        redo = (lambda k: xs.__setitem__(k, rig.getReal(pair._rig_out)),
-                lambda k: ter.setReal(pair._ter_in, list(xs[k, :len(ter_in)])),
-                lambda k: ys.__setitem__(k, ter.getReal(pair._ter_out)),
-                lambda k: rig.setReal(pair._rig_in, list(ys[k, :len(rig_in)])),
-                lambda k: rig.doStep(k * step, step),
-                lambda k: ter.doStep(k * step, step))
         pointers = [rig_c, *(cast(f, c_void_p) for f in (rig_get, rig_set, rig_step)),
                     ter_c, *(cast(f, c_void_p) for f in (ter_get, ter_set, ter_step))]
         resume = 0
@@ -315,19 +317,19 @@ def _cosimulate_direct(pair: Coupling, where: list[int], n: int, step: float) ->
     for k in range(n + 1):
         x.value, y.value = x0 + k * dx, y0 + k * dy
         if rig_get(rig_c, rig_out, n_x, x) > WARNING:
-            rig.getReal(pair._rig_out)
+            redo[0](k)
         if ter_set(ter_c, ter_in, n_states, x) > WARNING:
-            ter.setReal(pair._ter_in, list(xs[k, :len(ter_in)]))
+            redo[1](k)
         if ter_get(ter_c, ter_out, n_y, y) > WARNING:
-            ter.getReal(pair._ter_out)
+            redo[2](k)
         if rig_set(rig_c, rig_in, n_forces, y) > WARNING:
-            rig.setReal(pair._rig_in, list(ys[k, :len(rig_in)]))
+            redo[3](k)
         if k < n:
             t.value = k * step
             if rig_step(rig_c, t, h, no_set_prior) > WARNING:
-                rig.doStep(k * step, step)
+                redo[4](k)
             if ter_step(ter_c, t, h, no_set_prior) > WARNING:
-                ter.doStep(k * step, step)
+                redo[5](k)
     return _record(xs, ys, where, n, step)
 
 
