@@ -72,13 +72,20 @@ def compile_function(fn: ca.Function, out_dir: Path, jacobian: bool = False,
     library = out_dir / f"{fn.name()}.so"
     with tempfile.TemporaryDirectory(prefix="wheelterrain_cg_") as tmp:
         source = _generate(fn, Path(tmp), jacobian)
+        _compile(cc, optimisation, source, library, "-lm")
+        library.with_suffix(".sha256").write_text(_digest(source) + "\n")
+    return library
+
+
+def _compile(cc: str, optimisation: str, source: Path, library: Path, *libs: str) -> None:
+    """Compile the C file ``source`` into the shared library ``library`` (installed whole,
+    :func:`install`); CompileError with the compiler's message where it fails."""
+    with tempfile.TemporaryDirectory(prefix="wheelterrain_c_") as tmp:
         partial = Path(tmp) / library.name
-        run = run_compiler([cc, optimisation, *CFLAGS, str(source), "-o", str(partial), "-lm"])
+        run = run_compiler([cc, optimisation, *CFLAGS, str(source), "-o", str(partial), *libs])
         if run.returncode != 0:
             raise CompileError(f"{cc} failed on {source.name}: {run.stderr.strip()[:2000]}")
         install(partial, library)
-        library.with_suffix(".sha256").write_text(_digest(source) + "\n")
-    return library
 
 
 def cached_library(fn: ca.Function, kind: str, jacobian: bool = False,
@@ -110,14 +117,7 @@ def cached_source(source: Path, optimisation: str = "-O2") -> Path:
     make_cache_folder(place)
     with locked(place.parent / f".{place.name}.lock"):  # another process may compile it
         if not library.is_file():
-            with tempfile.TemporaryDirectory(prefix="wheelterrain_c_") as tmp:
-                partial = Path(tmp) / library.name
-                run = run_compiler([cc, optimisation, *CFLAGS, str(source), "-o",
-                                    str(partial)])
-                if run.returncode != 0:
-                    raise CompileError(f"{cc} failed on {source.name}: "
-                                       f"{run.stderr.strip()[:2000]}")
-                install(partial, library)
+            _compile(cc, optimisation, source, library)
     return library
 
 
