@@ -409,7 +409,8 @@ def test_every_example_has_a_reference_compared_on_its_signals(built):
     Resources/Reference/WheelTerrain/Examples/<Example>/, and its run stops at the CSV's end."""
     examples = [p.stem for p in (built / ROOT / "Examples").glob("*.mo")
                 if "experiment(" in p.read_text(encoding="utf-8")]
-    assert len(examples) == 12  # SteadyC2, SlipRamp, 5 rovers, RigC1 ... RigC4, PlanarRig
+    # SteadyC2, SlipRamp, 5 rovers, RigC1 ... RigC4, PlanarRig, PlanarRover, PlanarRoverSlope
+    assert len(examples) == 14
     for name in examples:
         signals = reference.read_signals(built, name)
         ref = reference.read(built, name)
@@ -754,6 +755,33 @@ def test_the_planar_wheel_rolls_backward_as_the_mirror_and_lands_from_above(plan
     assert np.all(np.asarray(dropped["wheel.plastic_sinkage"])[air] == 0)
     load = rig.defaults()["rig.load"]
     assert abs(np.mean(np.asarray(dropped["normal_force"])[-100:]) - load) < 0.05 * load
+
+
+@needs_planar
+@pytest.mark.slow
+def test_the_rover_from_standard_parts_is_the_python_rover(built, msl_root):
+    """Examples.PlanarRoverSlope (PlanarRover: a body on PlanarMechanics' Frame, two
+    FixedTranslation axles, four PlanarWheels, four speed-loop drives from MSL parts mounted on
+    the wheels' supports, only connections between them) against RoverSlope's reference, the
+    Python model's rover: 3 s on level ground from its start in the soil, then the climb to
+    10 deg. At its own experiment tolerance every compared signal within 1e-8 of its largest
+    value (measured 1.3e-10, a front wheel's pull; PlanarRover against Rover's 10 s 2.1e-9). The
+    chassis pitches (the motors' reactions and the load transfer), so the wheels' spin, the
+    drives' mounting and the pitch rate in each axle's speed all take part."""
+    model = _load_example([msl_root], "PlanarRoverSlope")
+    assert model.structure().is_balanced
+    stop, interval = reference.rover_run("RoverSlope")
+    result = model.simulate((0.0, stop), dt=interval,
+                            config=_own_tolerance(built, "PlanarRoverSlope"))
+    ref = reference.read(built, "PlanarRoverSlope")
+    assert ref.keys() == reference.read(built, "RoverSlope").keys()
+    time = np.asarray(result.time)
+    assert np.allclose(time, ref["time"], rtol=0, atol=1e-9)
+    for key in reference.read_signals(built, "PlanarRoverSlope")[1:]:
+        got, want = np.asarray(result[key]), ref[key]
+        assert np.max(np.abs(got - want)) <= 1e-8 * np.max(np.abs(want)), key
+    pitch = np.asarray(result["pitch"])
+    assert np.ptp(pitch[time >= 3.0]) > 1e-3  # the climb pitches the chassis
 
 
 HORIZONTAL_RUN = """model Run

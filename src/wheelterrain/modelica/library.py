@@ -29,7 +29,10 @@ level), and where each part comes from:
 - ``Examples``: ``SteadyC2``, ``SlipRamp``, ``Rover``, ``RoverSlope``, ``RoverDescent``,
   ``RoverPullTest``, ``RoverSoftPatch`` and ``RigC1`` ... ``RigC4`` (the paper's
   rig from MSL components), ``PlanarRig`` (the rig with a PlanarWheel, level or tilted) with
-  ``Utilities.RigCarriage``, with ``experiment`` annotations at which they reproduce their
+  ``Utilities.RigCarriage``, ``PlanarRover`` and ``PlanarRoverSlope`` (the rover from standard
+  parts: ``Utilities.PlanarBody``, PlanarMechanics' FixedTranslation axles, four PlanarWheels,
+  four ``Utilities.SpeedDrive``; Rover's and RoverSlope's references), with ``experiment``
+  annotations at which they reproduce their
   reference results (``Resources/Reference``, MSL's regression layout: each example's CSV and
   ``comparisonSignals.txt``) written by the Python model.
 - ``UsersGuide``: conventions, slips, citations, the name map, what was tested in which tool.
@@ -944,6 +947,42 @@ def _rover_example(name: str = "Rover") -> str:
     return "\n".join(lines) + "\n"
 
 
+def _planar_rover() -> str:
+    """Examples.PlanarRover: the rover of Examples.Rover from standard parts (a body,
+    PlanarMechanics' FixedTranslation axles, four PlanarWheels, four Utilities.SpeedDrives), its
+    rover parameters Data.rover's rows by name."""
+    rows = {n.split(".", 1)[1]: rover.ROVER_NAMES.index(n) + 1 for n in rover.ROVER_NAMES
+            if n.count(".") == 1}
+    phase = NAMES.index("ripple.phase") + 1
+    wheels, connections = [], []
+    for k, w in enumerate(rover.WHEELS):  # a row each, top to bottom: drive, then wheel
+        y = 75 - 45 * k
+        j = rover.ROVER_NAMES.index(f"rover.grouser_phase.{w}") + 1
+        axle = "front" if w in rover.FRONT else "rear"
+        wheels += [f"  {LIBRARY}.Wheels.PlanarWheel {w}(parameters(ripple(phase="
+                   f"{LIBRARY}.Data.rashidPatch[{phase}] + r[{j}])))",
+                   f'    "{w}: its grouser phase the preset\'s and rover.grouser_phase.{w}"',
+                   f"    annotation({_placement(80, y)});",
+                   f"  {LIBRARY}.Examples.Utilities.SpeedDrive {w}_drive("
+                   f"J=r[{rows['wheel_inertia']}], bandwidth=r[{rows['speed_bandwidth']}],",
+                   f"    w_ref=rim_speed/slip_radius, tau_max=r[{rows['motor_torque_limit']}]) "
+                   f'"{w}\'s motor and speed loop"',
+                   f"    annotation({_placement(40, y)});"]
+        connections += [f"  connect({axle}.frame_b, {w}.frame_a);",
+                        f"  connect({w}_drive.flange_b, {w}.flange_a);",
+                        f"  connect({w}_drive.support, {w}.support);"]
+    return _template(
+        "PlanarRover", R=len(rover.ROVER_NAMES),
+        heave_start=translate.literal(reference.ROVER_HEAVE_START),
+        wheels="\n".join(wheels), connections="\n".join(connections),
+        experiment=_experiment("PlanarRover", *reference.rover_run("Rover")),
+        reference=_reference_doc("PlanarRover"),
+        **{name: rows[name] for name in (
+            "mass", "pitch_inertia", "wheelbase", "cg_forward", "cg_height", "gravity",
+            "rim_speed", "slip_radius", "ramp_time", "slope_rate", "slope_rate_after",
+            "slope_bound")})
+
+
 def _examples(lib: Library) -> None:
     where = f"{LIBRARY}/Examples"
     load = translate.literal(reference.STEADY_LOAD)
@@ -983,8 +1022,19 @@ def _examples(lib: Library) -> None:
         "PlanarRig", sinkage_start=translate.literal(reference.RIG_SINKAGE_START),
         experiment=_experiment("PlanarRig", reference.RIG_STOP, reference.RIG_INTERVAL),
         **rig))
+    _class_file(lib, where, "PlanarRover", _planar_rover())
+    slope = reference.PLANAR_ROVERS["PlanarRoverSlope"]
+    r = reference.rover_parameters(slope)
+    _class_file(lib, where, "PlanarRoverSlope", (
+        'model PlanarRoverSlope "The rover from standard parts: '
+        f'{reference.ROVER_DESCRIPTIONS[slope]}"\n'
+        f"  extends PlanarRover(r={_vector([r[n] for n in rover.ROVER_NAMES])});\n"
+        f"  annotation({_experiment('PlanarRoverSlope', *reference.rover_run(slope))},\n"
+        f'    Documentation(info="<html><p>PlanarRover with {slope}\'s rover parameters. '
+        f'{_reference_doc("PlanarRoverSlope")} ({slope}\'s: the Python model).</p></html>"));\n'
+        "end PlanarRoverSlope;\n"))
     _class_file(lib, where, "Utilities", _template("Utilities"))
-    order += ["PlanarRig", "Utilities"]
+    order += ["PlanarRig", "PlanarRover", "PlanarRoverSlope", "Utilities"]
     for case, s in reference.RIG_CASES.items():
         name = f"Rig{case}"
         run = _experiment(name, reference.RIG_STOP, reference.RIG_INTERVAL)

@@ -131,6 +131,9 @@ a stall at 27 deg, a slide at 8.9 deg); on level ground, a force holding the rov
 at 1 N/s (the pull test's profile, faster: the CLI's rises at 0.05 % of the weight per second
 until the rover stalls, an hour). Starting on the slope instead, the rover would slide while
 it sinks into the soil from its start."""
+PLANAR_ROVERS = {"PlanarRover": "Rover", "PlanarRoverSlope": "RoverSlope"}
+"""The rover examples from standard parts (PlanarWheels on a body) and the RoverChassis example
+whose rover each is: the same trajectory, so the same reference."""
 ROVER_MAPS = {"RoverSoftPatch": ground.soft_patch(presets.load())}
 """The rover examples on a terrain map (MapWheels): the soft-patch scenario's map over the
 default preset's soil."""
@@ -278,6 +281,8 @@ def files() -> dict[str, str]:
     for example in (*ROVER_PROFILES, *ROVER_MAPS):
         stop, interval = rover_run(example)
         tables[example] = _csv(ROVER_COLUMNS, rover_trajectory(stop, interval, example))
+    for example, same in PLANAR_ROVERS.items():
+        tables[example] = tables[same]
     out = {}
     for name, text in tables.items():
         out[f"{location(name)}/{name}.csv"] = text
