@@ -1,7 +1,5 @@
 block MapWheel "The Wheel on a terrain map: its soil the Terrain FMU's map gives at the wheel's position"
   extends WheelTerrain.Components.PartialWheel;
-  parameter Real p[${N}] = WheelTerrain.Data.rashidPatch
-    "the wheel's and the model's parameters in table order (its soil rows are the map's)";
   parameter Real g[${G}] = WheelTerrain.Data.terrain
     "the terrain map's parameters in table order (the Terrain FMU's: a soil, a patch of another)";
   input Real position(unit="m") "where the wheel's axle is along the path";

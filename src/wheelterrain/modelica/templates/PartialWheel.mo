@@ -1,5 +1,11 @@
 partial block PartialWheel "The WheelTerrain FMU's contact as a block (its model exchange), its parameter vector pk given by the block that extends it"
-  Real pk[${N}] "the parameters the contact takes, in table order";
+  replaceable parameter WheelTerrain.Records.Presets.RashidPatch parameters
+    constrainedby WheelTerrain.Records.Parameters
+    "the wheel and the contact model as a record (a preset, or your own values), p by default"
+    annotation(choicesAllMatching=true);
+  parameter Real p[${N}] = WheelTerrain.Records.parameterVector(parameters)
+    "the parameters in table order: the record's, or a vector of WheelTerrain.Data given instead";
+  Real pk[${N}] "the parameters the contact takes, in table order (p, its soil rows the extending block's)";
   replaceable function contactFunction = WheelTerrain.Functions.contact
     constrainedby WheelTerrain.Functions.Interfaces.Contact
     "the contact: Functions.contact (generated, the default) or Functions.External.contact (CasADi's C)";

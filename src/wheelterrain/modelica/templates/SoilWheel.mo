@@ -1,7 +1,5 @@
 block SoilWheel "The Wheel with the soil rows of its parameters as an input: a terrain's soil under the wheel"
   extends WheelTerrain.Components.PartialWheel;
-  parameter Real p[${N}] = WheelTerrain.Data.rashidPatch
-    "the wheel's and the model's parameters in table order (its soil rows are the input's)";
   input Real soil[${S}] "the soil.* parameters under the wheel, table order (Functions.Index.Soil)";
 equation
   pk = cat(1, p[1:${SOIL_FIRST}], soil, p[${SOIL_AFTER}:${N}]);
