@@ -76,6 +76,30 @@ def test_motor_power_is_traction_power_plus_losses(level_elastic):
         assert motor == pytest.approx(parts, rel=1e-6)
 
 
+def test_the_pull_at_the_wheels_sinkage_falls_with_slip_where_the_pressing_rover_grows(quiet):
+    """The disturbance that ends the climb on the soil with memory (rover_limits.unstable_cause):
+    on Earth, the wheels inheriting their rut's shear, the rover's pull at its wheels'
+    steady sinkages rises with slip at 26 deg and falls at 30.5 deg, and the rover linearised
+    on the pressing branch (growth_rate) is stable at the one and grows at the other, so a
+    disturbance that grows at 30.5 deg is named slip_sinkage; with model.rut_shear 0 the
+    pull rises at 30.5 deg too, the rover is stable there, and a disturbance that grew would
+    be named stability."""
+    p = rover.defaults()
+    for values, deg, falls in (({}, 26.0, False), ({}, 30.5, True),
+                               ({"model.rut_shear": 0.0}, 30.5, False)):
+        terrain = rover_scenarios.terrain_of(quiet.with_values(values))
+        slope = math.radians(deg)
+        slip = rover_limits.steady_slip(terrain, p, slope)
+        balance = rover.steady_balance(terrain, p, slope, slip)
+        assert (rover_limits.pull_slope_at_sinkage(balance) < 0) == falls, (values, deg)
+        assert (rover_limits.growth_rate(terrain, p, slope, slip)["rate"] > 0) == falls
+        assert rover_limits.steady_cause(terrain, p, slope, slip) is None
+        named = rover_limits.unstable_cause(terrain, p, slope, slip)
+        assert named == ("slip_sinkage" if falls else "stability")
+    elastic = rover_scenarios.terrain_of(quiet.with_values({"model.soil_memory": 0}))
+    assert rover_limits.unstable_cause(elastic, p, math.radians(30.5)) == "stability"
+
+
 RUT_LOOP = pytest.mark.xfail(strict=True, reason=(
     "the Moon's ramped climb stalls 1 deg before the probe predicts (27.29 against 28.33 deg, "
     "ripple-free): a loop through the ruts "

@@ -21,7 +21,7 @@ import numpy as np
 from wheelterrain.cosim import ruts
 from wheelterrain.cosim.rover import STEP, RoverResult, Soil, coupled_forces, simulate
 from wheelterrain.errors import WheelTerrainError
-from wheelterrain.model import rover
+from wheelterrain.model import api, rover
 from wheelterrain.model.slip import ground_speed
 from wheelterrain.parameters import NAMES
 
@@ -256,6 +256,30 @@ def statically_stable(terrain: Mapping, p: Mapping[str, float], slope: float,
             > rover.steady_balance(terrain, p, slope, lo)["surplus"])
 
 
+def pull_slope_at_sinkage(balance: dict) -> float:
+    """d(sum of the wheels' pulls)/d(slip) [N] of the rover in steady motion (``balance``,
+    :func:`rover.steady_balance`) with every wheel held at its sinkage there, each on its
+    soil there (a rear wheel in its rut): the pull the slip changes before the wheels sink
+    to the new slip's depth. Negative, more slip gives less pull at once: the slip-sinkage
+    law lowers the load a sinkage carries, and so the thrust, faster than the shear
+    displacement raises it (a rear wheel that inherits its rut's shear has it mobilised
+    already); the rover slows, its slip grows, and the loop runs on the time scale of its
+    speed, m*omega*R / |this| (0.3 s over 11 N at 30.5 deg on Earth), unless the wheels sink
+    to the new balance first. Where this is negative the rover's linearisation on the
+    pressing branch has an unstable eigenvalue (measured on Earth: +4.7/s at 29.6 deg, none
+    at 26 deg; with model.rut_shear 0 it stays positive and the linearisation stable): the
+    dynamic side of ``slip_sinkage``."""
+    slip = balance["slip"]
+    h = 1e-4
+    lo, hi = max(slip - h, LOCKED), min(slip + h, 0.999)
+    total = 0.0
+    for w in rover.WHEELS:
+        z, ground = balance["wheels"][w]["sinkage"], balance["terrain"][w]
+        total += (api.contact_forces(ground, z, hi)["drawbar_pull"]
+                  - api.contact_forces(ground, z, lo)["drawbar_pull"]) / (hi - lo)
+    return total
+
+
 STALL_CAUSES = ("traction", "slip_sinkage", "stability", "motor_torque", "domain")
 """What can end a slope or descent run (``stall_cause``), in the order they are tested."""
 
@@ -264,9 +288,10 @@ def steady_cause(terrain: Mapping, p: Mapping[str, float], slope: float,
                  slip: float | None = None) -> str | None:
     """Which steady condition fails on ``slope``, or None: no steady slip in
     [SLIDE_SLIP, STALL_SLIP] (``traction``: the wheels cannot hold the rover; downhill, it
-    slides), the force balance falls with slip there (``slip_sinkage``), or the motors
-    cannot give its torque (``motor_torque``, rover.motor_torque_limit). ``slip``: the
-    slope's steady slip where the caller has it (:func:`steady_slip`)."""
+    slides), the force balance falls with slip there (``slip_sinkage``, with the wheels
+    sunk to each slip's depth: :func:`statically_stable`), or the motors cannot give its
+    torque (``motor_torque``, rover.motor_torque_limit). ``slip``: the slope's steady slip
+    where the caller has it (:func:`steady_slip`)."""
     i = steady_slip(terrain, p, slope) if slip is None else slip
     if i is None:
         return "traction"
@@ -279,16 +304,37 @@ def steady_cause(terrain: Mapping, p: Mapping[str, float], slope: float,
     return None
 
 
+def unstable_cause(terrain: Mapping, p: Mapping[str, float], slope: float,
+                   slip: float | None = None) -> str:
+    """What a disturbance that grew out of a steady motion that exists, is statically stable
+    and within the motors' torque (``slip``, else the slope's steady slip) is: on a soil with
+    memory, ``slip_sinkage`` where the rover's pull at its wheels' sinkage falls with slip
+    (:func:`pull_slope_at_sinkage`; measured: the rover linearised on the pressing branch
+    grows exactly there, the chassis' pitch inertia and speed loops barely move it, and
+    without the rut's inherited shear neither happens), else ``stability``. On the elastic
+    soil it stays ``stability``: there the pull at the wheels' sinkage falls with slip from
+    10.5 deg on the Moon while the rover holds to 12.3 deg, so the test does not say what
+    grew."""
+    if not has_memory(terrain):
+        return "stability"
+    i = steady_slip(terrain, p, slope) if slip is None else slip
+    if i is None:
+        return "stability"
+    falls = pull_slope_at_sinkage(rover.steady_balance(terrain, p, slope, i)) < 0
+    return "slip_sinkage" if falls else "stability"
+
+
 def run_cause(res: RoverResult, terrain: Mapping, p: Mapping[str, float],
               slope: float) -> str:
     """Which of STALL_CAUSES ended a run that stalled or slid at ``slope`` [rad]: ``domain``
     where it left the model's domain other than by its slip (a non-finite value, a refused
     step); else the first steady condition that fails there (:func:`steady_cause`, on the
-    ripple-free soil ``terrain``); else ``stability``: a steady motion that the motors can
-    drive exists and is statically stable, and the run did not hold it (a disturbance grew)."""
+    ripple-free soil ``terrain``); else what the disturbance that grew was
+    (:func:`unstable_cause`: ``slip_sinkage`` or ``stability``): a steady motion that the
+    motors can drive exists and is statically stable, and the run did not hold it."""
     if res.left_domain and "slip reached" not in res.left_domain:
         return "domain"
-    return steady_cause(terrain, p, slope) or "stability"
+    return steady_cause(terrain, p, slope) or unstable_cause(terrain, p, slope)
 
 
 def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
@@ -298,14 +344,17 @@ def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
     has a steady motion that it also holds: a steady slip exists in [SLIDE_SLIP, STALL_SLIP]
     (else ``traction``: the wheels cannot hold the rover, downhill it slides), more slip gives
     more net force there (else ``slip_sinkage``, :func:`statically_stable`), and a disturbance
-    dies out (else ``stability``): on a soil without memory the linearisation about the steady
-    motion has no eigenvalue with a positive real part; on a soil with memory, which has none,
-    the perturbed motion is run (:func:`holds`). Bisection on the slope from level ground, every
-    condition checked at every trial; ``limit`` says which one ended it (a tolerance of
-    1e-3 rad where the motion is run). ``mode``: for ``stability``, the disturbance that grew
-    at the first slope past the limit (:func:`_grown_mode` from the probe run; on a soil
-    without memory the eigenvalue's real part and frequency, ``leading`` "eigenvalue"), else
-    None. ``trials(k, n)`` is told each trial done, of the n the bisection takes at most."""
+    dies out (else ``stability``, or on a soil with memory ``slip_sinkage`` where the pull at
+    the wheels' sinkage falls with slip, :func:`unstable_cause`): on a soil without memory
+    the linearisation about the steady motion has no eigenvalue with a positive real part; on
+    a soil with memory, which has none, the perturbed motion is run (:func:`holds`).
+    Bisection on the slope from level ground, every condition checked at every trial;
+    ``limit`` says which one ended it (a tolerance of 1e-3 rad where the motion is run).
+    ``mode``: for a disturbance that grew (``stability``, or ``slip_sinkage`` on a soil with
+    memory), the disturbance that grew at the first slope past the limit
+    (:func:`_grown_mode` from the probe run; on a soil without memory the eigenvalue's real
+    part and frequency, ``leading`` "eigenvalue"), else None. ``trials(k, n)`` is told each
+    trial done, of the n the bisection takes at most."""
     top = direction * math.radians(60)
     memory = has_memory(terrain)
     if memory:
@@ -334,14 +383,14 @@ def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,
         if memory:
             run = probe(terrain, p, slope, i)
             modes[slope] = run["mode"]
-            return None if run["holds"] else "stability"
+            return None if run["holds"] else unstable_cause(terrain, p, slope, i)
         g = growth_rate(terrain, p, slope, i)
         modes[slope] = {"leading": "eigenvalue", "growth_rate_per_s": g["rate"],
                         "frequency_hz": g["frequency_hz"]}
         return "stability" if g["rate"] > 0 else None
 
     def mode(slope: float, why: str | None) -> dict | None:
-        return modes.get(slope) if why == "stability" else None
+        return modes.get(slope) if why in ("stability", "slip_sinkage") else None
 
     level = verdict(0.0)  # each verdict once: on a soil with memory it runs the rover
     if level is not None:
