@@ -265,10 +265,11 @@ def pull_slope_at_sinkage(balance: dict) -> float:
     displacement raises it (a rear wheel that inherits its rut's shear has it mobilised
     already); the rover slows, its slip grows, and the loop runs on the time scale of its
     speed, m*omega*R / |this| (0.3 s over 11 N at 30.5 deg on Earth), unless the wheels sink
-    to the new balance first. Where this is negative the rover's linearisation on the
-    pressing branch has an unstable eigenvalue (measured on Earth: +4.7/s at 29.6 deg, none
-    at 26 deg; with model.rut_shear 0 it stays positive and the linearisation stable): the
-    dynamic side of ``slip_sinkage``."""
+    to the new balance first: the dynamic side of ``slip_sinkage``. Measured: on Earth it
+    turns at 29.2 deg and the rover linearised on the pressing branch turns unstable with it
+    (between 29.2 and 29.4 deg); on the Moon it turns at 27.3 deg, where the ramped climb
+    stalls, the linearisation later (-0.26/s at 27.6 deg); with model.rut_shear 0 it stays
+    positive and the linearisation stable."""
     slip = balance["slip"]
     h = 1e-4
     lo, hi = max(slip - h, LOCKED), min(slip + h, 0.999)
@@ -309,9 +310,10 @@ def unstable_cause(terrain: Mapping, p: Mapping[str, float], slope: float,
     """What a disturbance that grew out of a steady motion that exists, is statically stable
     and within the motors' torque (``slip``, else the slope's steady slip) is: on a soil with
     memory, ``slip_sinkage`` where the rover's pull at its wheels' sinkage falls with slip
-    (:func:`pull_slope_at_sinkage`; measured: the rover linearised on the pressing branch
-    grows exactly there, the chassis' pitch inertia and speed loops barely move it, and
-    without the rut's inherited shear neither happens), else ``stability``. On the elastic
+    (:func:`pull_slope_at_sinkage`; measured: on Earth the rover linearised on the pressing
+    branch turns unstable where it turns, the chassis' pitch inertia and speed loops barely
+    move that growth, and without the rut's inherited shear neither happens), else
+    ``stability``. On the elastic
     soil it stays ``stability``: there the pull at the wheels' sinkage falls with slip from
     10.5 deg on the Moon while the rover holds to 12.3 deg, so the test does not say what
     grew."""
