@@ -104,7 +104,9 @@ RUT_LOOP = pytest.mark.xfail(strict=True, reason=(
     "the Moon's ramped climb stalls 1 deg before the probe predicts (27.29 against 28.33 deg, "
     "ripple-free): a loop through the ruts "
     "(front wheel, rut, rear wheel a wheelbase later, pitch) of 0.04 Hz that the ramped run "
-    "grows and the probe's small kick does not, over twelve wheelbases (docs/rover.md)"))
+    "grows and the probe's small kick does not, over twelve wheelbases; it stalls where the "
+    "rover's pull at its wheels' sinkage turns to fall with slip (27.3 deg), which names the "
+    "cause and does not decide the limit (docs/rover.md)"))
 
 
 @pytest.mark.slow
