@@ -336,7 +336,10 @@ def run_cause(res: RoverResult, terrain: Mapping, p: Mapping[str, float],
     motors can drive exists and is statically stable, and the run did not hold it."""
     if res.left_domain and "slip reached" not in res.left_domain:
         return "domain"
-    return steady_cause(terrain, p, slope) or unstable_cause(terrain, p, slope)
+    i = steady_slip(terrain, p, slope)  # once, for both tests
+    if i is None:
+        return "traction"
+    return steady_cause(terrain, p, slope, i) or unstable_cause(terrain, p, slope, i)
 
 
 def limit_slope(terrain: Mapping, p: Mapping[str, float], direction: int = 1,

@@ -983,6 +983,17 @@ def _planar_rover() -> str:
             "slope_bound")})
 
 
+def _profiled_rover(name: str, base: str, example: str, what: str, info: str) -> str:
+    """Examples.``name``: the rover example ``base`` with the rover parameters of the rover
+    example ``example`` (its input profile, reference.ROVER_PROFILES) and its run."""
+    r = reference.rover_parameters(example)
+    return (f'model {name} "{what}: {reference.ROVER_DESCRIPTIONS[example]}"\n'
+            f"  extends {base}(r={_vector([r[n] for n in rover.ROVER_NAMES])});\n"
+            f"  annotation({_experiment(name, *reference.rover_run(example))},\n"
+            f'    Documentation(info="<html><p>{info}</p></html>"));\n'
+            f"end {name};\n")
+
+
 def _examples(lib: Library) -> None:
     where = f"{LIBRARY}/Examples"
     load = translate.literal(reference.STEADY_LOAD)
@@ -1004,18 +1015,12 @@ def _examples(lib: Library) -> None:
     for example, profile in reference.ROVER_PROFILES.items():
         if example == "Rover":
             continue
-        r = reference.rover_parameters(example)
-        what = reference.ROVER_DESCRIPTIONS[example]
         changed = ", ".join(sorted(profile))
-        text = (f'model {example} "The rover: {what}"\n'
-                f"  extends Rover(r={_vector([r[n] for n in rover.ROVER_NAMES])});\n"
-                f"  annotation({_experiment(example, *reference.rover_run(example))},\n"
-                f'    Documentation(info="<html><p>Data.rover with {changed} changed. '
-                f"{_reference_doc(example)} (the Python model, as for "
-                "Rover). <code>wheelterrain rover --scenario slope|descent|pull-test</code> "
-                'goes on until the rover stalls or slides.</p></html>"));\n'
-                f"end {example};\n")
-        _class_file(lib, where, example, text)
+        _class_file(lib, where, example, _profiled_rover(
+            example, "Rover", example, "The rover",
+            f"Data.rover with {changed} changed. {_reference_doc(example)} (the Python model, "
+            "as for Rover). <code>wheelterrain rover --scenario slope|descent|pull-test</code> "
+            "goes on until the rover stalls or slides."))
         order.append(example)
     order.append("Rig")
     _class_file(lib, where, "PlanarRig", _template(
@@ -1024,15 +1029,10 @@ def _examples(lib: Library) -> None:
         **rig))
     _class_file(lib, where, "PlanarRover", _planar_rover())
     slope = reference.PLANAR_ROVERS["PlanarRoverSlope"]
-    r = reference.rover_parameters(slope)
-    _class_file(lib, where, "PlanarRoverSlope", (
-        'model PlanarRoverSlope "The rover from standard parts: '
-        f'{reference.ROVER_DESCRIPTIONS[slope]}"\n'
-        f"  extends PlanarRover(r={_vector([r[n] for n in rover.ROVER_NAMES])});\n"
-        f"  annotation({_experiment('PlanarRoverSlope', *reference.rover_run(slope))},\n"
-        f'    Documentation(info="<html><p>PlanarRover with {slope}\'s rover parameters. '
-        f'{_reference_doc("PlanarRoverSlope")} ({slope}\'s: the Python model).</p></html>"));\n'
-        "end PlanarRoverSlope;\n"))
+    _class_file(lib, where, "PlanarRoverSlope", _profiled_rover(
+        "PlanarRoverSlope", "PlanarRover", slope, "The rover from standard parts",
+        f"PlanarRover with {slope}'s rover parameters. {_reference_doc('PlanarRoverSlope')} "
+        f"({slope}'s: the Python model)."))
     _class_file(lib, where, "Utilities", _template("Utilities"))
     order += ["PlanarRig", "PlanarRover", "PlanarRoverSlope", "Utilities"]
     for case, s in reference.RIG_CASES.items():
