@@ -103,3 +103,47 @@ def test_every_fmu_serves_a_locked_wheel(built_root, path, kind):
     assert np.all(run["slip_paper"] == -1.0)
     for key in ("normal_force", "drawbar_pull", "torque"):
         assert run[key] == pytest.approx(want[key], rel=1e-9), key
+
+
+def test_the_slip_is_regularised_through_standstill_and_unchanged_where_it_was_defined():
+    """The model's slip in the frame of the faster motion (functions.backward: the mirror image
+    where omega*R + V < 0), (omega*R - V)/max(|omega*R|, |V|, v0) with v0 = SLIP_SPEED_FLOOR:
+    - where both speeds have one sign and the faster is at least v0 (every declared operating
+      point), bit for bit (omega*R - V)/max(omega*R, V) along the rolling, the slip before
+      the regularisation;
+    - within v0 of rest (|omega*R| + |V| <= v0) in [-1, 1] whatever the signs, and a
+      continuous function of the speeds on either side of the line where the rolling flips:
+      no step between neighbouring grid points larger than its Lipschitz bound 2*step/v0;
+    - 0 at rest, and the wheel turning against its axle's motion beyond v0 outside [-1, 1]."""
+    from wheelterrain.fmu import functions
+
+    v0 = functions.SLIP_SPEED_FLOOR
+
+    def sigma(rim, speed):
+        sign = np.where(functions.backward(rim, speed, 1.0), -1.0, 1.0)
+        got, _ = functions.slips(sign * rim, sign * speed, 1.0)
+        return np.asarray(got, dtype=float).reshape(np.shape(rim))
+
+    assert sigma(np.array(0.0), np.array(0.0)) == 0.0
+    # the declared operating points: one sign, the faster at least v0
+    rng = np.random.default_rng(7)
+    faster = v0 * 10 ** rng.uniform(0, 6, 4000)
+    ratio = rng.uniform(0, 1, 4000)
+    for sign in (1.0, -1.0):
+        for rim, speed in ((faster, faster * ratio), (faster * ratio, faster)):
+            want = (rim - speed) / np.maximum(rim, speed)  # along the rolling
+            np.testing.assert_array_equal(sigma(sign * rim, sign * speed), want)
+    # through rest: a grid over [-3 v0, 3 v0]^2
+    step = v0 / 50
+    axis = np.arange(-150, 151) * step
+    rim, speed = np.meshgrid(axis, axis, indexing="ij")
+    s = sigma(rim, speed)
+    near = np.abs(rim) + np.abs(speed) <= v0 * (1 - 1e-12)
+    assert np.all(np.abs(s[near]) <= 1)
+    against = (rim * speed < 0) & (np.abs(rim) + np.abs(speed) > v0 * (1 + 1e-9))
+    assert np.all(np.abs(s[against]) > 1)
+    flips = np.sign(rim + speed)
+    for axis_k in (0, 1):
+        jump = np.abs(np.diff(s, axis=axis_k))
+        same_side = np.diff(flips, axis=axis_k) == 0
+        assert np.all(jump[same_side] <= 2 * step / v0 * (1 + 1e-9))

@@ -17,6 +17,7 @@ from fmpy.validation import validate_fmu
 
 from wheelterrain import model, presets
 from wheelterrain.fmu.instance import Instance
+from wheelterrain.model.slip import reference_radius
 from wheelterrain.parameters import TABLE
 
 NAMES = ("WheelTerrain", "SingleWheelRig")
@@ -174,7 +175,9 @@ def test_braking_and_driving_use_the_contact_models_slip(fmus, slip):
 
 
 @pytest.mark.parametrize(("omega", "speed", "slip"), [
-    (-0.6, 0.01, "-4"),  # the wheel turning backward under a carriage moving forward
+    # the wheel turning backward under a carriage moving forward, the rim faster: the slip of
+    # the mirror image (rolling backward), (0.03 + 0.01)/0.03
+    (-0.6, 0.01, "1.33333"),
     (0.6, -0.02, "1.66667"),  # the carriage moving backward under a wheel turning forward
 ])
 def test_speeds_outside_the_slip_domain_are_refused_with_the_reason(fmus, omega, speed, slip):
@@ -185,6 +188,31 @@ def test_speeds_outside_the_slip_domain_are_refused_with_the_reason(fmus, omega,
         message = " ".join(t.errors())
         assert f"gives slip {slip}, outside the model's domain" in message, t.log
         assert "in [-1, 1], from a locked wheel (-1) to spinning in place (1)" in message
+        assert "against its carriage's motion only within 1e-05 m/s of rest" in message
+    finally:
+        t.close()
+
+
+@pytest.mark.parametrize(("rim", "speed", "slip"), [
+    (-3e-6, 5e-6, -0.8),  # the wheel turning backward a little, its carriage still forward
+    (4e-6, -1e-6, 0.5),  # the carriage a little backward, the wheel still forward
+    (2e-6, 2e-6, 0.0),  # both creeping at the same speed
+    (-6e-6, -2e-6, 0.4),  # backward, both below the floor: the mirror image's (6 - 2)/10
+])
+def test_a_wheel_and_its_carriage_pass_through_rest_with_the_regularised_slip(fmus, rim, speed,
+                                                                              slip):
+    """Within the slip's speed floor (1e-5 m/s) of rest the wheel and its carriage may turn
+    against each other, as they do when a vehicle stops and reverses: the step is served, its
+    slip (omega*R_ref - V)/1e-5 m/s in the frame of the faster motion, the forces finite."""
+    radius = reference_radius(presets.load(presets.DEFAULT_PRESET))
+    t = terrain(fmus, sinkage=0.02, wheel_speed=rim / radius, carriage_speed=speed)
+    try:
+        t.fmu.doStep(0.0, 1e-3)
+        got = dict(zip(("slip", "normal_force", "drawbar_pull"),
+                       t.get(("slip", "normal_force", "drawbar_pull")), strict=True))
+        assert got["slip"] == pytest.approx(slip, abs=1e-9)
+        assert all(math.isfinite(v) for v in got.values())
+        assert got["normal_force"] > 0
     finally:
         t.close()
 

@@ -311,7 +311,7 @@ class Controller:
         # so the objective's and the limits' derivatives skip the contact model
         named = rig.named(pr)
         omega, speed = xs[2, :].T, xs[4, :].T
-        slip, _, _ = fmu_model.slips(omega, speed, fmu_model.slip_radius(pt))
+        slip, _ = fmu_model.slips(omega, speed, fmu_model.slip_radius(pt))
         motor = rig.motor_torque(tuple(xs[k, :].T for k in range(len(rig.RIG_STATES))),
                                  (0, 0, 0, u, u), named)
         power = motor * omega

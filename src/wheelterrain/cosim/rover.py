@@ -66,7 +66,7 @@ def coupled_forces(xs: list, p: dict, pt: ca.MX, angles, plastics=None) -> tuple
     for k, w in enumerate(rover.WHEELS):
         z, rate = rover.wheel_kinematics(xs, p, w)
         speed = rover.axle_speed(xs, p, w)
-        unified, _, _ = functions.slips(s[f"{w}.wheel_speed"], speed, p["rover.slip_radius"])
+        unified, _ = functions.slips(s[f"{w}.wheel_speed"], speed, p["rover.slip_radius"])
         slip = ca.fmin(ca.fmax(unified, -1), 1)
         if plastics is None:
             out = dict(zip(contact.CONTACT_OUTPUTS,

@@ -408,7 +408,7 @@ def _chassis_slips(data: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
     radius = chassis_values(values)["rover.slip_radius"]
     wheels, _ = rover_system.named_record(data)
     for k, w in enumerate(rover.WHEELS):
-        unified, _, _ = functions.slips(wheels[w]["wheel_speed"], axles[k], radius)
+        unified, _ = functions.slips(wheels[w]["wheel_speed"], axles[k], radius)
         data[k * len(RECORD) + RECORD.index("slip")] = np.asarray(unified).ravel()
     return data
 

@@ -13,9 +13,9 @@ WheelTerrain
     TERRAIN_OUTPUTS (without wheel_angle and plastic_sinkage, the wrapper's states); ``guess``
     the sinkage [m] the solve starts Newton from (``warm_start``: the last contact_sinkage
     output), 0 for a cold solve (``model_functions.build().steady_from``). ``status``: STATUS_OK,
-    STATUS_SLIP (the wheel and the carriage moving in opposite directions, or the slip
-    outside [-1, 1]; a wheel rolling backward is the mirror image of one rolling forward,
-    MIRRORED;
+    STATUS_SLIP (the slip outside [-1, 1]: the wheel turning against the carriage's motion
+    beyond the slip's regularisation speed, :func:`slips`; a wheel rolling backward is the
+    mirror image of one rolling forward, MIRRORED;
     ``info`` is the slip), STATUS_ANGLE (the slip_angle input beyond SLIP_ANGLE_LIMIT; ``info``
     is the limit), STATUS_TURN (the yaw_rate input over the carriage speed beyond
     TURN_SLIP_LIMIT; ``info`` is the limit), STATUS_LOAD (load beyond the capacity; ``info``
@@ -61,7 +61,13 @@ if ROVER_INPUTS != rover.INPUTS:
     raise ImportError(f"RoverChassis' inputs {ROVER_INPUTS} differ from the rover model's "
                       f"{rover.INPUTS}")
 
-SPEED_FLOOR = 1e-9  # m/s: below this the wheel and the carriage are both at rest (slip 0)
+SPEED_FLOOR = 1e-9  # m/s: below this a speed is at rest (the paper's slip 0, the turn slip's floor)
+SLIP_SPEED_FLOOR = 1e-5
+"""m/s: the model's slip is regularised below this speed (:func:`slips`), the way PlanarMechanics'
+SlipBasedWheelJoint floors the speed its slip is divided by (vAdhesion_min): a tenth of the
+slowest rim speed the rig and the rover declare (rig.rim_speed, rover.rim_speed >= 1e-4 m/s),
+so no declared operating point moves, and a wheel and its axle pass through standstill with a
+continuous slip."""
 STATUS_OK, STATUS_SLIP, STATUS_LOAD, STATUS_UNCONVERGED, STATUS_BURIED, STATUS_NONFINITE = (
     0, 1, 2, 3, 4, 5)
 STATUS_ANGLE, STATUS_TURN = 6, 7
@@ -73,10 +79,11 @@ FINITE_LIMIT = 1e300  # |y| at or above this (or NaN) is not a finite output
 # carriage_speed, load.
 STATUS_MESSAGES = {
     STATUS_SLIP: ("wheel speed %g rad/s with carriage speed %g m/s gives slip %g, outside "
-                  "the model's domain: the model covers rolling forward or backward (wheel "
-                  "and carriage speeds not of opposite signs), its slip (omega*R_ref - "
-                  "V)/max(omega*R_ref, V) along the rolling in [-1, 1], from a locked wheel "
-                  "(-1) to spinning in place (1)"),
+                  "the model's domain: the model covers rolling forward or backward, its slip "
+                  "(omega*R_ref - V)/max(|omega*R_ref|, |V|, " f"{SLIP_SPEED_FLOOR:g}" " m/s) "
+                  "along the rolling in [-1, 1], from a locked wheel (-1) to spinning in "
+                  "place (1); a wheel turning against its carriage's motion only within "
+                  f"{SLIP_SPEED_FLOOR:g}" " m/s of rest (|omega*R_ref| + |V|)"),
     STATUS_LOAD: ("load %g N exceeds what the wheel can carry fully buried (%.6g N); valid range "
                   "[0, %.6g] N"),
     STATUS_UNCONVERGED: "sinkage solve did not converge for load %g N",
@@ -138,32 +145,30 @@ positive). The slip output is the slip relative to the direction of rolling."""
 
 
 def backward(wheel_speed, carriage_speed, slip_radius):
-    """True where the wheel rolls backward: neither speed above SPEED_FLOOR and one below
-    -SPEED_FLOOR (the rim's omega*R and the carriage's V; plain arithmetic on floats or CasADi
-    symbols)."""
-    rim = wheel_speed * slip_radius
-    return ca.logic_and(ca.logic_and(rim < SPEED_FLOOR, carriage_speed < SPEED_FLOOR),
-                        ca.logic_or(rim < -SPEED_FLOOR, carriage_speed < -SPEED_FLOOR))
+    """True where the wheel rolls backward: the rim's speed omega*R and the carriage's V sum
+    below 0 (both <= 0, one below; within SLIP_SPEED_FLOOR of rest, the faster of the two
+    moving backward). Plain arithmetic on floats or CasADi symbols."""
+    return wheel_speed * slip_radius + carriage_speed < 0
 
 
 def slips(wheel_speed, carriage_speed, slip_radius):
-    """(the model's slip, the paper's slip, forward) from the wheel's and the carriage's speeds.
+    """(the model's slip, the paper's slip) from the wheel's and the carriage's speeds.
 
-    The model's slip sigma = (omega*R - V)/max(omega*R, V) (:mod:`wheelterrain.model.slip`):
-    the traction slip driving, the skid braking, so the forces are those of the true kinematics
-    on either side, from a locked wheel (omega = 0: -1) to spinning in place (V = 0: 1); both
-    at rest (below SPEED_FLOOR) give 0. ``forward`` is false when the wheel or the carriage
-    moves backward (beyond SPEED_FLOOR): the model covers forward rolling only. The paper's
-    s = (omega*R - V)/V: NaN with the carriage at rest and the wheel turning
-    (:func:`paper_slip`).
+    The model's slip sigma = (omega*R - V)/max(|omega*R|, |V|, SLIP_SPEED_FLOOR)
+    (:mod:`wheelterrain.model.slip`): the traction slip driving, the skid braking, so the
+    forces are those of the true kinematics on either side, from a locked wheel (omega = 0: -1)
+    to spinning in place (V = 0: 1). Below SLIP_SPEED_FLOOR the denominator is that speed: the
+    slip is regularised, a continuous function of the two speeds through standstill (0 at
+    rest), and a wheel turning against its axle's motion has a slip in [-1, 1] while the two
+    speeds' magnitudes sum to no more than the floor (the wheel and its axle passing through
+    rest a little apart, as when a vehicle reverses); beyond, |sigma| > 1, outside the model.
+    Rolling backward (:func:`backward`) is taken as the mirror image: call this with both
+    speeds negated. The paper's s = (omega*R - V)/V: NaN with the carriage at rest and the
+    wheel turning (:func:`paper_slip`).
     """
     rim = wheel_speed * slip_radius
-    difference = rim - carriage_speed
-    at_rest = ca.fmax(ca.fabs(rim), ca.fabs(carriage_speed)) < SPEED_FLOOR
-    faster = ca.fmax(ca.fmax(rim, carriage_speed), SPEED_FLOOR)
-    unified = ca.if_else(at_rest, 0, difference / faster)
-    forward = ca.logic_and(rim > -SPEED_FLOOR, carriage_speed > -SPEED_FLOOR)
-    return unified, paper_slip(wheel_speed, carriage_speed, slip_radius), forward
+    scale = ca.fmax(ca.fmax(ca.fabs(rim), ca.fabs(carriage_speed)), SLIP_SPEED_FLOOR)
+    return (rim - carriage_speed) / scale, paper_slip(wheel_speed, carriage_speed, slip_radius)
 
 
 def paper_slip(wheel_speed, carriage_speed, slip_radius):
@@ -243,8 +248,8 @@ def terrain_functions(smooth: float | None = None
     # rolling backward (both speeds <= 0): the mirror image of rolling forward (MIRRORED)
     sign = ca.if_else(backward(omega, speed, radius), -1, 1)
     omega, speed = sign * omega, sign * speed
-    unified, paper, forward = slips(omega, speed, radius)
-    slip_bad = ca.logic_or(ca.logic_not(forward), ca.logic_or(unified < -1, unified > 1))
+    unified, paper = slips(omega, speed, radius)
+    slip_bad = ca.logic_or(unified < -1, unified > 1)
     safe_slip = ca.fmin(ca.fmax(unified, -1), 1)  # only used when the status is OK
 
     beta = sign * named["slip_angle"]

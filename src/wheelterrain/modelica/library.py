@@ -246,21 +246,24 @@ def exported() -> tuple[Exported, ...]:
     wheel_speed, carriage_speed, p = ca.SX.sym("wheel_speed"), ca.SX.sym(
         "carriage_speed"), ca.SX.sym("p", len(NAMES))
     # the paper's slip is left out: it is NaN with the axle at rest, and Modelica has no NaN
-    sigma, _, _ = fmu_functions.slips(wheel_speed, carriage_speed,
+    sigma, _ = fmu_functions.slips(wheel_speed, carriage_speed,
                                       fmu_functions.slip_radius(p))
     f = ca.Function("slipFromSpeeds", [wheel_speed, carriage_speed, p], [sigma], {"cse": True})
     names = ("wheel_speed", "carriage_speed", "p")
     out.append(Exported("slipFromSpeeds", f, names, (Port("slip", description="[1]"),),
                         "The model's slip from the wheel's and the axle's speeds: "
-                        "(omega*R_ref - V)/max(omega*R_ref, V), the traction slip driving, the "
-                        "skid braking, -1 a locked wheel (0 with both at rest)",
+                        "(omega*R_ref - V)/max(|omega*R_ref|, |V|, "
+                        f"{fmu_functions.SLIP_SPEED_FLOOR:g} m/s), the traction slip driving, "
+                        "the skid braking, -1 a locked wheel; regularised through standstill "
+                        "(0 at rest)",
                         _derivative(f, names)))
     f = ca.Function("rollingSign", [wheel_speed, carriage_speed, p], [ca.if_else(
         fmu_functions.backward(wheel_speed, carriage_speed, fmu_functions.slip_radius(p)), -1,
         1)], {"cse": True})
     out.append(Exported("rollingSign", f, names, (Port("sign", description="[1]"),),
-                        "-1 for a wheel rolling backward (both speeds <= 0, one below "
-                        "-1e-9 m/s): the mirror image of one rolling forward; else 1",
+                        "-1 for a wheel rolling backward (omega*R_ref + V < 0: both speeds "
+                        "<= 0, or near rest the faster of the two backward): the mirror image "
+                        "of one rolling forward; else 1",
                         _derivative(f, names)))
     s = ca.SX.sym("slip_paper")
     f = ca.Function("slipFromPaper", [s], [ca.if_else(s < 0, s, s / (1 + s))], {"cse": True})
@@ -712,6 +715,14 @@ def _speed_floor() -> str:
     return translate.literal(fmu_functions.SPEED_FLOOR)
 
 
+def _slip_speed_floor() -> str:
+    """The FMU's SLIP_SPEED_FLOOR [m/s], for the wheels' messages: a wheel turning against its
+    axle's motion beyond it is outside the slip's range."""
+    from wheelterrain.fmu import functions as fmu_functions
+
+    return f"{fmu_functions.SLIP_SPEED_FLOOR:g}"
+
+
 def _soil_rows() -> tuple[list[int], list[int], list[int]]:
     """The soil rows' 0-based positions in the table, and the soil's and the patch's in the
     terrain map's table: each side by side, as MapWheel, SoilWheel and Terrain slice them."""
@@ -739,7 +750,7 @@ def _components(lib: Library) -> None:
         "PartialWheel", N=len(NAMES), CONTACT_ROWS=rows + len(contact.MEMORY_OUTPUTS),
         PHASE_BEFORE=phase - 1, PHASE=phase, PHASE_AFTER=phase + 1,
         LATERAL_ROWS=lateral_rows, TURN_SLIP_LIMIT=f"{TURN_SLIP_LIMIT:g}",
-        SPEED_FLOOR=_speed_floor())))
+        SPEED_FLOOR=_speed_floor(), SLIP_SPEED_FLOOR=_slip_speed_floor())))
     _class_file(lib, where, "Wheel", _template("Wheel", N=len(NAMES)))
     soil, in_map, patch = _soil_rows()
     _class_file(lib, where, "MapWheel", _connectors(_template(
@@ -765,11 +776,13 @@ def _planar(lib: Library) -> None:
     _class_file(lib, LIBRARY, "Terrain", _template(
         "Terrain", G=len(ground.NAMES), SOIL_FIRST=soil[0] + 1, SOIL_LAST=soil[-1] + 1,
         MAP_AFTER_SOIL=len(in_map) + 1))
-    _class_file(lib, f"{LIBRARY}/Wheels", "PlanarWheel", _template("PlanarWheel", N=len(NAMES)))
+    _class_file(lib, f"{LIBRARY}/Wheels", "PlanarWheel", _template(
+        "PlanarWheel", N=len(NAMES), SLIP_SPEED_FLOOR=_slip_speed_floor()))
     _class_file(lib, f"{LIBRARY}/Wheels", "HorizontalWheel", _template(
         "HorizontalWheel", N=len(NAMES), SLIP_ANGLE_LIMIT=translate.literal(SLIP_ANGLE_LIMIT),
         SLIP_ANGLE_DEG=f"{math.degrees(SLIP_ANGLE_LIMIT):g}",
-        TURN_SLIP_LIMIT=f"{TURN_SLIP_LIMIT:g}", SPEED_FLOOR=_speed_floor()))
+        TURN_SLIP_LIMIT=f"{TURN_SLIP_LIMIT:g}", SPEED_FLOOR=_speed_floor(),
+        SLIP_SPEED_FLOOR=_slip_speed_floor()))
     lib.package(LIBRARY, "Wheels", "Wheels to connect into a vehicle: PlanarMechanics frames, "
                 "Rotational flanges; in the vertical plane of travel on an inner Terrain "
                 "(PlanarWheel) or seen from above with the load an input (HorizontalWheel)",
@@ -1060,7 +1073,8 @@ def _users_guide(lib: Library) -> None:
                       enumerate(contact.CONTACT_OUTPUTS + contact.MEMORY_OUTPUTS))
     info = string.Template(resources.files("wheelterrain.modelica").joinpath(
         "templates", "UsersGuide.html").read_text(encoding="utf-8")).substitute(
-        version=__version__, outputs=outputs, rows=rows, msl=MSL_VERSION)
+        version=__version__, outputs=outputs, rows=rows, msl=MSL_VERSION,
+        SLIP_SPEED_FLOOR=_slip_speed_floor())
     text = (f'package UsersGuide "Conventions, slips, the name map, what was tested"\n'
             f'  annotation(Documentation(info="{_doc(info)}"));\nend UsersGuide;\n')
     _class_file(lib, LIBRARY, "UsersGuide", text)

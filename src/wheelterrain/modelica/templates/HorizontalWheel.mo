@@ -45,7 +45,7 @@ equation
   // an equation, not a binding (as PartialWheel: rumoca 0.10 miscounts a binding's call here)
   rolling = WheelTerrain.Functions.rollingSign(wheel_speed, v_long, p);
   slip = WheelTerrain.Functions.slipFromSpeeds(rolling*wheel_speed, rolling*v_long, p);
-  assert(slip >= -1 and slip <= 1, "HorizontalWheel: the slip left the model's range [-1, 1] (the wheel turning against its hub's motion)");
+  assert(slip >= -1 and slip <= 1, "HorizontalWheel: the slip left the model's range [-1, 1] (the wheel turning against its hub's motion beyond ${SLIP_SPEED_FLOOR} m/s of rest: |omega*R_ref| + |v|)");
   assert(load > 0, "HorizontalWheel: the load must be positive (a wheel off the ground has no contact)");
   slip_angle = atan2(v_lat, rolling*v_long);
   assert(abs(slip_angle) <= ${SLIP_ANGLE_LIMIT}, "HorizontalWheel: |slip angle| beyond ${SLIP_ANGLE_DEG} deg, the lateral contact's range (a wheel moving sideways has no heading to slip along)");

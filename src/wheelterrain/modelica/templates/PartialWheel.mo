@@ -41,7 +41,7 @@ equation
   rolling = WheelTerrain.Functions.rollingSign(wheel_speed, carriage_speed, pk);
   der(wheel_angle) = wheel_speed;
   slip = WheelTerrain.Functions.slipFromSpeeds(rolling*wheel_speed, rolling*carriage_speed, pk);
-  assert(slip >= -1 and slip <= 1, "Wheel: the slip left the model's range [-1, 1] (the wheel turning against its axle's motion)");
+  assert(slip >= -1 and slip <= 1, "Wheel: the slip left the model's range [-1, 1] (the wheel turning against its axle's motion beyond ${SLIP_SPEED_FLOOR} m/s of rest: |omega*R_ref| + |v|)");
   // backward, the grousers of the mirror image: the wheel's angle and the ripple's phase negated
   // (mirroredGrousers, the FMU's rule)
   y = contactFunction(sinkage, sinkage_rate, slip, rolling*wheel_angle, plastic_sinkage, rolling*carriage_speed,
