@@ -757,7 +757,7 @@ def test_the_planar_wheel_rolls_backward_as_the_mirror_and_lands_from_above(plan
                                          params={"slip_paper": 0.25,
                                                  "rim_speed": sign * rim_speed})
     for key, sign in (("sinkage", 1), ("normal_force", 1), ("drawbar_pull", -1),
-                      ("inertia.w", -1), ("wheel.plastic_sinkage", 1)):
+                      ("drive.inertia.w", -1), ("wheel.plastic_sinkage", 1)):
         forward, back = np.asarray(runs[1][key]), np.asarray(runs[-1][key])
         assert np.max(np.abs(back - sign * forward)) <= 1e-9 * np.max(np.abs(forward)), key
     assert np.all(np.asarray(runs[-1]["wheel.contact.rolling"])[1:] == -1)

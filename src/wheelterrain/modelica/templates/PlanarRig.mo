@@ -1,4 +1,4 @@
-model PlanarRig "The paper's single-wheel rig with a PlanarWheel: a carriage moves the hub at the set slip and presses it down with the load, an MSL speed loop drives the axle"
+model PlanarRig "The paper's single-wheel rig with a PlanarWheel: a carriage moves the hub at the set slip and presses it down with the load, an MSL speed loop (Utilities.SpeedDrive) drives the axle"
   import SI = Modelica.Units.SI;
   parameter Real slip_paper = 0 "the paper's slip s the carriage is set to";
   parameter SI.Angle angle = 0 "the terrain's and the carriage's guide's inclination (0: the paper's level rig)";
@@ -17,37 +17,23 @@ model PlanarRig "The paper's single-wheel rig with a PlanarWheel: a carriage mov
     annotation(Placement(transformation(extent={{-60,-40},{-20,0}})));
   final parameter SI.Length slip_radius = wheel.parameters.wheel.radius + wheel.parameters.options.slip_radius_factor*wheel.parameters.grouser.height "R_ref";
   final parameter SI.AngularVelocity omega_ref = rim_speed/slip_radius;
-  Modelica.Mechanics.Rotational.Components.Inertia inertia(J=wheel_inertia, phi(start=0, fixed=true), w(start=omega_ref, fixed=true))
-    annotation(Placement(transformation(extent={{60,-30},{80,-10}})));
-  Modelica.Mechanics.Rotational.Sources.Torque motor
-    annotation(Placement(transformation(extent={{60,20},{80,40}})));
-  Modelica.Mechanics.Rotational.Sensors.SpeedSensor speed
-    annotation(Placement(transformation(extent={{60,-70},{80,-50}})));
-  Modelica.Blocks.Sources.Constant reference(k=omega_ref)
-    annotation(Placement(transformation(extent={{-60,40},{-40,60}})));
-  Modelica.Blocks.Math.Feedback error
-    annotation(Placement(transformation(extent={{-20,40},{0,60}})));
-  Modelica.Blocks.Continuous.PI controller(k=2*speed_bandwidth*wheel_inertia, T=2/speed_bandwidth, initType=Modelica.Blocks.Types.Init.InitialState, x_start=0)
-    annotation(Placement(transformation(extent={{20,40},{40,60}})));
+  WheelTerrain.Examples.Utilities.SpeedDrive drive(J=wheel_inertia, bandwidth=speed_bandwidth, w_ref=omega_ref, tau_max=Modelica.Constants.inf)
+    "the rig's motor and speed loop (the rig's motor has no torque limit)"
+    annotation(Placement(transformation(extent={{80,-30},{60,-10}})));
   SI.Force drawbar_pull = wheel.drawbar_pull;
   SI.Length sinkage = wheel.sinkage;
   SI.Force normal_force = wheel.normal_force;
   SI.Velocity sinkage_rate = wheel.sinkage_rate;
   SI.AngularVelocity wheel_speed = wheel.wheel_speed;
-  SI.Angle wheel_angle = inertia.phi;
+  SI.Angle wheel_angle = drive.inertia.phi;
   SI.Length plastic_sinkage = wheel.plastic_sinkage;
   SI.Torque torque = wheel.torque;
 equation
   connect(carriage.frame_b, wheel.frame_a) annotation(Line(points={{-20,-20},{0,-20}}));
-  connect(reference.y, error.u1) annotation(Line(points={{-39,50},{-18,50}}, color={0,0,127}));
-  connect(speed.w, error.u2) annotation(Line(points={{81,-60},{90,-60},{90,20},{-10,20},{-10,42}}, color={0,0,127}));
-  connect(error.y, controller.u) annotation(Line(points={{-1,50},{18,50}}, color={0,0,127}));
-  connect(controller.y, motor.tau) annotation(Line(points={{41,50},{50,50},{50,30},{58,30}}, color={0,0,127}));
-  connect(motor.flange, inertia.flange_b) annotation(Line(points={{80,30},{90,30},{90,-20},{80,-20}}));
-  connect(inertia.flange_a, wheel.flange_a) annotation(Line(points={{60,-20},{40,-20}}));
-  connect(speed.flange, inertia.flange_a) annotation(Line(points={{60,-60},{50,-60},{50,-20},{60,-20}}));
+  connect(drive.flange_b, wheel.flange_a) annotation(Line(points={{60,-20},{40,-20}}));
+  connect(drive.support, wheel.support) annotation(Line(points={{60,-26},{50,-26},{50,-46},{20,-46},{20,-40}}));
   annotation(${experiment},
     Diagram(coordinateSystem(extent={{-100,-100},{100,100}})),
-    Documentation(info="<html><p>Examples.Rig with the wheel a Wheels.PlanarWheel on an inner Terrain: the carriage (Examples.Utilities.RigCarriage, PlanarMechanics' Frame connector) moves the hub along its guide at the set slip, lets it move across the guide with the rig's mass and presses it toward the terrain with the load; the speed loop drives the axle through the wheel's inertia. With <code>angle</code> = 0 it is the paper's rig: its reference is RigC1's (Resources/Reference/WheelTerrain/Examples/PlanarRig/PlanarRig.csv, the Python model's rig at slip_paper 0); at 0.25, 0.5, 0.75 RigC2 ... RigC4's. Tilted (<code>angle</code> &lt;&gt; 0), the terrain and the guide incline together and the load stays along the terrain's normal: the same trajectory in the terrain's frame.</p></html>",
+    Documentation(info="<html><p>Examples.Rig with the wheel a Wheels.PlanarWheel on an inner Terrain: the carriage (Examples.Utilities.RigCarriage, PlanarMechanics' Frame connector) moves the hub along its guide at the set slip, lets it move across the guide with the rig's mass and presses it toward the terrain with the load; the speed loop (Examples.Utilities.SpeedDrive, the rover's drive without a torque limit, its housing on the wheel's support) drives the axle through the wheel's inertia. With <code>angle</code> = 0 it is the paper's rig: its reference is RigC1's (Resources/Reference/WheelTerrain/Examples/PlanarRig/PlanarRig.csv, the Python model's rig at slip_paper 0); at 0.25, 0.5, 0.75 RigC2 ... RigC4's. Tilted (<code>angle</code> &lt;&gt; 0), the terrain and the guide incline together and the load stays along the terrain's normal: the same trajectory in the terrain's frame.</p></html>",
       revisions="<html><ul><li>${version}: first version.</li></ul></html>"));
 end PlanarRig;
