@@ -151,6 +151,19 @@ def backward(wheel_speed, carriage_speed, slip_radius):
     return wheel_speed * slip_radius + carriage_speed < 0
 
 
+def turning_weight(wheel_speed, carriage_speed, slip_radius):
+    """The share of the wheel rolling forward in its contact, (1 + w)/2 with w = (omega*R + V)
+    clipped to [-1, 1] over SLIP_SPEED_FLOOR: 1 rolling forward, 0 backward (the mirror image,
+    MIRRORED), between them within SLIP_SPEED_FLOOR of the sum's turn, where the contact is the
+    blend of the two. So the direction of rolling turns as a regularised friction law turns
+    its force: continuously over a small speed, not at once. At rest (w = 0) the wheel sits in
+    a symmetric imprint, the two contacts' halves: no compaction resistance, as a wheel at rest
+    has none. Without it an ODE solver chatters where a driven wheel and its axle meet rest
+    together (the contact's resistance and torque flip there: a sliding mode at omega*R = -V)."""
+    w = (wheel_speed * slip_radius + carriage_speed) / SLIP_SPEED_FLOOR
+    return (1 + ca.fmin(ca.fmax(w, -1), 1)) / 2
+
+
 def slips(wheel_speed, carriage_speed, slip_radius):
     """(the model's slip, the paper's slip) from the wheel's and the carriage's speeds.
 
@@ -245,33 +258,51 @@ def terrain_functions(smooth: float | None = None
     # the rut met: the parameter's or the input's
     p = with_rut_met(given, (named["rut_met"], named["rut_pressure_met"]))
     radius = slip_radius(p)
-    # rolling backward (both speeds <= 0): the mirror image of rolling forward (MIRRORED)
-    sign = ca.if_else(backward(omega, speed, radius), -1, 1)
-    omega, speed = sign * omega, sign * speed
-    unified, paper = slips(omega, speed, radius)
-    slip_bad = ca.logic_or(unified < -1, unified > 1)
-    safe_slip = ca.fmin(ca.fmax(unified, -1), 1)  # only used when the status is OK
-
-    beta = sign * named["slip_angle"]
-    angle_bad = ca.fabs(beta) > SLIP_ANGLE_LIMIT
-    safe_beta = ca.if_else(angle_bad, 0, beta)  # only used when the status is OK
-    yaw = sign * named["yaw_rate"]  # turn slip yaw/V; a wheel at rest has none in range
-    turn_bad = ca.fabs(yaw) > TURN_SLIP_LIMIT * ca.fmax(speed, 0)
-    turn_slip = ca.if_else(turn_bad, 0, yaw / ca.fmax(speed, SPEED_FLOOR))
     held = (fns.contact_memory if smooth is None
             else model_functions.contact_memory_smooth(smooth))
-    rolled, rolled_angle = mirrored_grousers(p, angle, sign)
-    out = dict(zip((*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS),
-                   held(sinkage, rate, safe_slip, rolled_angle, plastic, speed, rolled),
-                   strict=True))
-    out.update(zip(contact.LATERAL_OUTPUTS, fns.lateral_memory(
-        sinkage, safe_slip, safe_beta, turn_slip, plastic, out["mean_pressure"], p),
-        strict=True))
-    out.update(contact_sinkage=sinkage, slip=unified, slip_paper=paper)
-    out.update({k: sign * out[k] for k in MIRRORED})
-    y = ca.vertcat(*(out[k] for k in TERRAIN_OUTPUTS))
-    # sinkage R_c below the surface the contact begins at (a rut's): the soil at the axle
     full_burial = contact.radii(soil.Params(p))[0] + soil.rut_surface(soil.Params(p))
+
+    def rolling(sign):
+        """The wheel taken to roll in the direction ``sign`` (1 forward; -1 backward, the
+        mirror image, MIRRORED): its slip and checks, its contact's outputs by name."""
+        om, v = sign * omega, sign * speed
+        unified, paper = slips(om, v, radius)
+        beta = sign * named["slip_angle"]
+        yaw = sign * named["yaw_rate"]  # turn slip yaw/V; a wheel at rest has none in range
+        f = {"unified": unified, "paper": paper, "speed": v,
+             "slip_bad": ca.logic_or(unified < -1, unified > 1),
+             "angle_bad": ca.fabs(beta) > SLIP_ANGLE_LIMIT,
+             "turn_bad": ca.fabs(yaw) > TURN_SLIP_LIMIT * ca.fmax(v, 0)}
+        f["safe_slip"] = ca.fmin(ca.fmax(unified, -1), 1)  # only used when the status is OK
+        f["safe_beta"] = ca.if_else(f["angle_bad"], 0, beta)
+        f["turn_slip"] = ca.if_else(f["turn_bad"], 0, yaw / ca.fmax(v, SPEED_FLOOR))
+        rolled, rolled_angle = mirrored_grousers(p, angle, sign)
+        out = dict(zip((*contact.CONTACT_OUTPUTS, *contact.MEMORY_OUTPUTS),
+                       held(sinkage, rate, f["safe_slip"], rolled_angle, plastic, v, rolled),
+                       strict=True))
+        out.update(zip(contact.LATERAL_OUTPUTS, fns.lateral_memory(
+            sinkage, f["safe_slip"], f["safe_beta"], f["turn_slip"], plastic,
+            out["mean_pressure"], p), strict=True))
+        out.update(contact_sinkage=sinkage, slip=unified, slip_paper=paper)
+        out.update({k: sign * out[k] for k in MIRRORED})
+        return f, out
+
+    # rolling backward (omega*R + V < 0): the mirror image of rolling forward (MIRRORED);
+    # within SLIP_SPEED_FLOOR of that sum's turn, the two blended (:func:`turning_weight`)
+    sign = ca.if_else(backward(omega, speed, radius), -1, 1)
+    f, out = rolling(sign)
+    weight = turning_weight(omega, speed, radius)
+    (_, ahead), (_, behind) = rolling(1), rolling(-1)
+    blended = {k: weight * ahead[k] + (1 - weight) * behind[k] for k in out}
+    blended.update(slip=out["slip"], slip_paper=out["slip_paper"])  # along the rolling
+    within = ca.logic_and(weight > 0, weight < 1)
+    y_one = ca.vertcat(*(out[k] for k in TERRAIN_OUTPUTS), out["plastic_rate"])
+    y_two = ca.vertcat(*(blended[k] for k in TERRAIN_OUTPUTS), blended["plastic_rate"])
+    y_all = ca.if_else(within, y_two, y_one, True)  # the second contact only near the turn
+    y, plastic_rate = y_all[:len(TERRAIN_OUTPUTS)], y_all[len(TERRAIN_OUTPUTS)]
+    unified, slip_bad, angle_bad, turn_bad = (f[k] for k in (
+        "unified", "slip_bad", "angle_bad", "turn_bad"))
+    # sinkage R_c below the surface the contact begins at (a rut's): the soil at the axle
     status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(
         angle_bad, STATUS_ANGLE, ca.if_else(turn_bad, STATUS_TURN, ca.if_else(
             sinkage > full_burial, STATUS_BURIED, ca.if_else(
@@ -279,40 +310,58 @@ def terrain_functions(smooth: float | None = None
     info = ca.if_else(slip_bad, unified, ca.if_else(angle_bad, SLIP_ANGLE_LIMIT, ca.if_else(
         turn_bad, TURN_SLIP_LIMIT, full_burial)))
     dynamic = ca.Function("terrain_dynamic", [u, angle, plastic, given],
-                          [y, status, info, out["plastic_rate"]],
+                          [y, status, info, plastic_rate],
                           ["u", "angle", "plastic", "p"], ["y", "status", "info", "plastic_rate"])
     h = ca.MX.sym("h")
     # the imprint relaxing toward the soil ahead needs the contact's mean pressure and exponent
     # at the step's start, which depend on neither the wheel angle nor the damper
     # (contact.yield_pressure: those two alone, the contact's numbers); toward the wheel it
     # needs neither, and the contact is not evaluated (a short-circuit switch)
-    pressure, exponent = contact.yield_pressure(sinkage, safe_slip, plastic, soil.Params(p),
-                                                fns.nodes, smooth)
-    toward_soil = fns.plastic_step(sinkage, plastic, speed, pressure, exponent, p, h)
-    toward_wheel = fns.plastic_step(sinkage, plastic, speed, 1, 0, p, h)
+    pressure, exponent = contact.yield_pressure(sinkage, f["safe_slip"], plastic,
+                                                soil.Params(p), fns.nodes, smooth)
+    toward_soil = fns.plastic_step(sinkage, plastic, f["speed"], pressure, exponent, p, h)
+    toward_wheel = fns.plastic_step(sinkage, plastic, f["speed"], 1, 0, p, h)
     relaxation = p[INDEX["model.imprint_relaxation"]]
     memory = ca.Function("terrain_memory", [u, plastic, given, h],
                          [ca.if_else(relaxation == 1, toward_soil, toward_wheel, True)],
                          ["u", "plastic", "p", "h"], ["plastic_next"])
 
     guess = ca.MX.sym("guess")
-    steady = dict(zip(solve.STEADY_OUTPUTS, fns.steady_from(load, safe_slip, p, guess),
-                      strict=True))
-    steady.update(contact_sinkage=steady["sinkage"], slip=unified, slip_paper=paper,
-                  ripple_amplitude=0)
-    steady.update(zip(contact.LATERAL_OUTPUTS, fns.lateral(steady["sinkage"], safe_slip,
-                                                           safe_beta, turn_slip, p),
-                      strict=True))
-    steady.update({k: sign * steady[k] for k in MIRRORED})
-    y = ca.vertcat(*(steady[k] for k in TERRAIN_OUTPUTS))
-    too_heavy = load > steady["capacity"]
-    converged = solve.solve_converged(steady["residual"], steady["last_step"])
+
+    def steady_rolling(sign, f):
+        """The quasi-static wheel rolling in the direction ``sign`` (``f``: its slip and
+        checks from :func:`rolling`): its outputs by name."""
+        steady = dict(zip(solve.STEADY_OUTPUTS, fns.steady_from(load, f["safe_slip"], p,
+                                                                guess), strict=True))
+        steady.update(contact_sinkage=steady["sinkage"], slip=f["unified"],
+                      slip_paper=f["paper"], ripple_amplitude=0)
+        steady.update(zip(contact.LATERAL_OUTPUTS, fns.lateral(
+            steady["sinkage"], f["safe_slip"], f["safe_beta"], f["turn_slip"], p), strict=True))
+        steady.update({k: sign * steady[k] for k in MIRRORED})
+        return steady
+
+    steady = steady_rolling(sign, f)
+    ahead, behind = steady_rolling(1, rolling(1)[0]), steady_rolling(-1, rolling(-1)[0])
+    blended = {k: weight * ahead[k] + (1 - weight) * behind[k] for k in steady}
+    blended.update(slip=steady["slip"], slip_paper=steady["slip_paper"])
+    def converged(steady):
+        return solve.solve_converged(steady["residual"], steady["last_step"])
+
+    y_one = ca.vertcat(*(steady[k] for k in TERRAIN_OUTPUTS), steady["capacity"],
+                       converged(steady))
+    y_two = ca.vertcat(*(blended[k] for k in TERRAIN_OUTPUTS),
+                       ca.fmin(ahead["capacity"], behind["capacity"]),
+                       ca.logic_and(converged(ahead), converged(behind)))
+    y_all = ca.if_else(within, y_two, y_one, True)  # the second solve only near the turn
+    n = len(TERRAIN_OUTPUTS)
+    y, capacity, converged = y_all[:n], y_all[n], y_all[n + 1]
+    too_heavy = load > capacity
     status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(angle_bad, STATUS_ANGLE, ca.if_else(
         turn_bad, STATUS_TURN, ca.if_else(too_heavy, STATUS_LOAD, ca.if_else(
             converged, ca.if_else(_finite(y, TERRAIN_OUTPUTS), STATUS_OK, STATUS_NONFINITE),
             STATUS_UNCONVERGED)))))
     info = ca.if_else(slip_bad, unified, ca.if_else(angle_bad, SLIP_ANGLE_LIMIT, ca.if_else(
-        turn_bad, TURN_SLIP_LIMIT, steady["capacity"])))
+        turn_bad, TURN_SLIP_LIMIT, capacity)))
     quasi = ca.Function("terrain_quasi_static", [u, given, guess], [y, status, info],
                         ["u", "p", "guess"], ["y", "status", "info"])
     return dynamic, quasi, memory
