@@ -265,6 +265,14 @@ def exported() -> tuple[Exported, ...]:
                         "<= 0, or near rest the faster of the two backward): the mirror image "
                         "of one rolling forward; else 1",
                         _derivative(f, names)))
+    f = ca.Function("turningWeight", [wheel_speed, carriage_speed, p], [
+        fmu_functions.turning_weight(wheel_speed, carriage_speed, fmu_functions.slip_radius(p))],
+        {"cse": True})
+    out.append(Exported("turningWeight", f, names, (Port("weight", description="[1]"),),
+                        "The share of rolling forward in the contact: 1 forward, 0 backward, "
+                        "between them within the slip's speed floor of omega*R_ref + V = 0, "
+                        "where the contact is the blend of the two (the FMU's)",
+                        _derivative(f, names)))
     s = ca.SX.sym("slip_paper")
     f = ca.Function("slipFromPaper", [s], [ca.if_else(s < 0, s, s / (1 + s))], {"cse": True})
     out.append(Exported("slipFromPaper", f, ("slip_paper",),
@@ -978,7 +986,9 @@ def _planar_rover() -> str:
                    f"    annotation({_placement(80, y)});",
                    f"  {LIBRARY}.Examples.Utilities.SpeedDrive {w}_drive("
                    f"J=r[{rows['wheel_inertia']}], bandwidth=r[{rows['speed_bandwidth']}],",
-                   f"    w_ref=rim_speed/slip_radius, tau_max=r[{rows['motor_torque_limit']}]) "
+                   f"    w_ref=rim_speed/slip_radius, tau_max=r[{rows['motor_torque_limit']}],",
+                   "    w_end=rim_speed_end/slip_radius, ramp_start=change_start, "
+                   "ramp_duration=change_duration) "
                    f'"{w}\'s motor and speed loop"',
                    f"    annotation({_placement(40, y)});"]
         connections += [f"  connect({axle}.frame_b, {w}.frame_a);",

@@ -35,6 +35,11 @@ partial block PartialWheel "The WheelTerrain FMU's contact as a block (its model
   output Real overturning_moment(unit="N.m") "the lateral stresses' moment about the heading axis x through the centre (M_x), + by the right-hand rule";
   output Real y[${CONTACT_ROWS}] "every output of Functions.contact, Functions.Index order (rolling backward: the mirror image's)";
   output Real y_lateral[${LATERAL_ROWS}] "every output of Functions.lateralMemory, Functions.Index.Lateral order";
+  Real share(unit="1")
+    "the direction of rolling's share of the contact: 1, but within the slip's speed floor of the turn of rolling, where the wheel rolling the other way takes the rest (Functions.turningWeight, the FMU's blend)";
+  Real y_turned[${CONTACT_ROWS}] "the contact of the wheel rolling the other way (used where share < 1; else y)";
+  Real y_lateral_turned[${LATERAL_ROWS}] "its lateral contact (used where share < 1; else y_lateral)";
+  Real turn_slip_turned(unit="rad/m") "its turn slip (0 where out of its range, as in the FMU)";
 equation
   // an equation, not a binding: rumoca 0.10 miscounts the equations where a binding's call is
   // multiplied into other calls' arguments
@@ -46,18 +51,28 @@ equation
   // (mirroredGrousers, the FMU's rule)
   y = contactFunction(sinkage, sinkage_rate, slip, rolling*wheel_angle, plastic_sinkage, rolling*carriage_speed,
     cat(1, pk[1:${PHASE_BEFORE}], {rolling*pk[${PHASE}]}, pk[${PHASE_AFTER}:${N}]));
-  der(plastic_sinkage) = y[WheelTerrain.Functions.Index.plastic_rate];
-  normal_force = y[WheelTerrain.Functions.Index.normal_force];
-  drawbar_pull = rolling*y[WheelTerrain.Functions.Index.drawbar_pull];
-  torque = rolling*y[WheelTerrain.Functions.Index.torque];
-  rut_left = y[WheelTerrain.Functions.Index.rut_left];
-  rut_pressure_left = y[WheelTerrain.Functions.Index.rut_pressure_left];
+  // within the slip's speed floor of the turn of rolling the contact is the blend of both
+  // directions (the FMU's, functions.turning_weight): the other's only evaluated there
+  share = noEvent(if rolling > 0 then WheelTerrain.Functions.turningWeight(wheel_speed, carriage_speed, pk)
+    else 1 - WheelTerrain.Functions.turningWeight(wheel_speed, carriage_speed, pk));
+  y_turned = noEvent(if share < 1 then contactFunction(sinkage, sinkage_rate, -slip, -rolling*wheel_angle, plastic_sinkage,
+    -rolling*carriage_speed, cat(1, pk[1:${PHASE_BEFORE}], {-rolling*pk[${PHASE}]}, pk[${PHASE_AFTER}:${N}])) else y);
+  der(plastic_sinkage) = share*y[WheelTerrain.Functions.Index.plastic_rate] + (1 - share)*y_turned[WheelTerrain.Functions.Index.plastic_rate];
+  normal_force = share*y[WheelTerrain.Functions.Index.normal_force] + (1 - share)*y_turned[WheelTerrain.Functions.Index.normal_force];
+  drawbar_pull = rolling*(share*y[WheelTerrain.Functions.Index.drawbar_pull] - (1 - share)*y_turned[WheelTerrain.Functions.Index.drawbar_pull]);
+  torque = rolling*(share*y[WheelTerrain.Functions.Index.torque] - (1 - share)*y_turned[WheelTerrain.Functions.Index.torque]);
+  rut_left = share*y[WheelTerrain.Functions.Index.rut_left] + (1 - share)*y_turned[WheelTerrain.Functions.Index.rut_left];
+  rut_pressure_left = share*y[WheelTerrain.Functions.Index.rut_pressure_left] + (1 - share)*y_turned[WheelTerrain.Functions.Index.rut_pressure_left];
   assert(abs(yaw_rate) <= ${TURN_SLIP_LIMIT}*max(rolling*carriage_speed, 0), "Wheel: |yaw_rate|/carriage_speed beyond ${TURN_SLIP_LIMIT} rad/m, the lateral contact's range (a wheel yawing on the spot or at rest is outside the model)");
   y_lateral = WheelTerrain.Functions.lateralMemory(sinkage, slip, rolling*slip_angle, turn_slip, plastic_sinkage,
     y[WheelTerrain.Functions.Index.mean_pressure], pk);
-  lateral_force = y_lateral[WheelTerrain.Functions.Index.Lateral.lateral_force];
-  aligning_moment = rolling*y_lateral[WheelTerrain.Functions.Index.Lateral.aligning_moment];
-  turning_moment = rolling*y_lateral[WheelTerrain.Functions.Index.Lateral.turning_moment];
-  overturning_moment = y_lateral[WheelTerrain.Functions.Index.Lateral.overturning_moment];
-  annotation(Documentation(info="<html><p>The WheelTerrain FMU's model exchange as a block: the same inputs, the same contact, its states wheel_angle and plastic_sinkage; at a slip angle and a yaw rate, the lateral force and the moments of the soil with memory (Functions.lateralMemory, the FMU's own, the grouser-period mean). Rolling backward (both speeds &lt;= 0) is the mirror image of rolling forward, as in the FMU: the contact of the speeds' magnitudes, the slip angle, the yaw rate, the wheel's angle and the ripple's phase negated, and the forces along x, the torque and the moments about the vertical negated (<code>rolling</code>, Functions.rollingSign); a wheel turning against its axle's motion stops the simulation on the slip's assert. Wheel gives it one parameter vector, MapWheel the soil of a terrain map at the wheel's position.</p></html>"));
+  turn_slip_turned = noEvent(if abs(yaw_rate) > ${TURN_SLIP_LIMIT}*max(-rolling*carriage_speed, 0) then 0
+    else -rolling*yaw_rate/max(-rolling*carriage_speed, ${SPEED_FLOOR}));
+  y_lateral_turned = noEvent(if share < 1 then WheelTerrain.Functions.lateralMemory(sinkage, -slip, -rolling*slip_angle, turn_slip_turned,
+    plastic_sinkage, y_turned[WheelTerrain.Functions.Index.mean_pressure], pk) else y_lateral);
+  lateral_force = share*y_lateral[WheelTerrain.Functions.Index.Lateral.lateral_force] + (1 - share)*y_lateral_turned[WheelTerrain.Functions.Index.Lateral.lateral_force];
+  aligning_moment = rolling*(share*y_lateral[WheelTerrain.Functions.Index.Lateral.aligning_moment] - (1 - share)*y_lateral_turned[WheelTerrain.Functions.Index.Lateral.aligning_moment]);
+  turning_moment = rolling*(share*y_lateral[WheelTerrain.Functions.Index.Lateral.turning_moment] - (1 - share)*y_lateral_turned[WheelTerrain.Functions.Index.Lateral.turning_moment]);
+  overturning_moment = share*y_lateral[WheelTerrain.Functions.Index.Lateral.overturning_moment] + (1 - share)*y_lateral_turned[WheelTerrain.Functions.Index.Lateral.overturning_moment];
+  annotation(Documentation(info="<html><p>The WheelTerrain FMU's model exchange as a block: the same inputs, the same contact, its states wheel_angle and plastic_sinkage; at a slip angle and a yaw rate, the lateral force and the moments of the soil with memory (Functions.lateralMemory, the FMU's own, the grouser-period mean). Rolling backward (both speeds &lt;= 0) is the mirror image of rolling forward, as in the FMU: the contact of the speeds' magnitudes, the slip angle, the yaw rate, the wheel's angle and the ripple's phase negated, and the forces along x, the torque and the moments about the vertical negated (<code>rolling</code>, Functions.rollingSign); within the slip's speed floor of the turn of rolling (omega*R + V = 0) the contact is the blend of the two directions, as in the FMU (<code>share</code>, Functions.turningWeight), so a driven vehicle stops and reverses; a wheel turning against its axle's motion beyond that floor stops the simulation on the slip's assert. Wheel gives it one parameter vector, MapWheel the soil of a terrain map at the wheel's position.</p></html>"));
 end PartialWheel;

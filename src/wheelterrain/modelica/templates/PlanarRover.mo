@@ -15,6 +15,9 @@ model PlanarRover "The rover from standard parts: a body, two axles (PlanarMecha
   final parameter SI.AngularVelocity slope_rate = r[${slope_rate}] "rover.slope_rate";
   final parameter SI.AngularVelocity slope_rate_after = r[${slope_rate_after}] "rover.slope_rate_after";
   final parameter SI.Angle slope_bound = r[${slope_bound}] "rover.slope_bound";
+  parameter SI.Velocity rim_speed_end = rim_speed "the rim speed the drives' commands ramp to (rim_speed: no change; negative: the rover stops and reverses)";
+  parameter SI.Time change_start = 0 "when the commands start to ramp to rim_speed_end";
+  parameter SI.Time change_duration = 1 "how long the ramp takes";
   final parameter SI.Length contact_radius = front_left.contact_radius "R_c of every wheel";
   inner PlanarMechanics.PlanarWorld planarWorld(enableAnimation=false)
     "PlanarMechanics' world (the axles' parts refer to it)"
