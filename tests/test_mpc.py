@@ -178,14 +178,7 @@ def test_on_the_soil_with_memory_the_loop_holds_and_misses_the_goal_by_the_ratch
     assert 5e-4 < figures["slip_rms_error"] < 1e-2, figures
 
 
-IMPRINT_TOWARD_THE_SOIL = pytest.mark.xfail(strict=True, reason=(
-    "with the imprint relaxing toward the soil ahead (model.imprint_relaxation 1, the default "
-    "since 2026-11-28) one of the sqpmethod's solves fails; the slip error still meets the "
-    "goal (4.3e-4 RMS; `wheelterrain mpc --plant casadi --memory --json`)"))
-
-
-@pytest.mark.parametrize("solver", [pytest.param("sqpmethod", marks=IMPRINT_TOWARD_THE_SOIL),
-                                    "rti"])
+@pytest.mark.parametrize("solver", ["sqpmethod", "rti"])
 def test_predicting_with_the_soils_memory_meets_the_nominal_goal(solver):
     """Settings.memory: the plant's plastic sinkage a state of the prediction (the yield
     smoothed over YIELD_WIDTH) foresees the ratchet: on the default soil, which remembers, the

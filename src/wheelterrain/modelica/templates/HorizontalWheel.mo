@@ -22,7 +22,7 @@ model HorizontalWheel "A rigid wheel with grousers seen from above: PlanarMechan
   SI.Velocity v_lat "across it, + toward the wheel's left";
   SI.AngularVelocity wheel_speed "the wheel's spin, + rolling along the heading";
   SI.AngularVelocity yaw_rate "the heading's yaw rate";
-  Real rolling(unit="1") "-1 rolling backward (both speeds <= 0): the mirror image of rolling forward; else 1";
+  Real rolling(unit="1") "-1 rolling backward (omega*R + v < 0: both speeds <= 0 but near rest): the mirror image of rolling forward; else 1";
   Real slip(unit="1") "the model's slip along the rolling: traction driving, skid braking (-1 locked)";
   SI.Angle slip_angle "the contact's: atan2(v_lat, |v_long|), + moving toward its left";
   Real turn_slip(unit="rad/m") "the contact's: the yaw rate over the speed, mirrored rolling backward";
@@ -71,7 +71,7 @@ equation
 <ul>
 <li>slip from the wheel's spin and the hub's speed along its heading; slip angle atan2(v_lat, |v_long|), + moving toward its left; turn slip the yaw rate over the speed;</li>
 <li>back on <code>frame_a</code>: the drawbar pull along the heading and the lateral force across it (Ishigami et al. 2007's side force), in the world frame, and the turning moment M_z about the vertical (the brush model of turn slip and the longitudinal shear across the tread); on <code>flange_a</code> the soil's resisting torque. The overturning moment is an output only (it acts out of this plane).</li>
-<li>Rolling backward (both speeds &lt;= 0) is the mirror image of rolling forward, as in the FMU.</li>
+<li>Rolling backward (omega*R + v &lt; 0: both speeds &lt;= 0 but near rest) is the mirror image of rolling forward, as in the FMU; this quasi-static wheel turns with the direction of rolling at once (the FMU's quasi-static mode blends the two within the slip's speed floor).</li>
 </ul>
 <p>Range (asserted with the reason): slip in [-1, 1] (a wheel turning against its hub's motion is outside it), |slip angle| up to ${SLIP_ANGLE_DEG} deg (a wheel moving sideways has no heading), |turn slip| up to ${TURN_SLIP_LIMIT} rad/m (a wheel yawing on the spot is outside the model), a positive load. The soil is the wheel's own (<code>parameters</code>), not a terrain's: in this plane there is no height. For the wheel in the vertical plane of travel (sinkage from the hub's height, the soil's memory), use Wheels.PlanarWheel.</p>
 <p>Tested (tests/test_modelica.py, rumoca): a hub moved at a slip angle and a yaw rate gives the steady state's drawbar pull, lateral force and turning moment within 1e-8, turned into the world frame; backward, the mirror image.</p>
