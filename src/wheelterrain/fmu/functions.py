@@ -260,6 +260,7 @@ def terrain_functions(smooth: float | None = None
     radius = slip_radius(p)
     held = (fns.contact_memory if smooth is None
             else model_functions.contact_memory_smooth(smooth))
+    # sinkage R_c below the surface the contact begins at (a rut's): the soil at the axle
     full_burial = contact.radii(soil.Params(p))[0] + soil.rut_surface(soil.Params(p))
 
     def rolling(sign):
@@ -292,7 +293,7 @@ def terrain_functions(smooth: float | None = None
     sign = ca.if_else(backward(omega, speed, radius), -1, 1)
     f, out = rolling(sign)
     weight = turning_weight(omega, speed, radius)
-    (_, ahead), (_, behind) = rolling(1), rolling(-1)
+    (f_ahead, ahead), (f_behind, behind) = rolling(1), rolling(-1)
     blended = {k: weight * ahead[k] + (1 - weight) * behind[k] for k in out}
     blended.update(slip=out["slip"], slip_paper=out["slip_paper"])  # along the rolling
     within = ca.logic_and(weight > 0, weight < 1)
@@ -302,7 +303,6 @@ def terrain_functions(smooth: float | None = None
     y, plastic_rate = y_all[:len(TERRAIN_OUTPUTS)], y_all[len(TERRAIN_OUTPUTS)]
     unified, slip_bad, angle_bad, turn_bad = (f[k] for k in (
         "unified", "slip_bad", "angle_bad", "turn_bad"))
-    # sinkage R_c below the surface the contact begins at (a rut's): the soil at the axle
     status = ca.if_else(slip_bad, STATUS_SLIP, ca.if_else(
         angle_bad, STATUS_ANGLE, ca.if_else(turn_bad, STATUS_TURN, ca.if_else(
             sinkage > full_burial, STATUS_BURIED, ca.if_else(
@@ -341,17 +341,18 @@ def terrain_functions(smooth: float | None = None
         return steady
 
     steady = steady_rolling(sign, f)
-    ahead, behind = steady_rolling(1, rolling(1)[0]), steady_rolling(-1, rolling(-1)[0])
+    ahead, behind = steady_rolling(1, f_ahead), steady_rolling(-1, f_behind)
     blended = {k: weight * ahead[k] + (1 - weight) * behind[k] for k in steady}
     blended.update(slip=steady["slip"], slip_paper=steady["slip_paper"])
-    def converged(steady):
+
+    def solved(steady):
         return solve.solve_converged(steady["residual"], steady["last_step"])
 
     y_one = ca.vertcat(*(steady[k] for k in TERRAIN_OUTPUTS), steady["capacity"],
-                       converged(steady))
+                       solved(steady))
     y_two = ca.vertcat(*(blended[k] for k in TERRAIN_OUTPUTS),
                        ca.fmin(ahead["capacity"], behind["capacity"]),
-                       ca.logic_and(converged(ahead), converged(behind)))
+                       ca.logic_and(solved(ahead), solved(behind)))
     y_all = ca.if_else(within, y_two, y_one, True)  # the second solve only near the turn
     n = len(TERRAIN_OUTPUTS)
     y, capacity, converged = y_all[:n], y_all[n], y_all[n + 1]
