@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
@@ -61,62 +62,98 @@ def test_the_fmu_function_is_the_model_on_floats():
                                             f"{q}.rut_pressure_met"))
 
 
-def test_the_record_keeps_the_deepest_rut_per_cell_and_serves_it_ahead():
-    """A wheel meets, terrain.lookahead ahead of its axle, the deepest rut left in a cell at
-    that cell's middle, and linear between two cells' middles; a cell nobody has passed, or
-    one the ring has come round since, has none."""
+def _window_mean(x, position, p, samples=200_001):
+    """An independent reading of the rut a wheel at ``position`` meets: the record's cells at
+    their middles, numpy's linear interpolation between them, its trapezoidal mean over the
+    leading half of terrain.lookahead (not more than 16 cells)."""
+    cell, ahead = p["terrain.cell"], p["terrain.lookahead"]
+    width = min(ahead / 2, 16 * cell)
+    a, b = position + ahead - width, position + ahead
+    numbers = np.arange(math.floor(a / cell) - 2, math.floor(b / cell) + 3)
+    cells = [ground.rut_in_cell(x, float(n)) for n in numbers]
+    s = np.linspace(a, b, samples)
+    middles = (numbers + 0.5) * cell
+    return tuple(float(np.trapezoid(np.interp(s, middles, [c[j] for c in cells]), s) / (b - a))
+                 for j in (0, 1))
+
+
+def test_the_record_keeps_the_deepest_rut_per_cell_and_serves_its_mean_ahead():
+    """Each cell keeps the deepest rut left in it (as deep again: the larger pressure); a
+    wheel meets the record, linear between the cells' middles, averaged over the leading half
+    of its reach ahead (terrain.lookahead / 2 to terrain.lookahead): an independent quadrature
+    of that mean agrees. A cell nobody has passed, or one the ring has come round since, has
+    none."""
     p = ground.defaults()
     x = ground.no_ruts()
     cell, ahead = p["terrain.cell"], p["terrain.lookahead"]
     # three ruts left in one cell: the deepest stays, with its own pressure
     for rut, pressure in ((0.004, 9e3), (0.006, 2e4), (0.005, 3e4)):
         x = ground.lay_rut(x, 1.0 + cell / 2, rut, pressure, p)
-    assert ground.met(x, 1.0 + cell / 2 - ahead, p) == pytest.approx((0.006, 2e4), rel=1e-13)
-    # halfway to the next cell's middle (untouched): half the rut and half its pressure; at
-    # its middle none
-    assert ground.met(x, 1.0 + cell - ahead, p) == pytest.approx((0.003, 1e4), rel=1e-13)
-    assert ground.met(x, 1.0 + 1.5 * cell - ahead, p) == pytest.approx((0.0, 0.0), abs=1e-15)
+    assert ground.rut_in_cell(x, math.floor(1.0 / cell)) == (0.006, 2e4)
     # as deep again: the larger pressure stays
     x = ground.lay_rut(x, 1.0 + cell / 2, 0.006, 2.5e4, p)
-    assert ground.met(x, 1.0 + cell / 2 - ahead, p) == pytest.approx((0.006, 2.5e4), rel=1e-13)
+    assert ground.rut_in_cell(x, math.floor(1.0 / cell)) == (0.006, 2.5e4)
+    # a rut along a few cells, each of its own depth and pressure
+    for k, (rut, pressure) in enumerate(((0.003, 1e4), (0.009, 4e4), (0.007, 3e4))):
+        x = ground.lay_rut(x, 1.0 + (k + 1.5) * cell, rut, pressure, p)
+    for at in np.linspace(1.0 - ahead - 2 * cell, 1.0 + 6 * cell - ahead / 2, 23):
+        assert ground.met(x, at, p) == pytest.approx(_window_mean(x, at, p), rel=1e-8,
+                                                     abs=1e-12), at
+    # the window over the rut's middle holds all of it: a mean, not the deepest cell
+    rut, pressure = ground.met(x, 1.0 + 2 * cell - 0.75 * ahead, p)
+    assert 0.003 < rut < 0.009
+    assert 1e4 < pressure < 4e4
+    # well before and after: none
+    assert ground.met(x, 1.0 - 2 * ahead, p) == (0.0, 0.0)
+    assert ground.met(x, 1.0 + 10 * cell, p) == (0.0, 0.0)
     # the ring comes round: a cell RUT_CELLS further on takes the slot, and the old is gone
     x = ground.lay_rut(x, 1.0 + cell / 2 + ground.RUT_CELLS * cell, 0.001, 5e3, p)
-    assert ground.met(x, 1.0 + cell / 2 - ahead, p) == pytest.approx((0.0, 0.0), abs=1e-15)
+    assert ground.rut_in_cell(x, math.floor(1.0 / cell)) == (0.0, 0.0)
 
 
-def test_a_rut_of_unknown_pressure_beside_a_known_one_is_met_as_unknown():
+def test_a_rut_of_unknown_pressure_in_the_window_is_met_as_unknown():
     """A rut recorded without its pressure (0: a wheel whose rut_pressure_left is not
-    connected) makes the pressure met 0 between its cell and the next, so that the wheel
-    reads the rut from its depth, not as carrying a share of its neighbour's pressure."""
+    connected) makes the pressure met 0 while a cell of it weighs in the wheel's window, so
+    that the wheel reads the rut from its depth, not as carrying a share of its neighbours'
+    pressure. The rover's table of the record gives the same numbers to the bit."""
     p = ground.defaults()
     cell, ahead = p["terrain.cell"], p["terrain.lookahead"]
-    x = ground.lay_rut(ground.no_ruts(), 1.0 + cell / 2, 0.006, 2e4, p)
-    x = ground.lay_rut(x, 1.0 + 1.5 * cell, 0.006, 0.0, p)
-    assert ground.met(x, 1.0 + cell / 2 - ahead, p) == pytest.approx((0.006, 2e4), rel=1e-13)
-    assert ground.met(x, 1.0 + cell - ahead, p) == pytest.approx((0.006, 0.0), rel=1e-13)
-    first = ground.met_cells(1.0 + cell / 2 - ahead, p)[0] - 1  # a table as the rover's
-    cells = [ground.rut_in_cell(x, first + k) for k in range(4)]
-    table = [first, *(r for r, _ in cells), *(q for _, q in cells)]
-    for at in (1.0 + cell / 2 - ahead, 1.0 + cell - ahead):
+    x = ground.no_ruts()
+    for k in range(20):
+        x = ground.lay_rut(x, 1.0 + (k + 0.5) * cell, 0.006, 2e4, p)
+    x = ground.lay_rut(x, 1.0 + 20.5 * cell, 0.006, 0.0, p)
+    inside = 1.0 + 12 * cell - ahead  # a window over cells of known pressure only
+    assert ground.met(x, inside, p) == pytest.approx((0.006, 2e4), rel=1e-13)
+    reaching = 1.0 + 20 * cell - ahead  # its window reaches the cell of unknown pressure
+    assert ground.met(x, reaching, p) == pytest.approx((0.006, 0.0), rel=1e-13)
+    for at in (inside, reaching, inside + 0.3 * cell):  # a table as the rover's
+        first = ground.window_cells(at, p)[0] - 3
+        cells = [ground.rut_in_cell(x, first + k) for k in range(ground.MET_CELLS + 6)]
+        table = [first, *(r for r, _ in cells), *(q for _, q in cells)]
         assert ground.met_in_table(at, p, table) == ground.met(x, at, p)
 
 
 def test_the_rut_a_wheel_meets_has_no_step_at_a_cell_s_edge():
-    """Along a rut that deepens cell by cell, the rut met is continuous: across each cell's
-    edge it changes by a sliver of a cell's step, not by the step (a staircase stepped the
-    rut under a wheel at every edge, a disturbance that grew with the cell's length)."""
+    """Along a rut that deepens cell by cell, the rut met is continuous: as the window's ends
+    cross cells' middles and edges it changes by a sliver of a cell's step, not by the step
+    (a staircase stepped the rut under a wheel at every edge, a disturbance that grew with
+    the cell's length); where the window lies on the even slope the mean is the rut at its
+    middle."""
     p = ground.defaults()
     cell, ahead = p["terrain.cell"], p["terrain.lookahead"]
     x = ground.no_ruts()
-    for k in range(10):
+    for k in range(30):
         x = ground.lay_rut(x, (100 + k + 0.5) * cell, 1e-3 * (k + 1), 1e4 * (k + 1), p)
-    for k in range(101, 109):  # the edges between recorded cells
-        edge = k * cell - ahead
-        after, before = ground.met(x, edge + 1e-9, p), ground.met(x, edge - 1e-9, p)
+    for k in range(1000):  # positions a fortieth of a cell apart across the recorded rut
+        at = (100.5 + k / 40) * cell - ahead / 2
+        after, before = ground.met(x, at + 1e-9, p), ground.met(x, at - 1e-9, p)
         assert abs(after[0] - before[0]) < 1e-8, k  # a staircase would jump by 1e-3 here
         assert abs(after[1] - before[1]) < 1e-1, k  # ... and the pressure by 1e4 Pa
-    middles = [ground.met(x, (100 + k + 0.5) * cell - ahead, p)[0] for k in range(10)]
-    assert middles == pytest.approx([1e-3 * (k + 1) for k in range(10)], abs=1e-15)
+    for k in range(15):  # the window on the even slope: the rut at its middle
+        at = (101 + k) * cell - ahead / 2
+        middle = at + 0.75 * ahead
+        assert ground.met(x, at, p)[0] == pytest.approx(1e-3 * (middle / cell - 99.5),
+                                                        rel=1e-12)
 
 
 @pytest.mark.parametrize("flavour", FLAVOURS)

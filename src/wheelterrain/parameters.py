@@ -578,17 +578,21 @@ GROUND_TABLE: tuple[Parameter, ...] = (
               "patch).", "Scenario value", quantity="Length", fmu=GROUND_FMU),
     Parameter("terrain.cell", "m", 0.005, 0.001, 0.1,
               "Length of a cell of the rut profile along the track: each cell keeps the "
-              "deepest rut a wheel left in it, and a wheel meets the rut linear between two "
-              "cells' middles. The track's last 256 cells are remembered "
+              "deepest rut a wheel left in it at its middle, linear between cells' middles, "
+              "and a wheel meets that profile averaged over the leading half of its "
+              "terrain.lookahead (at most 16 cells). The track's last 256 cells are remembered "
               "(1.28 m at the default), so the wheels of one track must be closer than that.",
               "Resolution: the rut varies along the track with the grouser passage, "
               "2*pi*R/n_g = 26 mm for the Rashid wheel: five cells per grouser, and less than "
               "a tenth of its 76 mm contact", quantity="Length", display_unit="mm",
               fmu=GROUND_FMU),
-    Parameter("terrain.lookahead", "m", 0.05, 0.0, 1.0,
-              "How far ahead of its axle a wheel meets the rut it runs in (the front of its "
-              "contact); the rut it leaves is recorded at its axle. At least three cells, so "
-              "that a wheel never meets its own rut.",
+    Parameter("terrain.lookahead", "m", 0.05, 0.003, 1.0,
+              "How far ahead of its axle a wheel's contact reaches into the rut it runs in "
+              "(the front of its contact): the wheel meets the rut averaged from half this "
+              "to this ahead of its axle, or over the last 16 cells of that stretch where "
+              "it is longer; the rut it leaves is recorded at its axle. At least three "
+              "cells (three of the shortest, 1 mm, at least), so that a wheel never meets "
+              "its own rut.",
               "Geometry: at most the wheel's radius ahead of the axle (the Rashid wheel's "
               "50 mm)", quantity="Length", display_unit="mm", fmu=GROUND_FMU),
     *(_patch_row(p) for p in TABLE if p.name.startswith("soil.")),

@@ -17,13 +17,15 @@ import numpy as np
 from wheelterrain.errors import ParameterError, WheelTerrainError
 from wheelterrain.model import ground, rover
 
-NEAR = 12
-"""Cells of the rut profile a wheel may meet within one block of steps, from the one before the
-first of the two it meets between at the block's start (:func:`met_table`): the profile is
-replayed between blocks (:func:`replay`), exactly as Terrain.fmu keeps it step by step,
-where a wheel moves less than NEAR - 3 cells a block (9 cells of 5 mm in 0.1 s: 0.45 m/s, 15
-times the default rim speed; a rover sliding downhill on braked or locked wheels moves
-faster than its rims)."""
+MOTION_CELLS = 9
+"""Cells of the rut profile a wheel may move within one block of steps: the profile is replayed
+between blocks (:func:`replay`), exactly as Terrain.fmu keeps it step by step, where a wheel
+moves less than this a block (9 cells of 5 mm in 0.1 s: 0.45 m/s, 15 times the default rim
+speed; a rover sliding downhill on braked or locked wheels moves faster than its rims)."""
+NEAR = ground.MET_CELLS + MOTION_CELLS + 1
+"""Cells of the rut profile a wheel's table holds for one block of steps (:func:`met_table`):
+from the one before the first its window touches at the block's start, the cells its window
+touches (ground.MET_CELLS at most) and those it may move on by (MOTION_CELLS)."""
 TABLE = 2 * NEAR + 1
 """A wheel's table in a block's ``met`` input (:func:`met_table`)."""
 N_MET = len(rover.WHEELS) * TABLE
@@ -31,12 +33,12 @@ N_MET = len(rover.WHEELS) * TABLE
 
 def met_table(profiles: dict, positions: dict[str, float], g: Mapping[str, float]) -> list:
     """The ``met`` input of a block (N_MET): per wheel (TABLE values), the number of the cell
-    before the first of the two it meets between at the block's start (ground.met_cells),
-    then the profile's ruts of NEAR cells from there, then those ruts' pressures
-    (ground.met_in_table reads it)."""
+    before the first its window touches at the block's start (ground.window_cells), then the
+    profile's ruts of NEAR cells from there, then those ruts' pressures (ground.met_in_table
+    reads it)."""
     out = []
     for w in rover.WHEELS:
-        first = ground.met_cells(positions[w], g)[0] - 1
+        first = ground.window_cells(positions[w], g)[0] - 1
         cells = [ground.rut_in_cell(profiles[rover.TRACK_OF[w]], first + k)
                  for k in range(NEAR)]
         out += [float(first), *(rut for rut, _ in cells), *(pressure for _, pressure in cells)]
@@ -88,15 +90,15 @@ def remember(profiles: dict, position: np.ndarray, left: Mapping[str, np.ndarray
              g: Mapping[str, float]) -> None:
     """After a block of steps: the ruts its steps left (``left``: per wheel, the rut left at
     each step; ``pressures``: the pressure it was pressed to; ``position``: the chassis' at
-    each step), into the tracks' profiles (:func:`replay`); refused where a wheel met a cell
-    outside the block's NEAR (it moved NEAR - 3 cells or more)."""
+    each step), into the tracks' profiles (:func:`replay`); refused where a wheel's window
+    touched a cell outside the block's table (it moved more than MOTION_CELLS cells)."""
     positions = {w: rover.wheel_position(p, position, w) for w in rover.WHEELS}
     for j, w in enumerate(rover.WHEELS):
-        numbers = ground.met_cells(positions[w], g)[0]  # and the cell after each
+        lowest, highest = ground.window_cells(positions[w], g)
         first = met[j * TABLE]
-        if np.any(numbers < first) or np.any(numbers + 1 > first + NEAR - 1):
+        if np.any(lowest < first) or np.any(highest > first + NEAR - 1):
             raise WheelTerrainError(
-                f"{w} moved more than {NEAR - 3} cells of the rut profile (terrain.cell = "
+                f"{w} moved more than {MOTION_CELLS} cells of the rut profile (terrain.cell = "
                 f"{g['terrain.cell']:g} m) in one block of {len(position)} steps: make "
                 "terrain.cell larger or the block shorter")
     replay(profiles, positions, left, pressures, g)

@@ -383,14 +383,15 @@ GROUND_IO: tuple[Var, ...] = tuple(v for q in QUERY_POINTS for v in (
           p.unit, p.quantity, p.display_unit, depends_on=(f"{q}.position",))
       for p in SOIL_ROWS),
     Var(f"{q}.rut_met", "output", f"The rut the wheel at {q} meets (to its WheelTerrain's "
-        "input rut_met): the deepest rut left in the cell terrain.lookahead ahead of its "
-        "position (its rut profile, linear between cells' middles), 0 where no wheel has left "
-        "one (or the profile has moved on)", "m", "Length",
+        "input rut_met): its rut profile (each cell's deepest rut at its middle, linear "
+        "between cells' middles) averaged over terrain.lookahead/2 to terrain.lookahead ahead "
+        "of its position (at most 16 cells), 0 where no wheel has left one (or the profile "
+        "has moved on)", "m", "Length",
         "mm", depends_on=(f"{q}.position",)),
     Var(f"{q}.rut_pressure_met", "output", f"The pressure the rut the wheel at {q} meets "
-        "(rut_met) carried (to its WheelTerrain's input rut_pressure_met): linear between "
-        "cells' middles as the rut; 0 where no wheel has left one, or where either cell's rut "
-        "has no known pressure", "Pa", "Pressure", "kPa",
+        "(rut_met) carried (to its WheelTerrain's input rut_pressure_met): averaged as the "
+        "rut; 0 where no wheel has left one, or where a cell the average reads holds a rut "
+        "of no known pressure", "Pa", "Pressure", "kPa",
         depends_on=(f"{q}.position",))))
 
 

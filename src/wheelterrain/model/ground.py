@@ -12,8 +12,9 @@ track, QUERY (the leading wheel, then the one behind it). Each step it lays, at 
 point's position, the rut that wheel leaves (WheelTerrain's ``rut_left``) with the pressure
 that wheel pressed it to (``rut_pressure_left``): the track is cut into cells of
 ``terrain.cell``, each keeping the deepest rut left in it and that rut's pressure. A wheel
-meets the rut ``terrain.lookahead`` ahead of its axle (the front of its contact; linear between
-the middles of the two cells around that point, :func:`met`), WheelTerrain's inputs
+meets the rut under the leading half of its contact: the profile (linear between the cells'
+middles) averaged from ``terrain.lookahead`` / 2 to ``terrain.lookahead`` ahead of its axle (the
+front of its contact; :func:`met_window`, :func:`met`), WheelTerrain's inputs
 ``rut_met`` and ``rut_pressure_met`` (its contact takes the deeper of it and its soil's
 ``soil.rut_depth``, with that rut's pressure), so the wheel behind runs in the rut of the wheel
 ahead, the query-point pattern of vehicle-terrain co-simulation, and meets it as carrying the
@@ -206,66 +207,88 @@ def lay_rut(x, position, left, pressure, p):
                         for v, old in zip(new, (ruts, cells, pressures), strict=True)))
 
 
-def met_cell(position, p):
-    """The number of the cell that holds the point whose rut a wheel at ``position`` [m]
-    meets: terrain.lookahead ahead of its axle, the front of its contact (a float, a numpy
-    array, a CasADi symbol)."""
-    return cell_number(position + p["terrain.lookahead"], p)
+WINDOW_CELLS = 16
+"""Cells of the rut profile the window a wheel meets spans at most (:func:`met_window`): its
+rut is read from at most WINDOW_CELLS + 3 cells (MET_CELLS) whatever the cell's length."""
+MET_CELLS = WINDOW_CELLS + 3
+"""Cells a wheel's window touches at most (:func:`window_cells`)."""
 
 
-def met_cells(position, p):
-    """``(first, share)``: the point a wheel at ``position`` meets (:func:`met_cell`) lies
-    between the middles of the cells ``first`` and ``first + 1``, ``share`` (0..1) of the way
-    from the one to the other."""
-    u = (position + p["terrain.lookahead"]) / p["terrain.cell"] - 0.5
-    first = _floor(u)
-    return first, u - first
+def met_window(position, p):
+    """``(a, b)`` [m]: the stretch of the track whose rut a wheel at ``position`` [m] meets: the
+    leading half of its reach ahead, from terrain.lookahead / 2 to terrain.lookahead (the front
+    of its contact) ahead of its axle, or its last WINDOW_CELLS cells where that half is
+    longer. It starts at least 1.5 cells ahead of the axle (terrain.lookahead is at least three
+    cells), clear of the cells the wheel's own rut is laid in."""
+    cell, ahead = p["terrain.cell"], p["terrain.lookahead"]
+    half = ahead / 2
+    width = pick(half < WINDOW_CELLS * cell, half, WINDOW_CELLS * cell)
+    return position + ahead - width, position + ahead
 
 
-def between(near, far, share):
-    """The rut ``share`` of the way from ``near`` (a cell's middle) to ``far`` (the next's)."""
-    return near + share * (far - near)
+def window_cells(position, p):
+    """``(first, last)``: the numbers of the first and the last cell whose rut enters the rut a
+    wheel at ``position`` meets (:func:`met_window`: the cells whose middles lie within a cell
+    of it); at most MET_CELLS of them."""
+    a, b = met_window(position, p)
+    cell = p["terrain.cell"]
+    return _floor(a / cell - 0.5), _floor(b / cell - 0.5) + 1
 
 
-def _met_between(near, far, share):
-    """``(rut, pressure)`` ``share`` of the way from the cell ``near`` to the cell ``far``
-    (each a (rut, pressure) pair): both linear between the cells' middles; the pressure 0
-    (not known) where either cell holds a rut whose pressure is not known."""
-    (r0, p0), (r1, p1) = near, far
-    unknown = pick(r0 > 0, pick(p0 > 0, 0, 1), 0) + pick(r1 > 0, pick(p1 > 0, 0, 1), 0)
-    return between(r0, r1, share), pick(unknown > 0, 0, between(p0, p1, share))
+def _clip(t):
+    return pick(t < -1, -1, pick(t > 1, 1, t))
+
+
+def _hat_area(t):
+    """The area left of ``t`` under the unit hat (1 - |s| on [-1, 1])."""
+    t = _clip(t)
+    return pick(t < 0, (1 + t) * (1 + t) / 2, 1 - (1 - t) * (1 - t) / 2)
+
+
+def _met_over(cells, position, p):
+    """``(rut, pressure)`` a wheel at ``position`` meets from ``cells``, (number, rut, pressure)
+    of the cells around its window in the order of their numbers (any more cells count 0):
+    the mean over the window (:func:`met_window`) of the rut profile linear between the cells'
+    middles, each cell weighted by the area its hat (1 at its middle, 0 at its neighbours')
+    has in the window; the pressure the same mean, 0 (not known) where a cell of the window
+    holds a rut whose pressure is not known. The terms are summed in the cells' order, so a
+    list with more cells of weight 0 before or after gives the same numbers to the bit."""
+    cell = p["terrain.cell"]
+    a, b = met_window(position, p)
+    rut = pressure = unknown = 0
+    for number, r, q in cells:
+        middle = (number + 0.5) * cell
+        weight = (_hat_area((b - middle) / cell) - _hat_area((a - middle) / cell)) * cell / (b - a)
+        rut = rut + weight * r
+        pressure = pressure + weight * q
+        unknown = unknown + pick(weight > 0, pick(r > 0, pick(q > 0, 0, 1), 0), 0)
+    return rut, pick(unknown > 0, 0, pressure)
 
 
 def met(x, position, p):
     """``(rut, pressure)``: the rut a wheel at ``position`` meets and the pressure it carried:
-    the rut profile's, linear between the middles of the two cells around the point it meets
-    (:func:`met_cells`, :func:`_met_between`). Piecewise linear along the track, not a
-    staircase: a staircase steps the rut under a wheel at every cell's edge, and those steps
-    were a disturbance of the rover's steady motion that depended on the cell's length (the
-    Moon's climb stalled 23.3-25.4 deg for cells of 10-2 mm)."""
-    first, share = met_cells(position, p)
-    return _met_between(rut_in_cell(x, first), rut_in_cell(x, first + 1), share)
+    the rut profile's, linear between the cells' middles, averaged over the window ahead of
+    the wheel (:func:`met_window`, :func:`_met_over`), read from MET_CELLS cells from the
+    window's first. Not read at one point: the contact spans a stretch of the rut, and a rut
+    read at one point served the wheels the cell-by-cell marks of the record, a disturbance
+    of the rover's steady motion that depended on the cell's length (the Earth's climb limit
+    moved 28.9-30.1 deg for cells of 2.5-20 mm; read as a staircase, the Moon's climb had
+    stalled 23.3-25.4 deg for cells of 10-2 mm)."""
+    first = window_cells(position, p)[0]
+    cells = [(first + k, *rut_in_cell(x, first + k)) for k in range(MET_CELLS)]
+    return _met_over(cells, position, p)
 
 
 def met_in_table(position, p, table):
     """:func:`met` from a table of the rut profile instead of the profile: ``table`` is the
-    number of a cell, then the ruts of the m cells from it on (a few: the cells a wheel meets
-    within a short stretch), then their pressures (any sequence or CasADi vector of 2m + 1).
-    ``(rut, pressure)`` a wheel at ``position`` meets, as :func:`met` reads them; 0 for a cell
-    the table does not hold. On CasADi symbols it is a switch over the table's cells, so SX
-    expressions take it (the in-process rover's blocks, the rover's energy ledger)."""
-    first, share = met_cells(position, p)
+    number of a cell, then the ruts of the m cells from it on (the cells a wheel's window
+    touches within a short stretch of travel), then their pressures (any sequence or CasADi
+    vector of 2m + 1). The same numbers as :func:`met` to the bit where the table holds every
+    cell the window touches (the cells of weight 0 add exact zeros)."""
     start = table[0]
     m = ((table.shape[0] if hasattr(table, "shape") else len(table)) - 1) // 2
-    near_rut = near_pressure = far_rut = far_pressure = 0
-    for k in range(m):
-        rut, pressure = table[1 + k], table[1 + m + k]
-        at_near, at_far = first == start + k, first + 1 == start + k
-        near_rut, near_pressure = (near_rut + pick(at_near, rut, 0),
-                                   near_pressure + pick(at_near, pressure, 0))
-        far_rut, far_pressure = (far_rut + pick(at_far, rut, 0),
-                                 far_pressure + pick(at_far, pressure, 0))
-    return _met_between((near_rut, near_pressure), (far_rut, far_pressure), share)
+    cells = [(start + k, table[1 + k], table[1 + m + k]) for k in range(m)]
+    return _met_over(cells, position, p)
 
 
 def outputs(x, u, p) -> tuple:
