@@ -65,9 +65,9 @@ def test_the_fmu_function_is_the_model_on_floats():
 def _window_mean(x, position, p, samples=200_001):
     """An independent reading of the rut a wheel at ``position`` meets: the record's cells at
     their middles, numpy's linear interpolation between them, its trapezoidal mean over the
-    leading half of terrain.lookahead (not more than 16 cells)."""
+    leading half of terrain.lookahead (not more than 10 cells)."""
     cell, ahead = p["terrain.cell"], p["terrain.lookahead"]
-    width = min(ahead / 2, 16 * cell)
+    width = min(ahead / 2, 10 * cell)
     a, b = position + ahead - width, position + ahead
     numbers = np.arange(math.floor(a / cell) - 2, math.floor(b / cell) + 3)
     cells = [ground.rut_in_cell(x, float(n)) for n in numbers]

@@ -580,7 +580,7 @@ GROUND_TABLE: tuple[Parameter, ...] = (
               "Length of a cell of the rut profile along the track: each cell keeps the "
               "deepest rut a wheel left in it at its middle, linear between cells' middles, "
               "and a wheel meets that profile averaged over the leading half of its "
-              "terrain.lookahead (at most 16 cells). The track's last 256 cells are remembered "
+              "terrain.lookahead (at most 10 cells). The track's last 256 cells are remembered "
               "(1.28 m at the default), so the wheels of one track must be closer than that.",
               "Resolution: the rut varies along the track with the grouser passage, "
               "2*pi*R/n_g = 26 mm for the Rashid wheel: five cells per grouser, and less than "
@@ -589,7 +589,7 @@ GROUND_TABLE: tuple[Parameter, ...] = (
     Parameter("terrain.lookahead", "m", 0.05, 0.003, 1.0,
               "How far ahead of its axle a wheel's contact reaches into the rut it runs in "
               "(the front of its contact): the wheel meets the rut averaged from half this "
-              "to this ahead of its axle, or over the last 16 cells of that stretch where "
+              "to this ahead of its axle, or over the last 10 cells of that stretch where "
               "it is longer; the rut it leaves is recorded at its axle. At least three "
               "cells (three of the shortest, 1 mm, at least), so that a wheel never meets "
               "its own rut.",

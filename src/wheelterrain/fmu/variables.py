@@ -385,7 +385,7 @@ GROUND_IO: tuple[Var, ...] = tuple(v for q in QUERY_POINTS for v in (
     Var(f"{q}.rut_met", "output", f"The rut the wheel at {q} meets (to its WheelTerrain's "
         "input rut_met): its rut profile (each cell's deepest rut at its middle, linear "
         "between cells' middles) averaged over terrain.lookahead/2 to terrain.lookahead ahead "
-        "of its position (at most 16 cells), 0 where no wheel has left one (or the profile "
+        "of its position (at most 10 cells), 0 where no wheel has left one (or the profile "
         "has moved on)", "m", "Length",
         "mm", depends_on=(f"{q}.position",)),
     Var(f"{q}.rut_pressure_met", "output", f"The pressure the rut the wheel at {q} meets "

@@ -207,7 +207,7 @@ def lay_rut(x, position, left, pressure, p):
                         for v, old in zip(new, (ruts, cells, pressures), strict=True)))
 
 
-WINDOW_CELLS = 16
+WINDOW_CELLS = 10
 """Cells of the rut profile the window a wheel meets spans at most (:func:`met_window`): its
 rut is read from at most WINDOW_CELLS + 3 cells (MET_CELLS) whatever the cell's length."""
 MET_CELLS = WINDOW_CELLS + 3
@@ -284,10 +284,20 @@ def met_in_table(position, p, table):
     number of a cell, then the ruts of the m cells from it on (the cells a wheel's window
     touches within a short stretch of travel), then their pressures (any sequence or CasADi
     vector of 2m + 1). The same numbers as :func:`met` to the bit where the table holds every
-    cell the window touches (the cells of weight 0 add exact zeros)."""
+    cell the window touches. On an MX vector the MET_CELLS cells from the window's first are
+    read by a symbolic index, as :func:`met` reads the record (an index past the table reads
+    its last cells: a wheel that moved beyond its table is refused after its block, by
+    ``cosim.ruts.remember``); elsewhere every cell of the table is summed (the cells of
+    weight 0 add exact zeros)."""
     start = table[0]
     m = ((table.shape[0] if hasattr(table, "shape") else len(table)) - 1) // 2
-    cells = [(start + k, table[1 + k], table[1 + m + k]) for k in range(m)]
+    if isinstance(table, ca.MX) and m >= MET_CELLS:
+        first = window_cells(position, p)[0]
+        offset = ca.fmin(ca.fmax(first - start, 0), m - MET_CELLS)
+        cells = [(first + k, table[1 + offset + k], table[1 + m + offset + k])
+                 for k in range(MET_CELLS)]
+    else:
+        cells = [(start + k, table[1 + k], table[1 + m + k]) for k in range(m)]
     return _met_over(cells, position, p)
 
 
