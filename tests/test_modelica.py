@@ -904,6 +904,45 @@ def test_the_horizontal_wheel_is_the_steady_state_at_its_hubs_slip_angle_and_yaw
     assert steady["lateral_force"] > 0  # moving toward its right (backward): pushed left
 
 
+@needs_planar
+@pytest.mark.slow
+def test_the_horizontal_wheel_blends_the_two_directions_at_the_turn_of_rolling(msl_root,
+                                                                              monkeypatch):
+    """Wheels.HorizontalWheel driven straight (no slip angle, no yaw) at speeds within the
+    slip's speed floor of the turn of rolling (omega*R + v = 0), forward and backward of it:
+    the FMU's quasi-static blend of the wheel rolling either way (terrain_quasi_static, the
+    same inputs), drawbar pull, torque and sinkage within 1e-8 (relative; of 1 N, 0.1 N*m and
+    1 cm below those); where the two
+    speeds are further apart it is the one direction's contact as before (the test above)."""
+    from wheelterrain.fmu import functions as fmu_functions
+    from wheelterrain.fmu import variables as fmu_variables
+
+    monkeypatch.delenv("MODELICAPATH", raising=False)
+    model = rumoca.Session(roots=[str(msl_root)]).loads(HORIZONTAL_RUN, model="Run")
+    config = rumoca.SimConfig(solver="rk-like", rtol=1e-10, atol=1e-12)
+    params = presets.load()
+    radius = float(fmu_functions.slip_radius(ca.DM(params.vector())))
+    quasi = fmu_functions.terrain_functions()[1]
+    floor = fmu_functions.SLIP_SPEED_FLOOR
+    shares = []
+    for speed, rim in ((4e-6, -1e-6), (-1e-6, 0.5e-6), (2e-6, -2.5e-6), (-3e-6, -1e-6)):
+        result = model.simulate((0.0, 0.5), dt=0.5, config=config, params={
+            "mover.U": speed, "mover.beta": 0.0, "mover.yaw": 0.0, "omega": rim / radius})
+        inputs = {n: 0.0 for n in fmu_variables.TERRAIN_INPUTS}
+        inputs.update(load=62.0, wheel_speed=rim / radius, carriage_speed=speed)
+        u = [inputs[n] for n in fmu_variables.TERRAIN_INPUTS]
+        y, status, _ = quasi(u, params.vector(), 0.01)
+        assert int(status) == fmu_functions.STATUS_OK
+        want = dict(zip(fmu_variables.TERRAIN_OUTPUTS, y.full().ravel(), strict=True))
+        for key, name, scale in (("drawbar_pull", "drawbar_pull", 1.0),
+                                 ("torque", "torque", 0.1), ("sinkage", "contact_sinkage", 0.01)):
+            got = result[f"wheel.{key}"][-1]
+            assert abs(got - want[name]) <= 1e-8 * max(abs(want[name]), scale), (speed, key)
+        shares.append(result["wheel.share"][-1])
+        assert abs(rim + speed) < floor
+    assert all(0 < share < 1 for share in shares)  # each point inside the blend
+
+
 @needs_msl
 def test_every_preset_record_gives_its_parameter_vector_options_as_enumerations(msl_root):
     """Records.parameterVector of every preset record (the options Types enumerations) is the
