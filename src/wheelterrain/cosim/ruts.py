@@ -39,8 +39,7 @@ def met_table(profiles: dict, positions: dict[str, float], g: Mapping[str, float
     out = []
     for w in rover.WHEELS:
         first = ground.window_cells(positions[w], g)[0] - 1
-        cells = [ground.rut_in_cell(profiles[rover.TRACK_OF[w]], first + k)
-                 for k in range(NEAR)]
+        cells = ground.ruts_in_cells(profiles[rover.TRACK_OF[w]], first, NEAR)
         out += [float(first), *(rut for rut, _ in cells), *(pressure for _, pressure in cells)]
     return out
 

@@ -174,6 +174,19 @@ def rut_in_cell(x, number):
     return ca.if_else(here, ruts[slot], 0), ca.if_else(here, pressures[slot], 0)
 
 
+def ruts_in_cells(x, first: int, count: int) -> list[tuple[float, float]]:
+    """:func:`rut_in_cell` of the ``count`` cells from number ``first`` on, of a rut profile
+    ``x`` of floats (the record split once, not once a cell: the in-process rover reads a
+    table of them for every wheel and block)."""
+    ruts, cells, pressures = _split(x)
+    out = []
+    for number in range(int(first), int(first) + count):
+        slot = number % RUT_CELLS
+        here = float(cells[slot]) == number
+        out.append((float(ruts[slot]), float(pressures[slot])) if here else (0.0, 0.0))
+    return out
+
+
 def lay_ruts(x, u, p):
     """The rut profile after a step: each query point (in QUERY order) leaves its input rut_left at
     its position (:func:`lay_rut`). ``x`` a list of floats or an MX vector, as returned."""
@@ -235,34 +248,39 @@ def window_cells(position, p):
     return _floor(a / cell - 0.5), _floor(b / cell - 0.5) + 1
 
 
-def _clip(t):
-    return pick(t < -1, -1, pick(t > 1, 1, t))
-
-
-def _hat_area(t):
-    """The area left of ``t`` under the unit hat (1 - |s| on [-1, 1])."""
-    t = _clip(t)
-    return pick(t < 0, (1 + t) * (1 + t) / 2, 1 - (1 - t) * (1 - t) / 2)
-
-
-def _met_over(cells, position, p):
-    """``(rut, pressure)`` a wheel at ``position`` meets from ``cells``, (number, rut, pressure)
-    of the cells around its window in the order of their numbers (any more cells count 0):
-    the mean over the window (:func:`met_window`) of the rut profile linear between the cells'
-    middles, each cell weighted by the area its hat (1 at its middle, 0 at its neighbours')
-    has in the window; the pressure the same mean, 0 (not known) where a cell of the window
-    holds a rut whose pressure is not known. The terms are summed in the cells' order, so a
-    list with more cells of weight 0 before or after gives the same numbers to the bit."""
+def _met_over(cells, read, position, p):
+    """``(rut, pressure)`` a wheel at ``position`` meets: the mean over its window (a, b)
+    (:func:`met_window`) of the rut profile linear between the cells' middles, the pressure
+    the same mean, 0 (not known) where a cell of the window holds a rut whose pressure is not
+    known. With u = x/cell - 1/2 the profile's coordinate (the cells' middles at whole u),
+    n = floor(u) and f = u - n at each end, the integral over the window in cells is the
+    sum of the cells na .. nb - 1 and the hats' shares at the ends: + (1 - (1 - fb)^2/2) of
+    cell nb, + fb^2/2 of nb + 1, - (1 - (1 - fa)^2/2) of na, - fa^2/2 of na + 1. ``cells``:
+    (number, rut, pressure) of consecutive cells holding na .. nb - 1 (in the order of their
+    numbers; any others count 0, added as exact zeros, so a longer list gives the same
+    numbers to the bit); ``read(number)``: (rut, pressure) of any cell, for the ends."""
     cell = p["terrain.cell"]
     a, b = met_window(position, p)
+    ua, ub = a / cell - 0.5, b / cell - 0.5
+    na, nb = _floor(ua), _floor(ub)
+    fa, fb = ua - na, ub - nb
     rut = pressure = unknown = 0
     for number, r, q in cells:
-        middle = (number + 0.5) * cell
-        weight = (_hat_area((b - middle) / cell) - _hat_area((a - middle) / cell)) * cell / (b - a)
-        rut = rut + weight * r
-        pressure = pressure + weight * q
-        unknown = unknown + pick(weight > 0, pick(r > 0, pick(q > 0, 0, 1), 0), 0)
-    return rut, pick(unknown > 0, 0, pressure)
+        inside = (number >= na) * (number < nb)
+        rut = rut + pick(inside, r, 0)
+        pressure = pressure + pick(inside, q, 0)
+        weighs = (number >= na) * (number <= nb)
+        unknown = unknown + pick(weighs, pick(r > 0, pick(q > 0, 0, 1), 0), 0)
+    ends = ((na, -(1 - (1 - fa) * (1 - fa) / 2)), (na + 1, -(fa * fa / 2)),
+            (nb, 1 - (1 - fb) * (1 - fb) / 2), (nb + 1, fb * fb / 2))
+    for number, share in ends:
+        r, q = read(number)
+        rut = rut + share * r
+        pressure = pressure + share * q
+    r, q = read(nb + 1)  # the last cell weighs where the window reaches past nb's middle
+    unknown = unknown + pick(fb > 0, pick(r > 0, pick(q > 0, 0, 1), 0), 0)
+    scale = cell / (b - a)
+    return rut * scale, pick(unknown > 0, 0, pressure * scale)
 
 
 def met(x, position, p):
@@ -276,7 +294,7 @@ def met(x, position, p):
     stalled 23.3-25.4 deg for cells of 10-2 mm)."""
     first = window_cells(position, p)[0]
     cells = [(first + k, *rut_in_cell(x, first + k)) for k in range(MET_CELLS)]
-    return _met_over(cells, position, p)
+    return _met_over(cells, lambda number: rut_in_cell(x, number), position, p)
 
 
 def met_in_table(position, p, table):
@@ -284,21 +302,34 @@ def met_in_table(position, p, table):
     number of a cell, then the ruts of the m cells from it on (the cells a wheel's window
     touches within a short stretch of travel), then their pressures (any sequence or CasADi
     vector of 2m + 1). The same numbers as :func:`met` to the bit where the table holds every
-    cell the window touches. On an MX vector the MET_CELLS cells from the window's first are
-    read by a symbolic index, as :func:`met` reads the record (an index past the table reads
-    its last cells: a wheel that moved beyond its table is refused after its block, by
-    ``cosim.ruts.remember``); elsewhere every cell of the table is summed (the cells of
-    weight 0 add exact zeros)."""
+    cell the window touches. On an MX vector the MET_CELLS cells from the window's first, and
+    its ends, are read by a symbolic index, as :func:`met` reads the record (an index past the
+    table reads its last cells: a wheel that moved beyond its table is refused after its
+    block, by ``cosim.ruts.remember``); elsewhere every cell of the table is summed (the
+    cells outside the window add exact zeros) and the ends picked from the table."""
     start = table[0]
     m = ((table.shape[0] if hasattr(table, "shape") else len(table)) - 1) // 2
+
+    if isinstance(table, ca.MX):
+        def read(number):
+            k = ca.fmin(ca.fmax(number - start, 0), m - 1)
+            return table[1 + k], table[1 + m + k]
+    elif isinstance(table, ca.SX):
+        def read(number):
+            here = [number == start + k for k in range(m)]
+            return (sum(pick(h, table[1 + k], 0) for k, h in enumerate(here)),
+                    sum(pick(h, table[1 + m + k], 0) for k, h in enumerate(here)))
+    else:
+        def read(number):
+            k = int(number - start)
+            return (table[1 + k], table[1 + m + k]) if 0 <= k < m else (0.0, 0.0)
+
     if isinstance(table, ca.MX) and m >= MET_CELLS:
         first = window_cells(position, p)[0]
-        offset = ca.fmin(ca.fmax(first - start, 0), m - MET_CELLS)
-        cells = [(first + k, table[1 + offset + k], table[1 + m + offset + k])
-                 for k in range(MET_CELLS)]
+        cells = [(first + k, *read(first + k)) for k in range(MET_CELLS)]
     else:
         cells = [(start + k, table[1 + k], table[1 + m + k]) for k in range(m)]
-    return _met_over(cells, position, p)
+    return _met_over(cells, read, position, p)
 
 
 def outputs(x, u, p) -> tuple:
