@@ -595,6 +595,31 @@ def test_fmpy_simulates_fmi3_as_fmi2(flavours, kind):
         assert runs[1][n] == pytest.approx(runs[0][n], rel=1e-12, abs=1e-15), n
 
 
+@pytest.mark.parametrize("where", ["pythonfmu", "native", "native/fmi3"])
+def test_a_lane_reads_and_writes_what_getreal_and_setreal_do(flavours, where):
+    """Instance.lane, the rover master's inner loop (references and buffer made once), on
+    FMI 2 (both flavours) and FMI 3: what it puts the FMU holds and getReal reads; what it
+    gets is getReal's, after a step too; a value the FMU refuses raises as fmpy's call
+    does."""
+    from fmpy.fmi1 import FMICallException
+
+    from wheelterrain.fmu.instance import Instance
+
+    names = ["sinkage", "wheel_speed", "carriage_speed"]
+    outputs = ["sinkage", "drawbar_pull", "torque"]
+    with Instance(flavours["root"] / where / "WheelTerrain.fmu") as inst:
+        inst.start({"sinkage": 0.02})
+        get, _ = inst.lane(inst.refs(outputs))
+        _, put = inst.lane(inst.refs(names))
+        put([0.015, 0.6, 0.03])
+        assert inst.get(names) == [0.015, 0.6, 0.03]
+        inst.fmu.doStep(0.0, 1e-3)
+        assert get() == inst.get(outputs)
+        assert get()[0] > 0
+        with pytest.raises(FMICallException):
+            put([math.nan, 0.6, 0.03])
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("interface", ["cs", "me"])
 def test_the_pair_through_fmi3_gives_the_fmi2_c1_c4_means(flavours, interface):

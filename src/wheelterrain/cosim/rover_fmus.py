@@ -153,56 +153,55 @@ class RoverFMUs:
             self.close()
             raise
         ch = self.instances[CHASSIS]
-        # per wheel TO_TERRAIN, then every wheel's position (one call)
-        self._ch_out = ch.refs([*(f"{w}.{n}" for w in rover.WHEELS for n in TO_TERRAIN),
-                                *(f"{w}.position" for w in rover.WHEELS)])
-        self._ch_in = ch.refs(f"{w}.{n}" for w in rover.WHEELS for n in TO_CHASSIS)
-        self._ch_record = ch.refs([*(f"{w}.{n}" for w in rover.WHEELS for n in
-                                     ("motor_torque", "wheel_speed")), *CHASSIS_RECORD])
+        # per wheel TO_TERRAIN, then every wheel's position (one call); each a lane (a
+        # get or a put with its references and buffer made once: Instance.lane)
+        self._ch_out = ch.lane(ch.refs([*(f"{w}.{n}" for w in rover.WHEELS for n in TO_TERRAIN),
+                                        *(f"{w}.position" for w in rover.WHEELS)]))[0]
+        self._ch_in = ch.lane(ch.refs(f"{w}.{n}" for w in rover.WHEELS for n in TO_CHASSIS))[1]
+        self._ch_record = ch.lane(ch.refs([*(f"{w}.{n}" for w in rover.WHEELS for n in
+                                             ("motor_torque", "wheel_speed")),
+                                           *CHASSIS_RECORD]))[0]
         # per wheel, one call: the rut met (and the map's soil), then TO_TERRAIN
-        self._ter_in = {w: self.instances[w].refs([*RUT_MET, *(GROUND if self.with_map
-                                                                else []), *TO_TERRAIN])
-                        for w in rover.WHEELS}
+        self._ter_in = {w: self.instances[w].lane(self.instances[w].refs(
+            [*RUT_MET, *(GROUND if self.with_map else []), *TO_TERRAIN]))[1]
+            for w in rover.WHEELS}
         # per track, both query points at once: positions in; the rut met (and the map's
-        # soil) out; the rut left in; and each wheel's rut met (and soil) inputs
+        # soil) out; the rut left in
         self._tracks = {}
         for track in rover.TRACKS:
             g = self.instances[track_component(track)]
             outs = [f"{q}.{n}" for q in QUERY_POINTS
                     for n in (*RUT_MET, *(GROUND if self.with_map else ()))]
-            self._tracks[track] = (g.refs(f"{q}.position" for q in QUERY_POINTS), g.refs(outs),
-                                   g.refs(f"{q}.{n}" for q in QUERY_POINTS for n in RUT_LEFT))
-        self._ter_out = {w: self.instances[w].refs((*TO_CHASSIS, "slip", "contact_sinkage",
-                                                    *RUT_LEFT))
-                         for w in rover.WHEELS}
+            self._tracks[track] = (g.lane(g.refs(f"{q}.position" for q in QUERY_POINTS))[1],
+                                   g.lane(g.refs(outs))[0],
+                                   g.lane(g.refs(f"{q}.{n}" for q in QUERY_POINTS
+                                                 for n in RUT_LEFT))[1])
+        self._ter_out = {w: self.instances[w].lane(self.instances[w].refs(
+            (*TO_CHASSIS, "slip", "contact_sinkage", *RUT_LEFT)))[0] for w in rover.WHEELS}
+        self._steps = [inst.fmu.doStep for inst in self.instances.values()]
 
     def exchange(self) -> list[float]:
         """One exchange at the current time; returns the record row: per wheel RECORD, then
         CHASSIS_RECORD."""
-        ch = self.instances[CHASSIS].fmu
-        x = ch.getReal(self._ch_out)
+        x = self._ch_out()
         forces, per, met = [], {}, {}
         n = len(TO_TERRAIN)
         position = dict(zip(rover.WHEELS, x[n * len(rover.WHEELS):], strict=True))
         for track, pair in rover.TRACKS.items():  # the ruts met (and the map's soil), at t
-            where, outs, _ = self._tracks[track]
-            g = self.instances[track_component(track)].fmu
-            g.setReal(where, [position[w] for w in pair])
-            values = g.getReal(outs)
+            put_where, get_met, _ = self._tracks[track]
+            put_where([position[w] for w in pair])
+            values = get_met()
             size = len(values) // len(pair)
             met.update({w: values[j * size:(j + 1) * size] for j, w in enumerate(pair)})
         for k, w in enumerate(rover.WHEELS):
-            t = self.instances[w].fmu
-            t.setReal(self._ter_in[w], [*met[w], *x[k * n:(k + 1) * n]])
-            y = t.getReal(self._ter_out[w])
+            self._ter_in[w]([*met[w], *x[k * n:(k + 1) * n]])
+            y = self._ter_out[w]()
             forces += y[:len(TO_CHASSIS)]
             per[w] = y
         for track, pair in rover.TRACKS.items():  # the ruts left, recorded at the step
-            g = self.instances[track_component(track)].fmu
-            g.setReal(self._tracks[track][2],
-                      [v for w in pair for v in per[w][-len(RUT_LEFT):]])
-        ch.setReal(self._ch_in, forces)
-        rec = ch.getReal(self._ch_record)
+            self._tracks[track][2]([v for w in pair for v in per[w][-len(RUT_LEFT):]])
+        self._ch_in(forces)
+        rec = self._ch_record()
         row = []
         for k, w in enumerate(rover.WHEELS):
             normal, pull, torque, slip, sinkage, rut, pressure = per[w]
@@ -214,8 +213,8 @@ class RoverFMUs:
         return row + rec[2 * len(rover.WHEELS):]
 
     def step(self, t: float, h: float) -> None:
-        for inst in self.instances.values():
-            inst.fmu.doStep(t, h)
+        for step in self._steps:
+            step(t, h)
 
     def errors(self) -> list[str]:
         """What the FMUs logged as discard, error or fatal, by instance."""

@@ -11,7 +11,7 @@ extracted itself.
 from __future__ import annotations
 
 import shutil
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 
 from wheelterrain.errors import FMUError
@@ -193,6 +193,38 @@ class Instance:
     def get(self, names: Iterable[str]) -> list[float]:
         """The Real variables ``names``, in that order."""
         return self.fmu.getReal(self.refs(names))
+
+    def lane(self, refs: Sequence[int]) -> tuple[Callable[[], list[float]],
+                                                 Callable[[Sequence[float]], None]]:
+        """``(get, put)`` for the Real variables of value references ``refs``, a master's inner
+        loop: ``get()`` their values, ``put(values)`` sets them, through the FMU's own
+        fmi2GetReal / fmi2SetReal (fmi3GetFloat64 / fmi3SetFloat64, as fmpy loaded them: a
+        status that is not OK raises as fmpy's getReal does) with the references and a value
+        buffer made once, where fmpy's getReal makes both at every call."""
+        import ctypes
+
+        n = len(refs)
+        fmi3 = isinstance(self.fmu, _Fmi3)
+        raw = self.fmu.raw if fmi3 else self.fmu
+        vr = (ctypes.c_uint32 * n)(*refs)
+        buffer = (ctypes.c_double * n)()
+        if fmi3:
+            def get() -> list[float]:
+                raw.fmi3GetFloat64(raw.component, vr, n, buffer, n)
+                return buffer[:]
+
+            def put(values: Sequence[float]) -> None:
+                buffer[:] = values
+                raw.fmi3SetFloat64(raw.component, vr, n, buffer, n)
+        else:
+            def get() -> list[float]:
+                raw.fmi2GetReal(raw.component, vr, n, buffer)
+                return buffer[:]
+
+            def put(values: Sequence[float]) -> None:
+                buffer[:] = values
+                raw.fmi2SetReal(raw.component, vr, n, buffer)
+        return get, put
 
     def value(self, name: str) -> float:
         """The Real variable ``name``."""
