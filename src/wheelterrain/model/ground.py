@@ -164,24 +164,22 @@ def rut_in_cell(x, number):
     floats, or a CasADi MX vector) holds for cell ``number``, and the pressure it carried [Pa];
     both 0 where no wheel has left one there (or the ring has come round since). MX: the slot
     is read by a symbolic index (one lookup, not one switch a slot)."""
-    ruts, cells, pressures = _split(x)
     if isinstance(number, (int, float)):
-        slot = int(_slot(number))
-        here = float(cells[slot]) == number
-        return (float(ruts[slot]), float(pressures[slot])) if here else (0.0, 0.0)
+        return ruts_in_cells(x, number, 1)[0]
+    ruts, cells, pressures = _split(x)
     slot = _slot(number)
     here = cells[slot] == number
     return ca.if_else(here, ruts[slot], 0), ca.if_else(here, pressures[slot], 0)
 
 
-def ruts_in_cells(x, first: int, count: int) -> list[tuple[float, float]]:
+def ruts_in_cells(x, first: float, count: int) -> list[tuple[float, float]]:
     """:func:`rut_in_cell` of the ``count`` cells from number ``first`` on, of a rut profile
     ``x`` of floats (the record split once, not once a cell: the in-process rover reads a
     table of them for every wheel and block)."""
     ruts, cells, pressures = _split(x)
     out = []
-    for number in range(int(first), int(first) + count):
-        slot = number % RUT_CELLS
+    for number in (first + k for k in range(count)):
+        slot = int(_slot(number))
         here = float(cells[slot]) == number
         out.append((float(ruts[slot]), float(pressures[slot])) if here else (0.0, 0.0))
     return out
@@ -277,7 +275,8 @@ def _met_over(cells, read, position, p):
         r, q = read(number)
         rut = rut + share * r
         pressure = pressure + share * q
-    r, q = read(nb + 1)  # the last cell weighs where the window reaches past nb's middle
+    # r, q: cell nb + 1's, the last end read; it weighs where the window reaches past nb's
+    # middle
     unknown = unknown + pick(fb > 0, pick(r > 0, pick(q > 0, 0, 1), 0), 0)
     scale = cell / (b - a)
     return rut * scale, pick(unknown > 0, 0, pressure * scale)
