@@ -3,14 +3,15 @@
 - the generator: every CasADi operation of the exported Functions mapped (an unmapped one
   refused by name), deterministic output, every file parsed by rumoca without an error, a
   package.order in every folder naming its classes;
-- every generated function, run by rumoca at operating points of every preset (each contact
-  form, braking, z = 0, tiny and deep sinkage, the soil's memory loading and unloading): bit for
-  bit its CasADi Function, or within 1e-10 relative where a substitution (expm1) acts; the
-  derivative functions likewise their CasADi Functions, which match CasADi's Jacobians;
-- SteadyC2 and SlipRamp (no MSL) simulated by rumoca against the steady state: 1e-8;
-- with the Modelica Standard Library 4.x on MODELICAPATH (skipped with the reason elsewhere):
-  the records' SI types exist, the rig examples are balanced and the rig's trajectory matches
-  the Python model's (Resources/Reference) to 1e-8.
+- with the Modelica Standard Library 4.x on MODELICAPATH (the shared archive, unpacked by
+  conftest.py; skipped with the reason elsewhere):
+  - every generated function (its arguments MSL's SI types), run by rumoca at operating points
+    of every preset (each contact form, braking, z = 0, tiny and deep sinkage, the soil's
+    memory loading and unloading): bit for bit its CasADi Function, or within 1e-10 relative
+    where a substitution (expm1) acts; the derivative functions likewise their CasADi
+    Functions, which match CasADi's Jacobians;
+  - every example at its own tolerance against its reference (the Python model): 1e-8; the
+    records' SI types exist; the components and wheels against the model.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from wheelterrain import presets
 from wheelterrain.model import api, contact, rig
 from wheelterrain.model import functions as model_functions
 from wheelterrain.modelica import library, reference, translate
+from wheelterrain.modelica.names import path as named
 from wheelterrain.parameters import NAMES
 
 rumoca = pytest.importorskip("rumoca")
@@ -101,6 +103,34 @@ def test_every_file_parses_and_every_folder_orders_its_classes(built):
         present = sorted([p.stem for p in folder.glob("*.mo") if p.name != "package.mo"]
                          + [p.name for p in folder.iterdir() if (p / "package.mo").exists()])
         assert sorted(listed) == present, folder
+
+
+def test_every_example_is_a_diagram_each_component_placed_each_connection_drawn(built):
+    """MSL's diagram examples: in every example (and its Utilities) each component declared
+    from a class (not a parameter or a variable) has a Placement, and each connect a Line;
+    the examples with more than one component join them by connections only (no equation
+    naming two components' variables)."""
+    examples = sorted((built / ROOT / "Examples").rglob("*.mo"))
+    assert len(examples) > 15
+    components = connections = 0
+    for path in examples:
+        text = path.read_text(encoding="utf-8")
+        for m in re.finditer(r"^\s+(?:inner |replaceable )?((?:WheelTerrain|Modelica|"
+                             r"PlanarMechanics)\.[\w.]+) \w+", text, re.M):
+            if m.group(1).rsplit(".", 1)[-1][0].isupper() and ".Units." not in m.group(1):
+                end = library._declaration_end(text, m.start())
+                assert "Placement(" in text[m.start():end], (path.name, m.group(0))
+                components += 1
+        for m in re.finditer(r"^\s+connect\(([^;]*);", text, re.M):
+            assert "Line(" in m.group(1), (path.name, m.group(0)[:80])
+            connections += 1
+        body = text.split("\nequation\n", 1)[1] if "\nequation\n" in text else ""
+        equations = [e for e in body.split(";") if "=" in e and "connect(" not in e
+                     and "annotation(" not in e and "end " not in e]
+        if path.parent.name == "FMUTwin":
+            assert equations == [], (path.name, equations[:2])
+    assert components > 60
+    assert connections > 140
 
 
 def test_every_public_class_is_documented_and_every_component_and_example_has_an_icon(built):
@@ -230,11 +260,13 @@ def _casadi_arguments(names, x, p):
 
 
 @pytest.fixture(scope="module")
-def probed(built, tmp_path_factory):
+def probed(msl_root, tmp_path_factory):
+    """Every generated function at the operating points, in one rumoca model (the functions'
+    arguments are Modelica.Units.SI types: MSL on the root)."""
     points = mp.points()
     folder = tmp_path_factory.mktemp("probe")
     (folder / "Probe.mo").write_text(_probe_model(points))
-    model = rumoca.Session(roots=[str(built)]).load(str(folder / "Probe.mo"), model="Probe")
+    model = rumoca.Session(roots=[str(msl_root)]).load(str(folder / "Probe.mo"), model="Probe")
     result = model.simulate((0.0, 0.0), dt=1.0)
     return points, result
 
@@ -267,6 +299,7 @@ def _same(got: np.ndarray, ref: np.ndarray, substituted: bool, what: str,
         assert np.all(np.abs(got - ref)[finite] <= 1e-10 * scale[finite] + 1e-300), what
 
 
+@needs_msl
 @pytest.mark.slow
 def test_every_generated_function_is_its_casadi_function_bit_for_bit(probed):
     points, result = probed
@@ -303,6 +336,7 @@ def test_every_generated_function_is_its_casadi_function_bit_for_bit(probed):
         _same(got, ref, False, e.name + "Der")
 
 
+@needs_msl
 @pytest.mark.slow
 def test_the_dispatchers_run_the_form_the_case_picks_and_every_form_is_reached(probed):
     points, result = probed
@@ -381,13 +415,14 @@ def _load_example(roots, name):
     """An example of the built library, loaded through a model outside the library's root
     (rumoca 0.10 resolves a file inside a root without the other roots)."""
     session = rumoca.Session(roots=[str(r) for r in roots])
-    return session.loads(f"model Run\n  extends {ROOT}.Examples.{name};\nend Run;\n",
+    return session.loads(f"model Run\n  extends {ROOT}.{reference.class_path(name)};\nend Run;\n",
                          model="Run")
 
 
 def _experiment(built, name: str) -> dict[str, float]:
     """The example ``name``'s experiment annotation as the library writes it."""
-    text = (built / ROOT / "Examples" / f"{name}.mo").read_text(encoding="utf-8")
+    text = (built / ROOT / f"{reference.class_path(name).replace('.', '/')}.mo").read_text(
+        encoding="utf-8")
     found = re.search(r"experiment\(([^)]*)\)", text)
     assert found, name
     return {k: float(v) for k, v in re.findall(r"(\w+)=([^,\s]+)", found.group(1))}
@@ -406,8 +441,9 @@ def _own_tolerance(built, *names: str):
 def test_every_example_has_a_reference_compared_on_its_signals(built):
     """MSL's regression layout: each example with an experiment annotation has its CSV and
     comparisonSignals.txt (time first, every signal a column of the CSV) in
-    Resources/Reference/WheelTerrain/Examples/<Example>/, and its run stops at the CSV's end."""
-    examples = [p.stem for p in (built / ROOT / "Examples").glob("*.mo")
+    Resources/Reference/WheelTerrain/<the example's class path>/, and its run stops at the
+    CSV's end."""
+    examples = [p.stem for p in (built / ROOT / "Examples").rglob("*.mo")
                 if "experiment(" in p.read_text(encoding="utf-8")]
     # SteadyC2, SlipRamp, 5 rovers, RigC1 ... RigC4, PlanarRig, PlanarRover, PlanarRoverSlope
     assert len(examples) == 14
@@ -427,17 +463,17 @@ def quasi_static(built, msl_root):
     compiled once), run over SlipRamp's second."""
     model = rumoca.Session(roots=[str(msl_root)]).loads(
         f"model Run\n  {ROOT}.Examples.SteadyC2 c2;\n  {ROOT}.Examples.SlipRamp ramp;\n"
-        f"  {ROOT}.Components.QuasiStaticWheel side(load=62, slip=0.2, slip_angle=0.3, "
-        "turn_slip=2);\n"
-        f"  {ROOT}.Components.Wheel w(sinkage=0.012, sinkage_rate=0, wheel_speed=0.25, "
-        "carriage_speed=0.02, slip_angle=-0.2, yaw_rate=0.04);\n"
-        f"  {ROOT}.Components.Wheel back(sinkage=0.012, sinkage_rate=0, wheel_speed=-0.25, "
-        "carriage_speed=-0.02, slip_angle=0.2, yaw_rate=-0.04);\n"
+        f"  {ROOT}.Components.QuasiStaticWheel side(load=62, slip=0.2, slipAngle=0.3, "
+        "turnSlip=2);\n"
+        f"  {ROOT}.Components.Wheel w(sinkage=0.012, sinkageRate=0, wheelSpeed=0.25, "
+        "carriageSpeed=0.02, slipAngle=-0.2, yawRate=0.04);\n"
+        f"  {ROOT}.Components.Wheel back(sinkage=0.012, sinkageRate=0, wheelSpeed=-0.25, "
+        "carriageSpeed=-0.02, slipAngle=0.2, yawRate=-0.04);\n"
         f"  {ROOT}.Components.Wheel record_(redeclare {ROOT}.Records.Presets.PaperTable1 "
-        "parameters, sinkage=0.012, sinkage_rate=0, wheel_speed=0.25, carriage_speed=0.02, "
-        "slip_angle=0, yaw_rate=0);\n"
+        "parameters, sinkage=0.012, sinkageRate=0, wheelSpeed=0.25, carriageSpeed=0.02, "
+        "slipAngle=0, yawRate=0);\n"
         f"  {ROOT}.Components.Wheel vector(p={ROOT}.Data.paperTable1, sinkage=0.012, "
-        "sinkage_rate=0, wheel_speed=0.25, carriage_speed=0.02, slip_angle=0, yaw_rate=0);\n"
+        "sinkageRate=0, wheelSpeed=0.25, carriageSpeed=0.02, slipAngle=0, yawRate=0);\n"
         "end Run;\n", model="Run")
     assert model.structure().is_balanced
     return model.simulate((0.0, 1.0), dt=0.05,
@@ -450,8 +486,8 @@ def test_steady_c2_matches_the_steady_state(built, quasi_static):
     expected = api.steady_state(presets.load(), 62.0, 0.25, slip_definition="paper")
     ref = reference.read(built, "SteadyC2")
     for key in ("sinkage", "drawbar_pull", "torque"):
-        assert ref[key][0] == expected[key]
-        got = quasi_static[f"c2.{key}"][-1]
+        assert ref[named(key)][0] == expected[key]
+        got = quasi_static[named(f"c2.{key}")][-1]
         assert abs(got - expected[key]) <= 1e-8 * abs(expected[key]), key
 
 
@@ -463,7 +499,8 @@ def test_a_wheel_takes_its_parameters_as_a_preset_record_or_as_a_vector(quasi_st
     default record, RashidPatch, has other soil values: measured -14.8 N against -13.0 N)."""
     assert not np.array_equal(presets.load("paper-table1").vector(), presets.load().vector())
     for key in ("normal_force", "drawbar_pull", "torque", "plastic_sinkage"):
-        assert np.array_equal(quasi_static[f"record_.{key}"], quasi_static[f"vector.{key}"]), key
+        assert np.array_equal(quasi_static[named(f"record_.{key}")],
+                              quasi_static[named(f"vector.{key}")]), key
 
 
 @needs_msl
@@ -475,7 +512,7 @@ def test_the_wheels_at_a_slip_angle_give_the_models_side_force(quasi_static):
     build().lateral_memory at its state, bit for bit (the turning moment within 1e-10)."""
     steady = api.steady_state(presets.load(), 62.0, 0.2, slip_angle=0.3, turn_slip=2.0)
     for key in ("lateral_force", "aligning_moment", "turning_moment"):
-        got = quasi_static[f"side.{key}"][-1]
+        got = quasi_static[named(f"side.{key}")][-1]
         assert abs(got - steady[key]) <= 1e-8 * abs(steady[key]), key
     assert steady["lateral_force"] < 0
     p = presets.load().vector()
@@ -484,12 +521,12 @@ def test_the_wheels_at_a_slip_angle_give_the_models_side_force(quasi_static):
     pressure = quasi_static[f"w.y[{contact.CONTACT_OUTPUTS.index('mean_pressure') + 1}]"][0]
     want = np.array(fns.lateral_memory(0.012, slip, -0.2, 0.04 / 0.02, 0.0, pressure,
                                        p)).ravel()
-    assert quasi_static["w.lateral_force"][0] == want[0]
-    assert quasi_static["w.aligning_moment"][0] == want[1]
+    assert quasi_static["w.lateralForce"][0] == want[0]
+    assert quasi_static["w.aligningMoment"][0] == want[1]
     turning = contact.LATERAL_OUTPUTS.index("turning_moment")
     # the patch's width moment runs through expm1, which the library writes as its series or
     # exp(x) - 1 (translate.SUBSTITUTED): within 1e-10, not bit for bit
-    assert quasi_static["w.turning_moment"][0] == pytest.approx(want[turning], rel=1e-10)
+    assert quasi_static["w.turningMoment"][0] == pytest.approx(want[turning], rel=1e-10)
     assert want[turning] != want[1]
     assert want[0] > 0  # moving toward its right: pushed to its left
 
@@ -504,9 +541,9 @@ def test_the_wheel_rolling_backward_is_the_mirror_image_of_the_wheel_rolling_for
     for key, sign in (("normal_force", 1), ("drawbar_pull", -1), ("torque", -1), ("slip", 1),
                       ("rut_left", 1), ("lateral_force", 1), ("aligning_moment", -1),
                       ("turning_moment", -1), ("overturning_moment", 1)):
-        forward, back = quasi_static[f"w.{key}"][0], quasi_static[f"back.{key}"][0]
+        forward, back = quasi_static[named(f"w.{key}")][0], quasi_static[named(f"back.{key}")][0]
         assert back == sign * forward, (key, forward, back)
-    assert quasi_static["w.drawbar_pull"][0] != 0
+    assert quasi_static["w.drawbarPull"][0] != 0
     assert quasi_static["back.rolling"][0] == -1
 
 
@@ -519,7 +556,7 @@ def test_a_slip_ramp_of_the_quasi_static_wheel_matches_the_steady_state(built, q
         got = np.asarray(quasi_static[f"ramp.{key}"])
         assert np.all(np.abs(got - ref[key]) <= 1e-8 * np.abs(ref[key]) + 1e-12), key
     assert ref["slip"][0] == reference.RAMP[0]
-    assert ref["drawbar_pull"][0] < 0 < ref["drawbar_pull"][-1]  # braking to driving
+    assert ref["drawbarPull"][0] < 0 < ref["drawbarPull"][-1]  # braking to driving
 
 
 ROVER_GROUPS = {"level-slope-descent-pull": ("Rover", "RoverSlope", "RoverDescent",
@@ -549,7 +586,7 @@ PATCH_EXIT = pytest.mark.xfail(strict=True, reason=(
 @pytest.mark.parametrize("group", [
     g if g != "soft-patch" else pytest.param(g, marks=PATCH_EXIT) for g in ROVER_GROUPS])
 def test_the_rover_of_four_wheels_follows_the_python_models_trajectory(built, msl_root, group):
-    """Examples.Rover (over its first second), RoverSlope, RoverDescent, RoverPullTest and
+    """Examples.FMUTwin.Rover (over its first second), RoverSlope, RoverDescent, RoverPullTest and
     RoverSoftPatch (RoverChassis and four Wheels or MapWheels) against the Python
     model's rover in model exchange (the RoverChassis FMU's rates on four contacts with memory,
     CVODES at 1e-12), on each example's comparisonSignals.txt: 1e-8 of each signal's largest
@@ -563,7 +600,8 @@ def test_the_rover_of_four_wheels_follows_the_python_models_trajectory(built, ms
     runs = {reference.rover_run(e) for e in examples}
     assert len(runs) == 1
     ((stop, interval),) = runs
-    parts = "".join(f"  {ROOT}.Examples.{e} e{k};\n" for k, e in enumerate(examples))
+    parts = "".join(f"  {ROOT}.{reference.class_path(e)} e{k};\n"
+                    for k, e in enumerate(examples))
     model = rumoca.Session(roots=[str(msl_root)]).loads(f"model Run\n{parts}end Run;\n",
                                                         model="Run")
     assert model.structure().is_balanced
@@ -592,11 +630,12 @@ def test_the_rover_examples_climb_descend_and_pull_as_their_profiles_say(built):
         late = ref["time"] >= 8.0
         if example == "RoverSoftPatch":  # each axle sinks deeper on the patch than before it
             for wheel, on in (("front_left", (12.0, 18.5)), ("rear_left", (25.0, 31.5))):
-                before = np.mean(ref[f"{wheel}.sinkage"][(ref["time"] >= 6) & (ref["time"] < 9)])
-                patch = np.mean(ref[f"{wheel}.sinkage"][(ref["time"] >= on[0])
+                sinkage = ref[named(f"{wheel}.sinkage")]
+                before = np.mean(sinkage[(ref["time"] >= 6) & (ref["time"] < 9)])
+                patch = np.mean(sinkage[(ref["time"] >= on[0])
                                                         & (ref["time"] < on[1])])
                 assert patch > before + 2e-3, (wheel, before, patch)
-        pull = sum(np.mean(ref[f"{w}.drawbar_pull"][late]) for w in
+        pull = sum(np.mean(ref[named(f"{w}.drawbar_pull")][late]) for w in
                    ("front_left", "front_right", "rear_left", "rear_right"))
         expected = {"Rover": 0.0, "RoverSoftPatch": 0.0,
                     "RoverSlope": weight * math.sin(math.radians(10.0)),
@@ -614,8 +653,8 @@ def test_a_wheel_running_the_external_contact_is_balanced_and_refused_by_name(ms
     session = rumoca.Session(roots=[str(msl_root)])
     model = session.loads(
         f"model Run\n  {ROOT}.Components.Wheel w(redeclare function contactFunction = "
-        f"{ROOT}.Functions.External.contact, sinkage=0.01, sinkage_rate=0, wheel_speed=0.1, "
-        "carriage_speed=0.01, slip_angle=0, yaw_rate=0);\nend Run;\n", model="Run")
+        f"{ROOT}.Functions.External.contact, sinkage=0.01, sinkageRate=0, wheelSpeed=0.1, "
+        "carriageSpeed=0.01, slipAngle=0, yawRate=0);\nend Run;\n", model="Run")
     assert model.structure().is_balanced
     with pytest.raises(Exception, match=r"WheelTerrain_contactCase.*cannot execute"):
         model.simulate((0.0, 0.1), dt=0.05)
@@ -647,7 +686,7 @@ def test_the_rig_on_msl_components_follows_the_python_models_trajectory(built, m
     config = _own_tolerance(built, *(f"Rig{case}" for case in reference.RIG_CASES))
     for case, slip_paper in reference.RIG_CASES.items():
         result = model.simulate((0.0, 1.0), dt=reference.RIG_INTERVAL,
-                                params={"slip_paper": slip_paper}, config=config)
+                                params={"slipPaper": slip_paper}, config=config)
         ref = reference.read(built, f"Rig{case}")
         n = len(result.time)
         assert n == 101
@@ -733,7 +772,7 @@ def test_the_planar_wheel_on_its_rig_is_the_rig_level_and_tilted(built, planar_r
     config = _own_tolerance(built, "PlanarRig")
     for case, slip_paper in reference.RIG_CASES.items():
         result = planar_rig.simulate((0.0, 1.0), dt=reference.RIG_INTERVAL, config=config,
-                                     params={"slip_paper": slip_paper,
+                                     params={"slipPaper": slip_paper,
                                              "angle": math.radians(angle_deg)})
         ref = reference.read(built, f"Rig{case}")
         n = len(result.time)
@@ -754,24 +793,24 @@ def test_the_planar_wheel_rolls_backward_as_the_mirror_and_lands_from_above(plan
     runs, rim_speed = {}, rig.defaults()["rig.rim_speed"]
     for sign in (1, -1):
         runs[sign] = planar_rig.simulate((0.0, 1.0), dt=reference.RIG_INTERVAL, config=config,
-                                         params={"slip_paper": 0.25,
-                                                 "rim_speed": sign * rim_speed})
+                                         params={"slipPaper": 0.25,
+                                                 "rimSpeed": sign * rim_speed})
     for key, sign in (("sinkage", 1), ("normal_force", 1), ("drawbar_pull", -1),
                       ("drive.inertia.w", -1), ("wheel.plastic_sinkage", 1)):
-        forward, back = np.asarray(runs[1][key]), np.asarray(runs[-1][key])
+        forward, back = np.asarray(runs[1][named(key)]), np.asarray(runs[-1][named(key)])
         assert np.max(np.abs(back - sign * forward)) <= 1e-9 * np.max(np.abs(forward)), key
     assert np.all(np.asarray(runs[-1]["wheel.contact.rolling"])[1:] == -1)
     dropped = planar_rig.simulate((0.0, 0.5), dt=0.0005, config=rumoca.SimConfig(
-        solver="rk-like", rtol=1e-8, atol=1e-10), params={"slip_paper": 0.25,
+        solver="rk-like", rtol=1e-8, atol=1e-10), params={"slipPaper": 0.25,
                                                           "sinkage_start": -0.002})
     sinkage = np.asarray(dropped["sinkage"])
     air = sinkage < 0
     assert air[0]
     assert not air[-1]
-    assert np.all(np.asarray(dropped["normal_force"])[air] == 0)
-    assert np.all(np.asarray(dropped["wheel.plastic_sinkage"])[air] == 0)
+    assert np.all(np.asarray(dropped["normalForce"])[air] == 0)
+    assert np.all(np.asarray(dropped["wheel.plasticSinkage"])[air] == 0)
     load = rig.defaults()["rig.load"]
-    assert abs(np.mean(np.asarray(dropped["normal_force"])[-100:]) - load) < 0.05 * load
+    assert abs(np.mean(np.asarray(dropped["normalForce"])[-100:]) - load) < 0.05 * load
 
 
 @needs_planar
@@ -810,11 +849,11 @@ def test_the_rover_from_standard_parts_stops_and_reverses(msl_root):
     FMU's; turned at once, neither of rumoca's solvers passed the stop in 5 minutes). Every
     wheel's rolling turns once; backward the rover runs at its forward speed (the mirror image
     on level ground: measured 2.4e-6 apart, the imprints' histories differ)."""
-    # literal values: rumoca 0.10 did not finish compiling rim_speed_end=-rim_speed (a
+    # literal values: rumoca 0.10 did not finish compiling rimSpeed_end=-rimSpeed (a
     # modifier naming the base's final parameter) in 20 minutes
     model = rumoca.Session(roots=[str(msl_root)]).loads(
-        f"model Run\n  extends {ROOT}.Examples.PlanarRover(rim_speed_end=-0.03, "
-        "change_start=1, change_duration=2);\nend Run;\n", model="Run")
+        f"model Run\n  extends {ROOT}.Examples.PlanarRover(rimSpeed_end=-0.03, "
+        "changeStartTime=1, changeDuration=2);\nend Run;\n", model="Run")
     assert model.structure().is_balanced
     result = model.simulate((0.0, 5.0), dt=0.01, config=rumoca.SimConfig(
         solver="rk-like", rtol=1e-6, atol=1e-9))
@@ -823,11 +862,11 @@ def test_the_rover_from_standard_parts_stops_and_reverses(msl_root):
     assert forward > 0.03
     assert speed[-1] == pytest.approx(-forward, rel=1e-4)
     for wheel in ("front_left", "front_right", "rear_left", "rear_right"):
-        rolling = np.asarray(result[f"{wheel}.contact.rolling"])
+        rolling = np.asarray(result[named(f"{wheel}.contact.rolling")])
         assert rolling[0] == 1
         assert rolling[-1] == -1
         assert np.count_nonzero(np.diff(rolling)) == 1, wheel
-        slip = np.asarray(result[f"{wheel}.slip"])
+        slip = np.asarray(result[named(f"{wheel}.slip")])
         assert np.all(np.abs(slip) <= 1)
 
 
@@ -892,7 +931,7 @@ def test_the_horizontal_wheel_is_the_steady_state_at_its_hubs_slip_angle_and_yaw
         want = {"slip": slip, "slip_angle": sign * 0.2, "lateral_force": steady["lateral_force"]}
         want.update({k: sign * steady[k] for k in ("drawbar_pull", "turning_moment", "torque")})
         for key, value in want.items():
-            got = result[f"wheel.{key}"][-1]
+            got = result[named(f"wheel.{key}")][-1]
             assert abs(got - value) <= 1e-8 * abs(value), (sign, key, got, value)
         heading = 0.4 + 0.02 * 1.0
         pull, side = want["drawbar_pull"], want["lateral_force"]
@@ -936,7 +975,7 @@ def test_the_horizontal_wheel_blends_the_two_directions_at_the_turn_of_rolling(m
         want = dict(zip(fmu_variables.TERRAIN_OUTPUTS, y.full().ravel(), strict=True))
         for key, name, scale in (("drawbar_pull", "drawbar_pull", 1.0),
                                  ("torque", "torque", 0.1), ("sinkage", "contact_sinkage", 0.01)):
-            got = result[f"wheel.{key}"][-1]
+            got = result[named(f"wheel.{key}")][-1]
             assert abs(got - want[name]) <= 1e-8 * max(abs(want[name]), scale), (speed, key)
         shares.append(result["wheel.share"][-1])
         assert abs(rim + speed) < floor
@@ -963,4 +1002,4 @@ def test_every_preset_record_gives_its_parameter_vector_options_as_enumerations(
         codes.add(want[NAMES.index("model.contact_form")])
     assert codes == {0.0, 1.0}  # both literals of an enumeration are met
     text = (msl_root / ROOT / "Records" / "Options.mo").read_text(encoding="utf-8")
-    assert f"{ROOT}.Types.ContactForm contact_form" in text
+    assert f"{ROOT}.Types.ContactForm contactForm" in text

@@ -366,7 +366,7 @@ def modelica_examples(ramp: dict, rig: dict | None, path: Path, rover: dict | No
         {"marker": "s", "ls": "none", "color": "C1", "mfc": "none"}),
         "Examples.SlipRamp (no MSL)")
     k = 1
-    for run, title in ((rover, "Examples.RoverSlope (no MSL): rear-left wheel"),
+    for run, title in ((rover, "Examples.FMUTwin.RoverSlope: rear-left wheel"),
                        (rig, "Examples.RigC2 (MSL flanges and blocks)")):
         if run:
             _tool_against_python(axes[0, k], "time", run, (

@@ -9,9 +9,10 @@ level), and where each part comes from:
   (:func:`wheelterrain.model.contact.export_kernels`), each with its derivative function
   (CasADi's forward mode, ``annotation(derivative(zeroDerivative=p))``), a function choosing
   the form as the model's switch does, the two slips (:mod:`wheelterrain.fmu.functions`), and
-  ``Index``: the position of each output in the functions' output vectors. No Modelica Standard
-  Library needed. ``Functions.External``: the same functions calling the C CasADi generates
-  from the same Functions (:mod:`.external`); ``Functions.Interfaces``: the signatures the
+  ``Index``: the position of each output in the functions' output vectors; every argument a
+  ``Modelica.Units.SI`` type (or Real with its unit where SI has none).
+  ``Functions.External``: the same functions calling the C CasADi generates from the same
+  Functions (:mod:`.external`); ``Functions.Interfaces``: the signatures the
   components' replaceable contact functions are constrained by.
 - ``Data``: every preset as a parameter vector in table order (no MSL needed).
 - ``Records``: the parameter table as records with ``Modelica.Units.SI`` types, ranges,
@@ -57,7 +58,7 @@ import numpy as np
 
 from wheelterrain import __version__, presets
 from wheelterrain.model import contact, ground, rover
-from wheelterrain.modelica import external, reference, translate
+from wheelterrain.modelica import external, names, reference, translate
 from wheelterrain.modelica.translate import Port
 from wheelterrain.parameters import (
     NAMES,
@@ -87,9 +88,10 @@ KEYWORDS = frozenset((
 
 def modelica_name(table_name: str) -> str:
     """The Records.Parameters component of a table row: 'soil.phi' -> 'soil.phi',
-    'model.contact_form' -> 'options.contact_form' (a keyword gets a trailing underscore)."""
+    'model.contact_form' -> 'options.contactForm' (the library's names, :mod:`.names`; a
+    keyword gets a trailing underscore)."""
     group, _, field_ = table_name.partition(".")
-    field_ = field_ + "_" if field_ in KEYWORDS else field_
+    field_ = field_ + "_" if field_ in KEYWORDS else names.identifier(field_)
     return f"{GROUPS[group]}.{field_}"
 
 
@@ -156,28 +158,34 @@ def _doc(text: str) -> str:
 # ---- Functions ----------------------------------------------------------------------------
 
 INPUT_DOC = {
-    "sinkage": "sinkage of the contact circle below the undisturbed surface [m]",
-    "sinkage_rate": "d(sinkage)/dt [m/s]",
+    "sinkage": "sinkage of the contact circle below the undisturbed surface",
+    "sinkage_rate": "d(sinkage)/dt",
     "slip": "the model's slip (omega*R_ref - V)/max(omega*R_ref, V): traction driving, skid "
-            "braking [1]",
-    "wheel_angle": "wheel angle, the grouser ripple's phase [rad]",
-    "plastic_sinkage": "the deepest the wheel has pressed the soil under it (its memory) [m]",
-    "carriage_speed": "the axle's forward speed V [m/s]",
-    "wheel_speed": "the wheel's angular velocity omega [rad/s]",
-    "slip_paper": "the paper's slip s = (omega*R_ref - V)/V [1]",
+            "braking",
+    "wheel_angle": "wheel angle, the grouser ripple's phase",
+    "plastic_sinkage": "the deepest the wheel has pressed the soil under it (its memory)",
+    "carriage_speed": "the axle's forward speed V",
+    "wheel_speed": "the wheel's angular velocity omega",
+    "slip_paper": "the paper's slip s = (omega*R_ref - V)/V",
     "slip_angle": "the slip angle between the wheel's heading and its velocity, positive when "
-                  "it moves toward its left [rad]",
+                  "it moves toward its left",
     "turn_slip": "the turn slip, the wheel's yaw rate over its forward speed, positive "
-                 "counter-clockwise seen from above [rad/m]",
+                 "counter-clockwise seen from above",
     "mean_pressure": "the contact's mean pressure at the yield sinkage (contact's output "
-                     "mean_pressure at the same state) [Pa]",
+                     "mean_pressure at the same state)",
     "p": "the parameters in table order (Data, Records.parameterVector)",
     "r": "the rover's parameters in table order (Data.rover)",
-    "x": "the chassis' state (Index.rover_states order)",
-    "u": "the chassis' inputs (Index.rover_inputs order)",
-    "position": "where the point is along the path [m]",
+    "x": "the chassis' state (Index.RoverState order)",
+    "u": "the chassis' inputs (Index.RoverInput order)",
+    "position": "where the point is along the path",
     "g": "the terrain map's parameters in table order (Data.terrain)",
 }
+INPUT_UNIT = {"sinkage": "m", "sinkage_rate": "m/s", "slip": "1", "wheel_angle": "rad",
+              "plastic_sinkage": "m", "carriage_speed": "m/s", "wheel_speed": "rad/s",
+              "slip_paper": "1", "slip_angle": "rad", "turn_slip": "rad/m",
+              "mean_pressure": "Pa", "position": "m"}
+"""The scalar inputs' units (their Modelica.Units.SI types, translate.SI_TYPES); the vectors
+(p, r, x, u, g) hold mixed units."""
 
 
 PARAMETER_INPUTS = ("p", "r", "g")
@@ -192,7 +200,8 @@ def _sizes() -> dict[str, int]:
 
 def _ports(names: Sequence[str]) -> list[Port]:
     sizes = _sizes()
-    return [Port(n, sizes.get(n, 1), description=INPUT_DOC[n]) for n in names]
+    return [Port(n, sizes.get(n, 1), description=INPUT_DOC[n], unit=INPUT_UNIT.get(n, ""))
+            for n in names]
 
 
 def _derivative(f: ca.Function, names: Sequence[str]) -> ca.Function:
@@ -250,7 +259,8 @@ def exported() -> tuple[Exported, ...]:
                                       fmu_functions.slip_radius(p))
     f = ca.Function("slipFromSpeeds", [wheel_speed, carriage_speed, p], [sigma], {"cse": True})
     names = ("wheel_speed", "carriage_speed", "p")
-    out.append(Exported("slipFromSpeeds", f, names, (Port("slip", description="[1]"),),
+    slip = Port("slip", description="the model's slip", unit="1")
+    out.append(Exported("slipFromSpeeds", f, names, (slip,),
                         "The model's slip from the wheel's and the axle's speeds: "
                         "(omega*R_ref - V)/max(|omega*R_ref|, |V|, "
                         f"{fmu_functions.SLIP_SPEED_FLOOR:g} m/s), the traction slip driving, "
@@ -260,7 +270,8 @@ def exported() -> tuple[Exported, ...]:
     f = ca.Function("rollingSign", [wheel_speed, carriage_speed, p], [ca.if_else(
         fmu_functions.backward(wheel_speed, carriage_speed, fmu_functions.slip_radius(p)), -1,
         1)], {"cse": True})
-    out.append(Exported("rollingSign", f, names, (Port("sign", description="[1]"),),
+    sign = Port("sign", description="the direction of rolling", unit="1")
+    out.append(Exported("rollingSign", f, names, (sign,),
                         "-1 for a wheel rolling backward (omega*R_ref + V < 0: both speeds "
                         "<= 0, or near rest the faster of the two backward): the mirror image "
                         "of one rolling forward; else 1",
@@ -268,7 +279,8 @@ def exported() -> tuple[Exported, ...]:
     f = ca.Function("turningWeight", [wheel_speed, carriage_speed, p], [
         fmu_functions.turning_weight(wheel_speed, carriage_speed, fmu_functions.slip_radius(p))],
         {"cse": True})
-    out.append(Exported("turningWeight", f, names, (Port("weight", description="[1]"),),
+    weight = Port("weight", description="the share of rolling forward", unit="1")
+    out.append(Exported("turningWeight", f, names, (weight,),
                         "The share of rolling forward in the contact: 1 forward, 0 backward, "
                         "between them within the slip's speed floor of omega*R_ref + V = 0, "
                         "where the contact is the blend of the two (the FMU's)",
@@ -277,7 +289,7 @@ def exported() -> tuple[Exported, ...]:
     f = ca.Function("slipFromPaper", [s], [ca.if_else(s < 0, s, s / (1 + s))], {"cse": True})
     out.append(Exported("slipFromPaper", f, ("slip_paper",),
                         (Port("slip", description="the model's slip: s/(1 + s) driving, s "
-                              "braking [1]"),),
+                              "braking", unit="1"),),
                         "The model's slip from the paper's slip", _derivative(f, ("slip_paper",))))
     side = ("lateral force, aligning moment, the force's two parts, turning moment and "
             "overturning moment")
@@ -363,10 +375,8 @@ def entries() -> tuple[Entry, ...]:
             annotation = f"derivative{f'({zero})' if zero else ''}={e.name}Der"
         out.append(Entry(e.name, e.function, inputs, e.outputs, e.description, annotation))
         if e.derivative is not None:
-            seeds = tuple(Port("der_" + p.name, p.size, description=f"d({p.name})/dt")
-                          for p in inputs if p.name not in PARAMETER_INPUTS)
-            outs = tuple(Port("der_" + p.name, p.size, description=f"d({p.name})/dt")
-                         for p in e.outputs)
+            seeds = tuple(p.rate() for p in inputs if p.name not in PARAMETER_INPUTS)
+            outs = tuple(p.rate() for p in e.outputs)
             out.append(Entry(f"{e.name}Der", e.derivative, inputs + seeds, outs,
                              f"Derivative of {e.name} (CasADi's forward mode)", ""))
     return tuple(out)
@@ -398,7 +408,7 @@ def _functions(lib: Library) -> None:
                 internal)
     order.append("Internal")
     lib.package(LIBRARY, "Functions", "The model's functions, generated instruction by "
-                "instruction from its CasADi Functions (no Modelica Standard Library needed)",
+                "instruction from its CasADi Functions (their arguments Modelica.Units.SI types)",
                 order)
 
 
@@ -440,7 +450,7 @@ def _dispatch_ports(memory: bool, der: bool) -> tuple[list[Port], Port]:
     rows = len(contact.CONTACT_OUTPUTS) + (len(contact.MEMORY_OUTPUTS) if memory else 0)
     inputs = _ports(names)
     if der:
-        inputs += [Port("der_" + n, description=f"d({n})/dt") for n in names if n != "p"]
+        inputs += [p.rate() for p in _ports(names) if p.name != "p"]
     return inputs, Port("der_y" if der else "y", rows, description="the outputs, Index order")
 
 
@@ -461,13 +471,13 @@ def _interfaces(lib: Library, where: str) -> list[str]:
     n_soil = len(ground.SOIL_NAMES)
     for name, what, lines in (
             ("Height", "Terrain.height: the terrain's height at a horizontal position",
-             ['  input Real x(unit="m") "horizontal position";',
-              '  output Real h(unit="m") "the terrain\'s height there";']),
+             ['  input Modelica.Units.SI.Length x "horizontal position";',
+              '  output Modelica.Units.SI.Length h "the terrain\'s height there";']),
             ("Slope", "Terrain.slopeAt: the terrain's inclination at a horizontal position",
-             ['  input Real x(unit="m") "horizontal position";',
-              '  output Real angle(unit="rad") "the inclination there, rising toward +x";']),
+             ['  input Modelica.Units.SI.Length x "horizontal position";',
+              '  output Modelica.Units.SI.Angle angle "the inclination there, rising toward +x";']),
             ("Soil", "Terrain.soil: the soil at a horizontal position",
-             ['  input Real position(unit="m") "horizontal position";',
+             ['  input Modelica.Units.SI.Length position "horizontal position";',
               f'  output Real soil[{n_soil}] "the soil.* parameters there, table order '
               '(Index.Soil)";'])):
         text = "\n".join([f'partial function {name} "The signature of {what}"', *lines,
@@ -518,14 +528,14 @@ def _index(lib: Library, where: str) -> None:
     for k, name in enumerate(contact.CONTACT_OUTPUTS + contact.MEMORY_OUTPUTS):
         scope = "contact only" if name in contact.MEMORY_OUTPUTS else "both"
         lines.append(f'  constant Integer {name} = {k + 1} "({scope})";')
-    for package, names, what in (("RoverState", rover.STATES, "roverRates' x and dx"),
-                                 ("RoverInput", rover.INPUTS, "roverRates' u"),
-                                 ("RoverWheel", [f"{w}.{q}" for w in rover.WHEELS
-                                                 for q in ("sinkage", "sinkage_rate",
-                                                           "axle_speed")],
-                                  "roverWheels' y")):
+    for package, members, what in (("RoverState", rover.STATES, "roverRates' x and dx"),
+                                   ("RoverInput", rover.INPUTS, "roverRates' u"),
+                                   ("RoverWheel", [f"{w}.{q}" for w in rover.WHEELS
+                                                   for q in ("sinkage", "sinkage_rate",
+                                                             "axle_speed")],
+                                    "roverWheels' y")):
         lines.append(f'  package {package} "Positions in {what}"')
-        for k, name in enumerate(names):
+        for k, name in enumerate(members):
             lines.append(f"    constant Integer {name.replace('.', '_')} = {k + 1};")
         lines.append(f"  end {package};")
     lines.append('  package Lateral "Positions in lateral\'s and lateralMemory\'s y"')
@@ -557,8 +567,8 @@ def _data(lib: Library) -> None:
             ("rover", [rover.defaults()[n] for n in rover.ROVER_NAMES],
              "The rover's parameters at the table's defaults (the rover.* rows, table order)"),
             ("roverStart", reference.rover_start(),
-             "The rover at the start of Examples.Rover: level, wheels at their reference speed, "
-             "the chassis 1 mm in the soil"),
+             "The rover at the start of Examples.FMUTwin.Rover: level, wheels at their "
+             "reference speed, the chassis 1 mm in the soil"),
             ("terrain", [ground.defaults()[n] for n in ground.NAMES],
              "The terrain map's parameters at the table's defaults (one soil, no patch)")):
         lines.append(_wrap_call(f"  constant Real {const}[{len(values)}] = {_vector(values)}"))
@@ -887,10 +897,62 @@ def _rover_chassis() -> str:
     return "\n".join(lines) + "\n"
 
 
-def _placement(x: float, y: float) -> str:
-    """A component's place in an example's diagram: a 40 x 40 square centred at (x, y)."""
-    corners = f"{{{{{x - 20:g},{y - 20:g}}},{{{x + 20:g},{y + 20:g}}}}}"
-    return f"Placement(transformation(extent={corners}))"
+def _pins(text: str) -> dict[str, tuple[float, float]]:
+    """A class file's connectors and where their icons sit in its icon (their placements'
+    centres): the ends of the connection lines an example draws to them."""
+    found = re.finditer(r"^\s*\S*(?:RealInput|RealOutput|Frame_a|Frame_b|Flange_a|Flange_b|"
+                        r"Support)\s+(\w+)[^;]*?annotation\(Placement\(transformation\("
+                        r"extent=\{\{(-?[\d.]+),(-?[\d.]+)\},\{(-?[\d.]+),(-?[\d.]+)\}\}",
+                        text, re.M)
+    return {m.group(1): ((float(m.group(2)) + float(m.group(4))) / 2,
+                         (float(m.group(3)) + float(m.group(5))) / 2) for m in found}
+
+
+MSL_PINS = {"Constant": {"y": (110.0, 0.0)},
+            "Add": {"u1": (-120.0, 60.0), "u2": (-120.0, -60.0), "y": (110.0, 0.0)},
+            "FixedTranslation": {"frame_a": (-100.0, 0.0), "frame_b": (100.0, 0.0)}}
+"""Where MSL's and PlanarMechanics' connectors sit in the icons of the classes the generated
+examples place (Blocks.Sources.Constant, Blocks.Math.Add, PlanarMechanics.Parts.
+FixedTranslation)."""
+
+
+def _line(ends: tuple[tuple[float, float], tuple[float, float]], signal: bool) -> str:
+    """A connection's line between two connector positions in the diagram: straight where
+    they are level, else across at half way."""
+    (x1, y1), (x2, y2) = ends
+    middle = round((x1 + x2) / 2, 1)
+    points = [(x1, y1), (x2, y2)] if y1 == y2 else [(x1, y1), (middle, y1), (middle, y2),
+                                                    (x2, y2)]
+    text = ",".join(f"{{{x:g},{y:g}}}" for x, y in points)
+    return f"Line(points={{{text}}}{', color={0,0,127}' if signal else ''})"
+
+
+@dataclass
+class Diagram:
+    """An example's diagram: each component's centre and half size, and its connectors'
+    places in its icon; :meth:`connect` writes a connection with its line."""
+
+    places: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+    pins: dict[str, dict[str, tuple[float, float]]] = field(default_factory=dict)
+
+    def place(self, name: str, x: float, y: float, pins: dict[str, tuple[float, float]],
+              half: float = 20.0, turned: bool = False) -> str:
+        """Place ``name`` centred at (x, y), ``half`` its half size (``turned``: rotated by
+        180 deg, its connectors on the other side)."""
+        self.places[name] = (x, y, half)
+        self.pins[name] = {k: (-px, -py) for k, (px, py) in pins.items()} if turned else pins
+        corners = f"{{{{{x - half:g},{y - half:g}}},{{{x + half:g},{y + half:g}}}}}"
+        return (f"Placement(transformation(extent={corners}"
+                f"{', rotation=180' if turned else ''}))")
+
+    def _at(self, reference: str) -> tuple[float, float]:
+        component, connector = reference.split(".")
+        x, y, half = self.places[component]
+        px, py = self.pins[component][re.sub(r"\[\d+\]$", "", connector)]
+        return round(x + px * half / 100, 1), round(y + py * half / 100, 1)
+
+    def connect(self, a: str, b: str, signal: bool = True) -> str:
+        return f"  connect({a}, {b}) annotation({_line((self._at(a), self._at(b)), signal)});"
 
 
 def _experiment(name: str, stop: float, interval: float) -> str:
@@ -906,19 +968,22 @@ def _reference_doc(name: str) -> str:
     return f"Reference: {folder}/{name}.csv, compared on {folder}/comparisonSignals.txt"
 
 
-def _rover_example(name: str = "Rover") -> str:
-    """Examples.Rover (four Wheels on one soil) or, for an example with a terrain map
-    (reference.ROVER_MAPS), four MapWheels on the map at their axles' positions."""
-    n = len(rover.WHEELS)
+def _rover_example(pins: dict[str, dict[str, tuple[float, float]]], name: str = "Rover") -> str:
+    """Examples.FMUTwin.Rover (four Wheels on one soil) or, for an example with a terrain map
+    (reference.ROVER_MAPS), four MapWheels on the map at their axles' positions: the blocks
+    and MSL's sources joined by connections only, drawn (``pins``: the library's blocks'
+    connectors, :func:`_pins`)."""
     stop, interval = reference.rover_run(name)
     mapped = name in reference.ROVER_MAPS
     what = ("on level ground with a patch of looser soil (k_phi' and phi scaled down) on "
             f"[{ground.SOFT_PATCH_START:g}, {ground.SOFT_PATCH_START + ground.SOFT_PATCH_LENGTH:g})"
             " m, under the front axle, then the rear: four MapWheels" if mapped else
             "on level ground at the commanded rim speed: four Wheels")
+    drive = rover.ROVER_NAMES.index("rover.drive") + 1
+    d = Diagram()
+    constant = MSL_PINS["Constant"]
     lines = [
-        f'model {name} "The rover {what} on a RoverChassis, the default preset\'s soil (no '
-        'Modelica Standard Library needed)"',
+        f'model {name} "The rover {what} on a RoverChassis, the default preset\'s soil"',
         f"  parameter Real p[{len(NAMES)}] = {LIBRARY}.Data.rashidPatch "
         '"every wheel\'s soil and model";',
         f"  parameter Real r[{_sizes()['r']}] = {LIBRARY}.Data.rover "
@@ -928,37 +993,60 @@ def _rover_example(name: str = "Rover") -> str:
         lines.append(f"  parameter Real g[{len(ground.NAMES)}] = "
                      f"{_vector([g[k] for k in ground.NAMES])} "
                      '"the terrain map (Data.terrain with the soft patch)";')
-    lines += [f"  {LIBRARY}.Components.RoverChassis chassis(r=r, slope=0, towing_force=0,",
-              f"    wheel_speed_command=zeros({n}), motor_torque_command=zeros({n}))",
-              f"    annotation({_placement(0, 40)});"]
+    lines += [f"  {LIBRARY}.Components.RoverChassis chassis(r=r) "
+              f"annotation({d.place('chassis', 0, 40, pins['RoverChassis'])});",
+              '  Modelica.Blocks.Sources.Constant level(k=0) "the terrain\'s own slope (the '
+              f'chassis\' rover.* profile adds to it)" '
+              f"annotation({d.place('level', -60, 90, constant, 10)});",
+              '  Modelica.Blocks.Sources.Constant free(k=0) "no force holding the rover back" '
+              f"annotation({d.place('free', -100, 90, constant, 10)});",
+              '  Modelica.Blocks.Sources.Constant noCommand(k=0) "the wheels\' speed and torque '
+              f"commands, read where rover.drive (r[{drive}]) is {rover.DRIVE_SPEED} or "
+              f"{rover.DRIVE_TORQUE} only: here the chassis' own profile drives\" "
+              f"annotation({d.place('noCommand', -100, 40, constant, 10)});",
+              '  Modelica.Blocks.Sources.Constant straight(k=0) "the chassis drives straight: no '
+              'slip angle, no yaw rate" '
+              f"annotation({d.place('straight', -100, -10, constant, 10)});"]
     k, size = NAMES.index("ripple.phase") + 1, len(NAMES)
     for w in rover.WHEELS:  # each wheel's grouser phase added to its ripple.phase
         j = rover.ROVER_NAMES.index(f"rover.grouser_phase.{w}") + 1
         lines += translate.wrap(f"  parameter Real p_{w}[{size}] = cat(1, p[1:{k - 1}], "
                                 f"{{p[{k}] + r[{j}]}}, p[{k + 1}:{size}]) "
                                 f'"{w}: p with its grouser phase";')
-    where = {w: _placement(60 if w in rover.FRONT else -60, 20 - 60 * (k % 2))
-             for k, w in enumerate(rover.WHEELS)}  # front right of the diagram, left above
-    lines += [f"  {LIBRARY}.Components.MapWheel {w}(p=p_{w}, g=g) annotation({where[w]});"
-              if mapped else f"  {LIBRARY}.Components.Wheel {w}(p=p_{w}) annotation({where[w]});"
-              for w in rover.WHEELS]
+    block = "MapWheel" if mapped else "Wheel"
+    for n, w in enumerate(rover.WHEELS):  # front right of the diagram, left above
+        where = d.place(w, 60 if w in rover.FRONT else -60, 20 - 60 * (n % 2), pins[block])
+        lines.append(f"  {LIBRARY}.Components.{block} {w}(p=p_{w}{', g=g' if mapped else ''}) "
+                     f"annotation({where});")
+    half = f"r[{rover.ROVER_NAMES.index('rover.wheelbase') + 1}]/2"
+    if mapped:  # rover.wheel_position: the axle ahead of or behind the reference point
+        add = MSL_PINS["Add"]
+        lines += [f'  Modelica.Blocks.Sources.Constant halfWheelbase(k={half}) "the axles\' '
+                  f'distance from the chassis\' reference point" '
+                  f"annotation({d.place('halfWheelbase', 100, 90, constant, 10)});",
+                  '  Modelica.Blocks.Math.Add frontAxle "where the front axle is along the path" '
+                  f"annotation({d.place('frontAxle', 60, 80, add, 10)});",
+                  '  Modelica.Blocks.Math.Add rearAxle(k2=-1) "where the rear axle is along the '
+                  f"path\" annotation({d.place('rearAxle', -60, -90, add, 10)});"]
     lines += ['  Real speed(unit="m/s") = chassis.speed;',
               '  Real position(unit="m") = chassis.position;',
               f'  Real heave(unit="m") = chassis.{_state("heave")};',
-              '  Real pitch(unit="rad") = chassis.pitch;', "equation"]
-    half = f"r[{rover.ROVER_NAMES.index('rover.wheelbase') + 1}]/2"
+              '  Real pitch(unit="rad") = chassis.pitch;', "equation",
+              d.connect("level.y", "chassis.slope"), d.connect("free.y", "chassis.towing_force")]
+    if mapped:
+        for axle in ("frontAxle", "rearAxle"):
+            lines += [d.connect("chassis.position", f"{axle}.u1"),
+                      d.connect("halfWheelbase.y", f"{axle}.u2")]
     for k, w in enumerate(rover.WHEELS, start=1):
-        lines += [f"  {w}.sinkage = chassis.sinkage[{k}];",
-                  f"  {w}.sinkage_rate = chassis.sinkage_rate[{k}];",
-                  f"  {w}.wheel_speed = chassis.wheel_speed[{k}];",
-                  f"  {w}.carriage_speed = chassis.carriage_speed[{k}];",
-                  f"  {w}.slip_angle = 0;  // the chassis drives straight",
-                  f"  {w}.yaw_rate = 0;"]
-        if mapped:  # rover.wheel_position: the axle ahead of or behind the reference point
-            lines.append(f"  {w}.position = chassis.position "
-                         f"{'+' if w in rover.FRONT else '-'} {half};")
-        lines += [f"  chassis.{q}[{k}] = {w}.{q};"
+        lines += [d.connect(f"chassis.{q}[{k}]", f"{w}.{q}")
+                  for q in ("sinkage", "sinkage_rate", "wheel_speed", "carriage_speed")]
+        lines += [d.connect("straight.y", f"{w}.{q}") for q in ("slip_angle", "yaw_rate")]
+        if mapped:
+            axle = "frontAxle" if w in rover.FRONT else "rearAxle"
+            lines.append(d.connect(f"{axle}.y", f"{w}.position"))
+        lines += [d.connect(f"{w}.{q}", f"chassis.{q}[{k}]")
                   for q in ("normal_force", "drawbar_pull", "torque")]
+        lines += [d.connect("noCommand.y", f"chassis.{q}[{k}]") for q in rover.WHEEL_COMMANDS]
     lines += [f"  annotation({_experiment(name, stop, interval)},",
               f'    Documentation(info="<html><p>{_reference_doc(name)} (the '
               "Python model: the RoverChassis FMU's model-exchange rates on four contacts with "
@@ -968,14 +1056,17 @@ def _rover_example(name: str = "Rover") -> str:
     return "\n".join(lines) + "\n"
 
 
-def _planar_rover() -> str:
-    """Examples.PlanarRover: the rover of Examples.Rover from standard parts (a body,
+def _planar_rover(pins: dict[str, dict[str, tuple[float, float]]]) -> str:
+    """Examples.PlanarRover: the rover of Examples.FMUTwin.Rover from standard parts (a body,
     PlanarMechanics' FixedTranslation axles, four PlanarWheels, four Utilities.SpeedDrives), its
     rover parameters Data.rover's rows by name."""
     rows = {n.split(".", 1)[1]: rover.ROVER_NAMES.index(n) + 1 for n in rover.ROVER_NAMES
             if n.count(".") == 1}
     phase = NAMES.index("ripple.phase") + 1
     wheels, connections = [], []
+    d, drive = Diagram(), pins["SpeedDrive"]
+    for axle, y in (("front", 50), ("rear", -20)):  # as the template places them
+        d.place(axle, 10, y, MSL_PINS["FixedTranslation"], 10)
     for k, w in enumerate(rover.WHEELS):  # a row each, top to bottom: drive, then wheel
         y = 75 - 45 * k
         j = rover.ROVER_NAMES.index(f"rover.grouser_phase.{w}") + 1
@@ -983,17 +1074,17 @@ def _planar_rover() -> str:
         wheels += [f"  {LIBRARY}.Wheels.PlanarWheel {w}(parameters(ripple(phase="
                    f"{LIBRARY}.Data.rashidPatch[{phase}] + r[{j}])))",
                    f'    "{w}: its grouser phase the preset\'s and rover.grouser_phase.{w}"',
-                   f"    annotation({_placement(80, y)});",
+                   f"    annotation({d.place(w, 50, y, pins['PlanarWheel'])});",
                    f"  {LIBRARY}.Examples.Utilities.SpeedDrive {w}_drive("
                    f"J=r[{rows['wheel_inertia']}], bandwidth=r[{rows['speed_bandwidth']}],",
                    f"    w_ref=rim_speed/slip_radius, tau_max=r[{rows['motor_torque_limit']}],",
-                   "    w_end=rim_speed_end/slip_radius, ramp_start=change_start, "
+                   "    w_end=rim_speed_end/slip_radius, ramp_start_time=change_start_time, "
                    "ramp_duration=change_duration) "
                    f'"{w}\'s motor and speed loop"',
-                   f"    annotation({_placement(40, y)});"]
-        connections += [f"  connect({axle}.frame_b, {w}.frame_a);",
-                        f"  connect({w}_drive.flange_b, {w}.flange_a);",
-                        f"  connect({w}_drive.support, {w}.support);"]
+                   f"    annotation({d.place(w + '_drive', 110, y, drive, 20, True)});"]
+        connections += [d.connect(f"{axle}.frame_b", f"{w}.frame_a", signal=False),
+                        d.connect(f"{w}_drive.flange_b", f"{w}.flange_a", signal=False),
+                        d.connect(f"{w}_drive.support", f"{w}.support", signal=False)]
     return _template(
         "PlanarRover", R=len(rover.ROVER_NAMES),
         heave_start=translate.literal(reference.ROVER_HEAVE_START),
@@ -1030,34 +1121,47 @@ def _examples(lib: Library) -> None:
     rig = {row.name.replace(".", "_"): translate.literal(row.default) for row in RIG_TABLE}
     _class_file(lib, where, "Rig", _template(
         "Rig", sinkage_start=translate.literal(reference.RIG_SINKAGE_START), **rig))
-    _class_file(lib, where, "Rover", _rover_example())
-    order = ["SteadyC2", "SlipRamp", "Rover"]
+    twins = f"{where}/FMUTwin"
+    components = f"{LIBRARY}/Components"
+    pins = {name: _pins(lib.files[f"{components}/{name}.mo"]) for name in ("RoverChassis",)}
+    pins["Wheel"] = _pins(lib.files[f"{components}/PartialWheel.mo"])
+    pins["MapWheel"] = pins["Wheel"] | _pins(lib.files[f"{components}/MapWheel.mo"])
+    _class_file(lib, twins, "Rover", _rover_example(pins))
+    twin_order = ["Rover"]
     for example in reference.ROVER_MAPS:
-        _class_file(lib, where, example, _rover_example(example))
-        order.append(example)
+        _class_file(lib, twins, example, _rover_example(pins, example))
+        twin_order.append(example)
     for example, profile in reference.ROVER_PROFILES.items():
         if example == "Rover":
             continue
         changed = ", ".join(sorted(profile))
-        _class_file(lib, where, example, _profiled_rover(
-            example, "Rover", example, "The rover",
+        _class_file(lib, twins, example, _profiled_rover(
+            example, f"{LIBRARY}.{reference.class_path('Rover')}", example, "The rover",
             f"Data.rover with {changed} changed. {_reference_doc(example)} (the Python model, "
             "as for Rover). <code>wheelterrain rover --scenario slope|descent|pull-test</code> "
             "goes on until the rover stalls or slides."))
-        order.append(example)
-    order.append("Rig")
+        twin_order.append(example)
+    assert sorted(twin_order) == sorted(reference.fmu_twins())
+    lib.package(where, "FMUTwin", "The rover on the RoverChassis block: the RoverChassis and "
+                "WheelTerrain FMUs' model exchange in Modelica, their cross-check (the rover "
+                "from standard parts: Examples.PlanarRover)", twin_order)
+    order = ["SteadyC2", "SlipRamp", "Rig"]
     _class_file(lib, where, "PlanarRig", _template(
         "PlanarRig", sinkage_start=translate.literal(reference.RIG_SINKAGE_START),
         experiment=_experiment("PlanarRig", reference.RIG_STOP, reference.RIG_INTERVAL),
         **rig))
-    _class_file(lib, where, "PlanarRover", _planar_rover())
+    utilities = _template("Utilities")
+    drive = utilities[utilities.index("model SpeedDrive"):utilities.index("end SpeedDrive")]
+    _class_file(lib, where, "PlanarRover", _planar_rover({
+        "PlanarWheel": _pins(lib.files[f"{LIBRARY}/Wheels/PlanarWheel.mo"]),
+        "SpeedDrive": _pins(drive)}))
     slope = reference.PLANAR_ROVERS["PlanarRoverSlope"]
     _class_file(lib, where, "PlanarRoverSlope", _profiled_rover(
         "PlanarRoverSlope", "PlanarRover", slope, "The rover from standard parts",
         f"PlanarRover with {slope}'s rover parameters. {_reference_doc('PlanarRoverSlope')} "
         f"({slope}'s: the Python model)."))
-    _class_file(lib, where, "Utilities", _template("Utilities"))
-    order += ["PlanarRig", "PlanarRover", "PlanarRoverSlope", "Utilities"]
+    _class_file(lib, where, "Utilities", utilities)
+    order += ["PlanarRig", "PlanarRover", "PlanarRoverSlope", "FMUTwin", "Utilities"]
     for case, s in reference.RIG_CASES.items():
         name = f"Rig{case}"
         run = _experiment(name, reference.RIG_STOP, reference.RIG_INTERVAL)
@@ -1069,6 +1173,10 @@ def _examples(lib: Library) -> None:
                 f"end Rig{case};\n")
         _class_file(lib, where, f"Rig{case}", text)
         order.append(f"Rig{case}")
+    first = ["SteadyC2", "SlipRamp", "Rig", *(f"Rig{case}" for case in reference.RIG_CASES)]
+    assert sorted(order) == sorted([*first, "PlanarRig", "PlanarRover", "PlanarRoverSlope",
+                                    "FMUTwin", "Utilities"])
+    order = first + [n for n in order if n not in first]
     lib.package(LIBRARY, "Examples", "Examples with experiment annotations; reference results "
                 "in Resources/Reference (MSL's regression layout)", order)
 
@@ -1159,8 +1267,24 @@ def _document(lib: Library) -> None:
             lib.files[path] = _documented(path, lib.files[path])
 
 
-def build_library() -> Library:
-    """The whole library as files (relative path -> text)."""
+def _name(lib: Library) -> None:
+    """Every class file's own identifiers in MSL's naming convention (:mod:`.names`): written
+    with the model's snake_case names, read in lowerCamelCase; the strings' mentions of them
+    too (not the table's and the FMUs' names, 'soil.k_phi'). Refused where two of the model's
+    names would become one."""
+    mo = [path for path in lib.files if path.endswith(".mo")]
+    own = set().union(*(names.identifiers(lib.files[path]) for path in mo))
+    names.check_distinct(own)
+    known = frozenset(n for n in own if names.identifier(n) != n)
+    tables = frozenset(n.partition(".")[0] for n in (*NAMES, *(row.name for row in RIG_TABLE),
+                                                      *rover.ROVER_NAMES, *ground.NAMES))
+    for path in mo:
+        lib.files[path] = names.prose(names.code(lib.files[path]), known, tables)
+
+
+def build_library(named: bool = True) -> Library:
+    """The whole library as files (relative path -> text); ``named`` False: its class files
+    with the model's names, before :func:`_name` (what the name checks read)."""
     lib = Library()
     lib.package("", LIBRARY, "Rigid-wheel terramechanics for planetary rover wheels with "
                 "grousers on loose soil (generated by wheelterrain)",
@@ -1176,6 +1300,8 @@ def build_library() -> Library:
     _planar(lib)
     _examples(lib)
     _document(lib)
+    if named:
+        _name(lib)
     for name, text in reference.files().items():
         lib.add(f"{LIBRARY}/Resources/Reference/{name}", text)
     for name, text in external.sources(entries()).items():

@@ -1,6 +1,7 @@
 """Reference results of the Modelica library's examples, computed by the Python model, in MSL's
-regression layout (``Resources/Reference/WheelTerrain/Examples/<Example>/<Example>.csv`` and
-``comparisonSignals.txt`` beside it, :func:`location`): what a Modelica tool's run of each
+regression layout (``Resources/Reference/WheelTerrain/Examples/[FMUTwin/]<Example>/<Example>.csv``
+and ``comparisonSignals.txt`` beside it, :func:`location`; the columns and signals in the
+library's names, :mod:`.names`): what a Modelica tool's run of each
 example should give at the example's own experiment annotation (:func:`tolerance`).
 
 - SteadyC2 and SlipRamp: the project's steady state (:func:`wheelterrain.model.api.steady_state`)
@@ -28,6 +29,7 @@ from wheelterrain import presets
 from wheelterrain.fmu import functions as fmu_functions
 from wheelterrain.model import api, ground, rig, rover
 from wheelterrain.model.slip import unified_from_paper
+from wheelterrain.modelica import names
 
 STEADY_LOAD = 62.0
 """N: the rig's load in the paper's C1-C4 (Table III), the steady examples' load."""
@@ -111,7 +113,7 @@ ROVER_COLUMNS = ("time", "speed", "position", "heave", "pitch",
 
 
 def rover_start() -> list[float]:
-    """Examples.Rover's start (rover.STATES order): rover.initial_state at the table's
+    """Examples.FMUTwin.Rover's start (rover.STATES order): rover.initial_state at the table's
     defaults, the chassis ROVER_HEAVE_START in the soil."""
     return list(rover.initial_state(rover.defaults(), heave=ROVER_HEAVE_START))
 
@@ -161,7 +163,7 @@ def rover_run(example: str) -> tuple[float, float]:
 
 def rover_trajectory(stop: float = ROVER_STOP, interval: float = ROVER_INTERVAL,
                      example: str = "Rover") -> np.ndarray:
-    """The rover of ``example`` (Examples.Rover, RoverSlope, RoverDescent): the RoverChassis
+    """The rover of ``example`` (Examples.FMUTwin.Rover, RoverSlope, RoverDescent): the RoverChassis
     FMU's model-exchange rates on four contacts with the soil's memory (each wheel's angle and
     plastic sinkage states), the default preset's soil and the example's rover parameters,
     integrated by CVODES at 1e-12: one row per output time, ROVER_COLUMNS."""
@@ -178,7 +180,7 @@ def rover_trajectory(stop: float = ROVER_STOP, interval: float = ROVER_INTERVAL,
 def _csv(columns: Sequence[str], rows) -> str:
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(columns)
+    writer.writerow([names.path(c) for c in columns])
     for row in rows:
         writer.writerow([repr(float(v)) for v in row])
     return buffer.getvalue()
@@ -195,10 +197,22 @@ def _kind(name: str) -> str:
     return "rig" if name.startswith("Rig") or name == "PlanarRig" else "rover"
 
 
+def fmu_twins() -> tuple[str, ...]:
+    """The examples of Examples.FMUTwin: the rover on the RoverChassis block, the FMUs' model
+    exchange in Modelica (the rover from standard parts is in Examples itself)."""
+    return (*ROVER_PROFILES, *ROVER_MAPS)
+
+
+def class_path(name: str) -> str:
+    """The example ``name``'s class below WheelTerrain: 'Examples.SteadyC2',
+    'Examples.FMUTwin.Rover'."""
+    return f"Examples.FMUTwin.{name}" if name in fmu_twins() else f"Examples.{name}"
+
+
 def location(name: str) -> str:
     """The folder of the example ``name``'s reference files below Resources/Reference (MSL's
     regression layout: the example's class path)."""
-    return f"WheelTerrain/Examples/{name}"
+    return "WheelTerrain/" + class_path(name).replace(".", "/")
 
 
 def tolerance(name: str) -> float:
@@ -287,5 +301,5 @@ def files() -> dict[str, str]:
     for name, text in tables.items():
         out[f"{location(name)}/{name}.csv"] = text
         out[f"{location(name)}/comparisonSignals.txt"] = "".join(
-            f"{signal}\n" for signal in compared(name))
+            f"{names.path(signal)}\n" for signal in compared(name))
     return out

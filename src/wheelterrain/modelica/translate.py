@@ -83,20 +83,44 @@ class UnmappedOperationError(ValueError):
     """A CasADi operation the translator has no Modelica form for."""
 
 
+SI_TYPES = {"m": "Length", "m/s": "Velocity", "m/s2": "Acceleration", "rad": "Angle",
+            "rad/s": "AngularVelocity", "rad/s2": "AngularAcceleration", "Pa": "Pressure",
+            "1": "DimensionlessRatio"}
+"""Unit -> the Modelica.Units.SI type of that unit (a unit with none: Real(unit=...))."""
+RATES = {"m": "m/s", "m/s": "m/s2", "rad": "rad/s", "rad/s": "rad/s2", "1": "1/s",
+         "Pa": "Pa/s", "rad/m": "rad/(m.s)"}
+"""Unit -> the unit of its rate (a derivative function's seed)."""
+
+
 @dataclass(frozen=True)
 class Port:
     """A Modelica input or output of the generated function: ``name``, its length (1: a
-    scalar), its Modelica type and description."""
+    scalar), its Modelica type and description, and its unit (``unit``: its
+    Modelica.Units.SI type, or Real with that unit where SI has none; '' for a vector of
+    mixed units)."""
 
     name: str
     size: int = 1
     type: str = "Real"
     description: str = ""
+    unit: str = ""
 
     def declaration(self, direction: str) -> str:
         dims = f"[{self.size}]" if self.size > 1 else ""
-        doc = f' "{self.description}"' if self.description else ""
-        return f"  {direction} {self.type} {self.name}{dims}{doc};"
+        doc = f' "{self.description} [{self.unit}]"' if self.unit else (
+            f' "{self.description}"' if self.description else "")
+        kind, unit = self.type, ""
+        if self.unit and self.type == "Real":
+            if self.unit in SI_TYPES:
+                kind = f"Modelica.Units.SI.{SI_TYPES[self.unit]}"
+            else:
+                unit = f'({"each " if self.size > 1 else ""}unit="{self.unit}")'
+        return f"  {direction} {kind} {self.name}{dims}{unit}{doc};"
+
+    def rate(self) -> Port:
+        """The port of this one's rate, der_<name> (a derivative function's seed or output)."""
+        return Port("der_" + self.name, self.size, description=f"d({self.name})/dt",
+                    unit=RATES[self.unit] if self.unit else "")
 
     def element(self, k: int) -> str:
         return f"{self.name}[{k + 1}]" if self.size > 1 else self.name

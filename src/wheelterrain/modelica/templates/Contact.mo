@@ -9,9 +9,12 @@ model Contact "The wheel-soil contact between a wheel's hub, its axle and the gr
   replaceable function contactFunction = WheelTerrain.Functions.contact
     constrainedby WheelTerrain.Functions.Interfaces.Contact
     "the contact: Functions.contact (generated, the default) or Functions.External.contact (CasADi's C)";
-  Modelica.Mechanics.Rotational.Interfaces.Flange_a hub "the wheel's hub: its angle turns the wheel forward";
-  Modelica.Mechanics.Translational.Interfaces.Flange_a axle "the axle, horizontally: s forward";
-  Modelica.Mechanics.Translational.Interfaces.Flange_a vertical "the axle, vertically: s up, s = -sinkage";
+  Modelica.Mechanics.Rotational.Interfaces.Flange_a hub "the wheel's hub: its angle turns the wheel forward"
+    annotation(Placement(transformation(extent={{-110,-10},{-90,10}})));
+  Modelica.Mechanics.Translational.Interfaces.Flange_a axle "the axle, horizontally: s forward"
+    annotation(Placement(transformation(extent={{-10,90},{10,110}})));
+  Modelica.Mechanics.Translational.Interfaces.Flange_a vertical "the axle, vertically: s up, s = -sinkage"
+    annotation(Placement(transformation(extent={{-10,-110},{10,-90}})));
   SI.Length sinkage "below the undisturbed surface";
   SI.Velocity sinkage_rate;
   SI.AngularVelocity wheel_speed;

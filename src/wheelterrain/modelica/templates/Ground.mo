@@ -2,8 +2,8 @@ package Ground "The terrain's shape: its height and slope at a horizontal positi
   function height "The terrain's height at a horizontal position: flat, a plane or a profile"
     extends WheelTerrain.Functions.Interfaces.Height;
     input WheelTerrain.Types.Ground ground = WheelTerrain.Types.Ground.flat "the shape";
-    input Real slope(unit="rad") = 0 "the plane's inclination, rising toward +x (ground = plane)";
-    input Real profile[:, 2] = {{0, 0}, {1, 0}} "x [m] and height [m] of the profile's points, x rising (ground = profile)";
+    input Modelica.Units.SI.Angle slope = 0 "the plane's inclination, rising toward +x (ground = plane)";
+    input Modelica.Units.SI.Length profile[:, 2] = {{0, 0}, {1, 0}} "x [m] and height [m] of the profile's points, x rising (ground = profile)";
   protected
     Integer k = WheelTerrain.Functions.Ground.segment(x, profile);
     Real share = WheelTerrain.Functions.Ground.share(x, profile, k);
@@ -15,8 +15,8 @@ package Ground "The terrain's shape: its height and slope at a horizontal positi
   function slope "The terrain's inclination at a horizontal position, rising toward +x: flat, a plane or a profile"
     extends WheelTerrain.Functions.Interfaces.Slope;
     input WheelTerrain.Types.Ground ground = WheelTerrain.Types.Ground.flat "the shape";
-    input Real slope(unit="rad") = 0 "the plane's inclination (ground = plane)";
-    input Real profile[:, 2] = {{0, 0}, {1, 0}} "x [m] and height [m] of the profile's points, x rising (ground = profile)";
+    input Modelica.Units.SI.Angle slope = 0 "the plane's inclination (ground = plane)";
+    input Modelica.Units.SI.Length profile[:, 2] = {{0, 0}, {1, 0}} "x [m] and height [m] of the profile's points, x rising (ground = profile)";
   protected
     Integer k = WheelTerrain.Functions.Ground.segment(x, profile);
     Real inside = if x > profile[1, 1] and x < profile[size(profile, 1), 1] then 1 else 0;
@@ -26,8 +26,8 @@ package Ground "The terrain's shape: its height and slope at a horizontal positi
   end slope;
 
   function segment "The profile's segment holding x: k with profile[k, 1] <= x < profile[k + 1, 1] (the first or last segment beyond the table)"
-    input Real x(unit="m") "horizontal position";
-    input Real profile[:, 2] "x [m] and height [m] of the profile's points, x rising";
+    input Modelica.Units.SI.Length x "horizontal position";
+    input Modelica.Units.SI.Length profile[:, 2] "x [m] and height [m] of the profile's points, x rising";
     output Integer k "the segment's first point";
   algorithm
     assert(size(profile, 1) >= 2, "Terrain: a profile needs at least two points");
@@ -38,10 +38,10 @@ package Ground "The terrain's shape: its height and slope at a horizontal positi
   end segment;
 
   function share "Where x lies in the profile's segment k, clipped to [0, 1] (level beyond the table)"
-    input Real x(unit="m") "horizontal position";
-    input Real profile[:, 2] "x [m] and height [m] of the profile's points, x rising";
+    input Modelica.Units.SI.Length x "horizontal position";
+    input Modelica.Units.SI.Length profile[:, 2] "x [m] and height [m] of the profile's points, x rising";
     input Integer k "the segment";
-    output Real share "0 at its first point, 1 at its last";
+    output Modelica.Units.SI.DimensionlessRatio share "0 at its first point, 1 at its last";
   algorithm
     assert(profile[k + 1, 1] > profile[k, 1], "Terrain: the profile's x must rise from point to point");
     share := min(1, max(0, (x - profile[k, 1])/(profile[k + 1, 1] - profile[k, 1])));

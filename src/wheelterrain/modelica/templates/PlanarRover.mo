@@ -16,7 +16,7 @@ model PlanarRover "The rover from standard parts: a body, two axles (PlanarMecha
   final parameter SI.AngularVelocity slope_rate_after = r[${slope_rate_after}] "rover.slope_rate_after";
   final parameter SI.Angle slope_bound = r[${slope_bound}] "rover.slope_bound";
   parameter SI.Velocity rim_speed_end = rim_speed "the rim speed the drives' commands ramp to (rim_speed: no change; negative: the rover stops and reverses)";
-  parameter SI.Time change_start = 0 "when the commands start to ramp to rim_speed_end";
+  parameter SI.Time change_start_time = 0 "when the commands start to ramp to rim_speed_end";
   parameter SI.Time change_duration = 1 "how long the ramp takes";
   final parameter SI.Length contact_radius = front_left.contact_radius "R_c of every wheel";
   inner PlanarMechanics.PlanarWorld planarWorld(enableAnimation=false)
@@ -51,7 +51,7 @@ equation
 ${connections}
   annotation(${experiment},
     Diagram(coordinateSystem(extent={{-100,-100},{100,100}})),
-    Documentation(info="<html><p>Examples.Rover's rover built the way a Modelica user builds a vehicle: a body (Utilities.PlanarBody, PlanarMechanics.Parts.Body's equations), its axles PlanarMechanics.Parts.FixedTranslation from the centre of mass (<code>rover.wheelbase</code>, <code>rover.cg_forward</code>, <code>rover.cg_height</code>), two Wheels.PlanarWheel on each axle (the left and the right wheel of an axle run alike in the plane; each its own grouser phase, <code>rover.grouser_phase.*</code>), each driven by a Utilities.SpeedDrive (MSL's PI, Limiter, Torque, Inertia and SpeedSensor; the motor's housing on the wheel's <code>support</code>, so its reaction pitches the body), one inner Terrain. No RoverChassis, no signal block between the parts: the connections are the rover.</p>
-<p>It is the Python model's rover (the RoverChassis FMU's equations): the same trajectory as Examples.Rover, whose reference it reproduces (${reference}). The ground is flat and the slope profile (<code>rover.ramp_time</code> ... rows) turns gravity in the ground's frame, as the Python rover's slope input does: PlanarRoverSlope is RoverSlope's climb. Tested in rumoca with MSL 4.1.0 and PlanarMechanics 1.6.0 (tests/test_modelica.py); the body is Utilities.PlanarBody because rumoca 0.10 cannot run PlanarMechanics.Parts.Body.</p></html>",
+    Documentation(info="<html><p>Examples.FMUTwin.Rover's rover built the way a Modelica user builds a vehicle: a body (Utilities.PlanarBody, PlanarMechanics.Parts.Body's equations), its axles PlanarMechanics.Parts.FixedTranslation from the centre of mass (<code>rover.wheelbase</code>, <code>rover.cg_forward</code>, <code>rover.cg_height</code>), two Wheels.PlanarWheel on each axle (the left and the right wheel of an axle run alike in the plane; each its own grouser phase, <code>rover.grouser_phase.*</code>), each driven by a Utilities.SpeedDrive (MSL's PI, Limiter, Torque, Inertia and SpeedSensor; the motor's housing on the wheel's <code>support</code>, so its reaction pitches the body), one inner Terrain. No RoverChassis, no signal block between the parts: the connections are the rover.</p>
+<p>It is the Python model's rover (the RoverChassis FMU's equations): the same trajectory as Examples.FMUTwin.Rover, whose reference it reproduces (${reference}). The ground is flat and the slope profile (<code>rover.ramp_time</code> ... rows) turns gravity in the ground's frame, as the Python rover's slope input does: PlanarRoverSlope is RoverSlope's climb. Tested in rumoca with MSL 4.1.0 and PlanarMechanics 1.6.0 (tests/test_modelica.py); the body is Utilities.PlanarBody because rumoca 0.10 cannot run PlanarMechanics.Parts.Body.</p></html>",
       revisions="<html><ul><li>${version}: first version.</li></ul></html>"));
 end PlanarRover;

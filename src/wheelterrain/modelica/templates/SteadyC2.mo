@@ -1,11 +1,23 @@
 model SteadyC2 "The quasi-static wheel at the paper's C2: 62 N, the paper's slip 0.25, the default preset"
   parameter Real slip_paper = 0.25 "the paper's slip s";
-  WheelTerrain.Components.QuasiStaticWheel wheel(load=${steady_load},
-    slip=WheelTerrain.Functions.slipFromPaper(slip_paper), slip_angle=0, turn_slip=0);
+  WheelTerrain.Components.QuasiStaticWheel wheel
+    annotation(Placement(transformation(extent={{-20,-20},{20,20}})));
+  Modelica.Blocks.Sources.Constant load(k=${steady_load}) "the wheel's load [N]"
+    annotation(Placement(transformation(extent={{-80,50},{-60,70}})));
+  Modelica.Blocks.Sources.Constant slipSet(k=WheelTerrain.Functions.slipFromPaper(slip_paper))
+    "the model's slip at the paper's s"
+    annotation(Placement(transformation(extent={{-80,10},{-60,30}})));
+  Modelica.Blocks.Sources.Constant straight(k=0) "driven straight: no slip angle, no turn slip"
+    annotation(Placement(transformation(extent={{-80,-40},{-60,-20}})));
   Real sinkage(unit="m") = wheel.sinkage;
   Real drawbar_pull(unit="N") = wheel.drawbar_pull;
   Real slip(unit="1") = wheel.slip "the model's slip";
   Real torque(unit="N.m") = wheel.torque;
+equation
+  connect(load.y, wheel.load) annotation(Line(points={{-59,60},{-40,60},{-40,12},{-24,12}}, color={0,0,127}));
+  connect(slipSet.y, wheel.slip) annotation(Line(points={{-59,20},{-42,20},{-42,4},{-24,4}}, color={0,0,127}));
+  connect(straight.y, wheel.slip_angle) annotation(Line(points={{-59,-30},{-44,-30},{-44,-4},{-24,-4}}, color={0,0,127}));
+  connect(straight.y, wheel.turn_slip) annotation(Line(points={{-59,-30},{-44,-30},{-44,-12},{-24,-12}}, color={0,0,127}));
   annotation(${experiment},
     Documentation(info="<html><p>Reference: Resources/Reference/WheelTerrain/Examples/SteadyC2/SteadyC2.csv (the Python model's steady state).</p></html>"));
 end SteadyC2;

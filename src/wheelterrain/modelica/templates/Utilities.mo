@@ -70,14 +70,14 @@ package Utilities "Parts the examples use"
     parameter SI.AngularVelocity w_ref "the commanded spin";
     parameter SI.Torque tau_max "the motor's torque limit";
     parameter SI.AngularVelocity w_end = w_ref "the spin the command ramps to (w_ref: no change)";
-    parameter SI.Time ramp_start = 0 "when the command starts to ramp from w_ref to w_end";
+    parameter SI.Time ramp_start_time = 0 "when the command starts to ramp from w_ref to w_end";
     parameter SI.Time ramp_duration(min=Modelica.Constants.small) = 1 "how long the ramp takes";
     Modelica.Mechanics.Rotational.Interfaces.Flange_b flange_b "to the wheel's axle (PlanarWheel.flange_a)"
       annotation(Placement(transformation(extent={{90,-10},{110,10}})));
     Modelica.Mechanics.Rotational.Interfaces.Support support "to the hub (PlanarWheel.support): the motor's housing"
       annotation(Placement(transformation(extent={{90,-70},{110,-50}})));
-    Modelica.Blocks.Sources.RealExpression reference(y=w_ref + (w_end - w_ref)*noEvent(min(max((time - ramp_start)/ramp_duration, 0), 1)))
-      "w_ref, ramping to w_end from ramp_start (exactly w_ref with w_end = w_ref; no events, as a Ramp's, in the examples' output grid)"
+    Modelica.Blocks.Sources.RealExpression reference(y=w_ref + (w_end - w_ref)*noEvent(min(max((time - ramp_start_time)/ramp_duration, 0), 1)))
+      "w_ref, ramping to w_end from ramp_start_time (exactly w_ref with w_end = w_ref; no events, as a Ramp's, in the examples' output grid)"
       annotation(Placement(transformation(extent={{-100,40},{-80,60}})));
     Modelica.Blocks.Math.Feedback error
       annotation(Placement(transformation(extent={{-70,40},{-50,60}})));
@@ -106,7 +106,7 @@ package Utilities "Parts the examples use"
         Rectangle(extent={{60,10},{100,-10}}, lineColor={64,64,64}, fillColor={200,200,200}, fillPattern=FillPattern.Solid),
         Text(extent={{-80,20},{60,-20}}, textString="PI", textColor={0,0,0}),
         Text(extent={{-150,60},{150,100}}, textString="%name", textColor={0,0,255})}),
-      Documentation(info="<html><p>The Python rover's speed loop from MSL parts: the spin's error to the command (<code>w_ref</code>, or from <code>ramp_start</code> a ramp over <code>ramp_duration</code> to <code>w_end</code>: through zero, the vehicle stops and reverses) into a PI with both closed-loop poles at -<code>bandwidth</code> (k = 2*bandwidth*J, T = 2/bandwidth), limited to +-<code>tau_max</code>, a torque source whose housing is the wheel's support (the hub), the spin inertia J on the axle, the spin read by a SpeedSensor on it (the wheel's rolling rate, as the Python rover's loop reads it; a motor's encoder would read it relative to the hub). The limiter has no anti-windup (the Python rover's loop stops integrating while saturated): the same while the loop is not saturated.</p></html>",
+      Documentation(info="<html><p>The Python rover's speed loop from MSL parts: the spin's error to the command (<code>w_ref</code>, or from <code>ramp_start_time</code> a ramp over <code>ramp_duration</code> to <code>w_end</code>: through zero, the vehicle stops and reverses) into a PI with both closed-loop poles at -<code>bandwidth</code> (k = 2*bandwidth*J, T = 2/bandwidth), limited to +-<code>tau_max</code>, a torque source whose housing is the wheel's support (the hub), the spin inertia J on the axle, the spin read by a SpeedSensor on it (the wheel's rolling rate, as the Python rover's loop reads it; a motor's encoder would read it relative to the hub). The limiter has no anti-windup (the Python rover's loop stops integrating while saturated): the same while the loop is not saturated.</p></html>",
         revisions="<html><ul><li>${version}: first version.</li></ul></html>"));
   end SpeedDrive;
   annotation(Documentation(info="<html><p>Parts the examples use, not meant for a vehicle.</p></html>"));
